@@ -1,0 +1,68 @@
+"""Floating ring: torques on the ring and ring-speed-ratio (RSR) models (physics.md §6).
+
+The ring is the outer wall of the inner film and the inner wall of the outer film, so its torque is the
+sum of :func:`frbmodel.film.film_torques` of both films; the RSR formulas follow from setting that sum to 0.
+"""
+from __future__ import annotations
+
+from .errors import ParameterError
+from .film import film_torques, offset_torque_coefficient, petroff_coefficient
+
+def ring_torque(bearing, r_inner, force_inner, r_outer, force_outer, omega_rotor, omega_ring):
+    """Total torque [N m] on the ring (CCW about +z), M^I + M^O of physics.md §6.2 / §7.2.
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    r_inner : (..., 2)
+        Journal minus ring centre [m]; ``force_inner`` the inner-film force on the journal [N].
+    r_outer : (..., 2)
+        Ring centre minus housing centre [m]; ``force_outer`` the outer-film force on the ring [N].
+    omega_rotor, omega_ring : float or array
+        Journal and ring spin speeds [rad/s].
+    """
+    _, t_ring_from_inner = film_torques(bearing.inner, r_inner, force_inner, omega_rotor, omega_ring)
+    t_ring_from_outer, _ = film_torques(bearing.outer, r_outer, force_outer, omega_ring, 0.0)
+    return t_ring_from_inner + t_ring_from_outer
+
+
+def ring_speed_ratio(bearing, eps_inner: float = 0.0, eps_outer: float = 0.0, torque: str = "petroff",
+                     model: str = "short") -> float:
+    """Ring-speed ratio ω_FR / ω_R of the steady torque balance at given film eccentricity ratios.
+
+    ``torque="petroff"``: Petroff torques only — the paper's eq. (7); with ``eps_inner = eps_outer = 0``
+    this is eq. (6), ``1 / (1 + (μ_O/μ_I)(L_O/L_I)(c_I/c_O)(D_O/D_I)³)``.
+    ``torque="full"``: Petroff plus the pressure-offset torques (physics.md §6.3),
+    ``(A_I − k_I) / (A_I + A_O + k_I + k_O)``.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> b = frb.turbocharger(outer_clearance=36e-6).bearings[0]
+    >>> round(frb.ring_speed_ratio(b), 5)
+    0.19903
+    """
+    for name, eps in (("eps_inner", eps_inner), ("eps_outer", eps_outer)):
+        if not (0.0 <= eps < 1.0):
+            raise ParameterError(f"{name} = {eps!r} is invalid: valid range 0 <= eps < 1")
+    a_i = petroff_coefficient(bearing.inner, eps_inner)
+    a_o = petroff_coefficient(bearing.outer, eps_outer)
+    if torque == "petroff":
+        return float(a_i / (a_i + a_o))
+    if torque == "full":
+        k_i = offset_torque_coefficient(bearing.inner, eps_inner, model)
+        k_o = offset_torque_coefficient(bearing.outer, eps_outer, model)
+        return float((a_i - k_i) / (a_i + a_o + k_i + k_o))
+    raise ParameterError(f"torque = {torque!r} is unknown; valid values are 'petroff', 'full'")
+
+
+def static_ring_torque(bearing, eps_inner: float, eps_outer: float, omega_rotor: float, omega_ring: float,
+                       model: str = "short") -> float:
+    """Steady torque [N m] on the ring at static film states (eq. 32 residual, full torques)."""
+    a_i = petroff_coefficient(bearing.inner, eps_inner)
+    a_o = petroff_coefficient(bearing.outer, eps_outer)
+    k_i = offset_torque_coefficient(bearing.inner, eps_inner, model)
+    k_o = offset_torque_coefficient(bearing.outer, eps_outer, model)
+    return float(a_i * (omega_rotor - omega_ring) - k_i * (omega_rotor + omega_ring) - a_o * omega_ring
+                 - k_o * omega_ring)
+

@@ -1,0 +1,247 @@
+"""Static equilibria of the floating-ring bearings for methods C, D, F, G, I and J (physics.md §6.4).
+
+Per bearing X the inner film must carry the static reaction W_X and the outer film W_X plus the ring
+weight. Because each film force depends only on its own relative position and speed, F (and D) solve each
+film in closed form; G solves (28)–(31) as one coupled 4-unknown system (same answer, more work); I and J
+add the ring speed as unknown (eq. (7), respectively the full torque balance (32)) and solve a 1-D root
+in the ring speed with closed-form film solutions inside.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .bearing import ring_speed_ratio, static_ring_torque
+from .errors import ConvergenceError, ParameterError
+from .film import film_coefficients, film_force, static_position
+from .methods import get_method
+
+RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
+
+
+def rpm_to_rad(speed_rpm):
+    return np.asarray(speed_rpm, dtype=float) * RPM
+
+
+@dataclass
+class BearingEquilibrium:
+    """Static state of one floating-ring bearing. Positions in [m], speeds in [rad/s]."""
+
+    name: str
+    journal: np.ndarray  # journal centre rel. housing [m]
+    ring: np.ndarray  # ring centre rel. housing [m]
+    eps_inner: float
+    eps_outer: float
+    ring_speed: float  # [rad/s]
+    ring_speed_ratio: float
+    rotor_speed: float  # [rad/s]
+    iterations: int
+    evaluations: int
+
+    @property
+    def r_inner(self) -> np.ndarray:
+        """Journal minus ring centre [m]."""
+        return self.journal - self.ring
+
+    @property
+    def omega_inner(self) -> float:
+        """Inner film speed sum ω_R + ω_FR [rad/s]."""
+        return self.rotor_speed + self.ring_speed
+
+    @property
+    def omega_outer(self) -> float:
+        """Outer film speed sum ω_FR [rad/s]."""
+        return self.ring_speed
+
+
+@dataclass
+class EquilibriumResult:
+    """Equilibrium of both bearings at one speed (``bearings[0]`` turbine side)."""
+
+    method: str
+    speed_rpm: float
+    bearings: tuple
+    cpu_time_s: float = 0.0
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def iterations(self) -> int:
+        return sum(b.iterations for b in self.bearings)
+
+    @property
+    def evaluations(self) -> int:
+        return sum(b.evaluations for b in self.bearings)
+
+    def to_dataframe(self):
+        import pandas as pd
+
+        rows = []
+        for b in self.bearings:
+            rows.append({"bearing": b.name, "method": self.method, "speed [rpm]": self.speed_rpm,
+                         "journal x [m]": b.journal[0], "journal y [m]": b.journal[1],
+                         "ring x [m]": b.ring[0], "ring y [m]": b.ring[1],
+                         "eps_inner [-]": b.eps_inner, "eps_outer [-]": b.eps_outer,
+                         "ring speed [rad/s]": b.ring_speed, "RSR [-]": b.ring_speed_ratio,
+                         "iterations [-]": b.iterations, "evaluations [-]": b.evaluations})
+        return pd.DataFrame(rows)
+
+    def __str__(self):
+        lines = [f"method {self.method} equilibrium at {self.speed_rpm:.0f} rpm "
+                 f"({self.cpu_time_s * 1e3:.3f} ms, {self.iterations} iterations, {self.evaluations} evaluations)"]
+        for b in self.bearings:
+            lines.append(
+                f"  {b.name:>10}: RSR {b.ring_speed_ratio:.5f}  eps_I {b.eps_inner:.4f}  eps_O {b.eps_outer:.4f}  "
+                f"journal ({b.journal[0] * 1e6:+.3f}, {b.journal[1] * 1e6:+.3f}) um  "
+                f"ring ({b.ring[0] * 1e6:+.3f}, {b.ring[1] * 1e6:+.3f}) um")
+        return "\n".join(lines)
+
+
+def _loads(bearing, w, g):
+    return np.array([0.0, w]), np.array([0.0, w + bearing.ring_mass * g])
+
+
+def _uncoupled(bearing, w, omega_r, model, g, rsr):
+    f_i, f_o = _loads(bearing, w, g)
+    omega_fr = rsr * omega_r
+    r_i, eps_i, it_i = static_position(bearing.inner, f_i, omega_r + omega_fr, model)
+    r_o, eps_o, it_o = static_position(bearing.outer, f_o, omega_fr, model)
+    return BearingEquilibrium(bearing.name, r_o + r_i, r_o, eps_i, eps_o, omega_fr, rsr, omega_r, it_i + it_o, 2)
+
+
+def _outer_only(bearing, w, omega_r, model, g, rsr):
+    _, f_o = _loads(bearing, w, g)
+    omega_fr = rsr * omega_r
+    r_o, eps_o, it = static_position(bearing.outer, f_o, omega_fr, model)
+    return BearingEquilibrium(bearing.name, r_o.copy(), r_o, 0.0, eps_o, omega_fr, rsr, omega_r, it, 1)
+
+
+def _coupled(bearing, w, omega_r, model, g, rsr):
+    """Method G: solve F^I(r_I) = (0, W), F^O(r_O) = F^I + (0, m g) as one 4-unknown system (hybr)."""
+    from scipy.optimize import root
+
+    omega_fr = rsr * omega_r
+    c_i, c_o = bearing.inner.clearance, bearing.outer.clearance
+    scale_f = max(abs(w), bearing.ring_mass * g, 1e-6)
+    zero = np.zeros(2)
+    mg = np.array([0.0, bearing.ring_mass * g])
+    target = np.array([0.0, w])
+
+    def unpack(x):
+        return np.array([x[0] * c_i, x[1] * c_i]), np.array([x[2] * c_o, x[3] * c_o])
+
+    def fun(x):
+        r_i, r_o = unpack(x)
+        f_i = film_force(bearing.inner, r_i, zero, omega_r + omega_fr, model)
+        f_o = film_force(bearing.outer, r_o, zero, omega_fr, model)
+        return np.concatenate([f_i - target, f_o - f_i - mg]) / scale_f
+
+    def jac(x):
+        r_i, r_o = unpack(x)
+        k_i, _ = film_coefficients(bearing.inner, r_i, omega_r + omega_fr, model)
+        k_o, _ = film_coefficients(bearing.outer, r_o, omega_fr, model)
+        J = np.zeros((4, 4))
+        J[:2, :2] = -k_i * c_i
+        J[2:, :2] = k_i * c_i
+        J[2:, 2:] = -k_o * c_o
+        return J / scale_f
+
+    sol = root(fun, np.zeros(4), jac=jac, method="hybr", options={"xtol": 1e-13})
+    if not sol.success or np.max(np.abs(sol.fun)) > 1e-9:
+        raise ConvergenceError(f"method G equilibrium of the {bearing.name} bearing did not converge at "
+                               f"{omega_r / RPM:.0f} rpm: {sol.message} (residual {np.max(np.abs(sol.fun)):.3g})")
+    r_i, r_o = unpack(sol.x)
+    return BearingEquilibrium(bearing.name, r_o + r_i, r_o, float(np.hypot(*r_i) / c_i), float(np.hypot(*r_o) / c_o),
+                              omega_fr, rsr, omega_r, int(sol.nfev), int(sol.nfev + sol.njev))
+
+
+def _ring_speed_root(bearing, w, omega_r, model, g, residual_kind):
+    """Methods I and J: 1-D Brent root in the ring speed; each evaluation solves both films in closed form."""
+    from scipy.optimize import brentq
+
+    f_i, f_o = _loads(bearing, w, g)
+    counter = {"n": 0}
+
+    def films(omega_fr):
+        counter["n"] += 1
+        r_i, eps_i, _ = static_position(bearing.inner, f_i, omega_r + omega_fr, model)
+        r_o, eps_o, _ = static_position(bearing.outer, f_o, omega_fr, model)
+        return r_i, eps_i, r_o, eps_o
+
+    def residual(omega_fr):
+        _, eps_i, _, eps_o = films(omega_fr)
+        if residual_kind == "petroff":
+            return ring_speed_ratio(bearing, eps_i, eps_o, "petroff", model) * omega_r - omega_fr
+        return static_ring_torque(bearing, eps_i, eps_o, omega_r, omega_fr, model) / omega_r
+
+    rsr6 = ring_speed_ratio(bearing)
+    lo, hi = 0.5 * rsr6 * omega_r, min(1.2 * rsr6, 0.999) * omega_r
+    try:
+        r_lo, r_hi = residual(lo), residual(hi)
+        if r_lo * r_hi > 0.0:
+            lo, hi = 1e-3 * omega_r, 0.999 * omega_r
+            r_lo, r_hi = residual(lo), residual(hi)
+        if r_lo * r_hi > 0.0:
+            raise ConvergenceError(
+                f"method {'I' if residual_kind == 'petroff' else 'J'} ring speed of the {bearing.name} bearing: "
+                f"no root in 0.001..0.999 x rotor speed at {omega_r / RPM:.0f} rpm")
+        omega_fr, res = brentq(residual, lo, hi, xtol=1e-12 * omega_r, rtol=1e-14, full_output=True)
+    except ValueError as exc:  # a film solution failed inside (e.g. eps -> 1 at a tiny ring speed)
+        raise ConvergenceError(f"ring speed solve of the {bearing.name} bearing failed at {omega_r / RPM:.0f} rpm: "
+                               f"{exc}") from exc
+    r_i, eps_i, r_o, eps_o = films(omega_fr)
+    return BearingEquilibrium(bearing.name, r_o + r_i, r_o, eps_i, eps_o, omega_fr, omega_fr / omega_r, omega_r,
+                              int(res.iterations), 2 * counter["n"])
+
+
+def bearing_equilibrium(bearing, load, speed, method, film_model="short", gravity=9.81):
+    """Equilibrium of one bearing carrying vertical ``load`` [N] at rotor ``speed`` [rad/s] for ``method``."""
+    m = get_method(method)
+    if m.equilibrium is None:
+        raise ParameterError(f"method {m.letter} has no film equilibrium; equilibria exist for "
+                             "C, D, F, G, I, J")
+    if not speed > 0.0:
+        raise ParameterError(f"rotor speed = {speed!r} rad/s is invalid for method {m.letter}: a linearized film "
+                             "needs a rotor speed > 0")
+    kind = m.equilibrium
+    if kind in ("petroff", "torque"):
+        return _ring_speed_root(bearing, load, speed, film_model, gravity, kind)
+    rsr = ring_speed_ratio(bearing)
+    solver = {"uncoupled": _uncoupled, "outer_film": _outer_only, "coupled": _coupled}[kind]
+    return solver(bearing, load, speed, film_model, gravity, rsr)
+
+
+def equilibrium(system, method="J", speed_rpm=150e3) -> EquilibriumResult:
+    """Static equilibrium of both floating-ring bearings.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    method : {"C", "D", "F", "G", "I", "J"}
+    speed_rpm : float
+        Rotor speed [rpm], > 0.
+
+    Returns
+    -------
+    EquilibriumResult
+        Journal/ring positions [m], eccentricity ratios, ring speeds [rad/s] and RSR per bearing,
+        iterations, evaluations and CPU time.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> eq = frb.equilibrium(frb.turbocharger(36e-6), method="J", speed_rpm=100e3)
+    >>> round(eq.bearings[0].ring_speed_ratio, 3)
+    0.198
+    """
+    speed_rpm = float(speed_rpm)
+    if not speed_rpm > 0.0 or not math.isfinite(speed_rpm):
+        raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for a film equilibrium: valid range > 0")
+    m = get_method(method)
+    t0 = time.perf_counter()
+    loads = system.bearing_loads
+    res = tuple(bearing_equilibrium(b, loads[i], speed_rpm * RPM, m.letter, system.film_model, system.gravity)
+                for i, b in enumerate(system.bearings))
+    return EquilibriumResult(m.letter, speed_rpm, res, time.perf_counter() - t0)

@@ -1,0 +1,157 @@
+"""Bearing coupling matrices (paper eqs. 17–27) and the global linear system (eq. 3 or 8).
+
+The global DoF vector is the rotor's ``[v, w, θx, θy]`` per node, followed — for methods with ring
+DoFs — by ``[x, y]`` of the turbine-side ring and then of the compressor-side ring.
+The linear equation of motion is ``M q̈ + (C_b + Ω G) q̇ + K q = 0``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .equilibrium import RPM, bearing_equilibrium
+from .errors import ParameterError
+from .film import film_coefficients
+from .methods import get_method
+
+
+@dataclass
+class LinearSystem:
+    """Matrices of the linearized system at one speed.
+
+    Attributes
+    ----------
+    M, C, K : ndarray
+        Mass [kg...], velocity (bearing damping + Ω G) [N s/m...] and stiffness [N/m...] matrices.
+    dof_labels : list of str
+    method : str
+    speed_rpm : float
+    equilibrium : tuple of BearingEquilibrium or None
+    ring_dofs : list of (int, int) or None
+        Global indices of (x, y) of each ring.
+    """
+
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    dof_labels: list
+    method: str
+    speed_rpm: float
+    equilibrium: tuple | None
+    ring_dofs: list | None
+    n_rotor_dof: int
+
+
+def film_pair_matrix(k_inner, k_outer):
+    """Journal/ring coupling of two films (paper eq. 27): [[K_I, −K_I], [−K_I, K_I + K_O]] (4 x 4)."""
+    return np.block([[k_inner, -k_inner], [-k_inner, k_inner + k_outer]])
+
+
+def series_elementwise(a, b):
+    """Element-wise series combination 1/x = 1/a + 1/b (method D, as written in the paper).
+
+    Where one entry is 0 the series value is 0; where a + b = 0 with a·b ≠ 0 the result is infinite —
+    the artefact physics.md §12 item 7 warns about; it is reported as an error.
+    """
+    num = a * b
+    den = a + b
+    out = np.zeros_like(num)
+    nz = num != 0.0
+    if np.any(nz & (den == 0.0)):
+        raise ParameterError("method D series combination is singular: an inner and an outer film coefficient "
+                             "are equal and opposite (k_I + k_O = 0)")
+    out[nz] = num[nz] / den[nz]
+    return out
+
+
+def bearing_matrices(bearing, eq, method, film_model="short", **kw):
+    """Stiffness and damping of one bearing for ``method``.
+
+    Returns ``(K, C)``: 2 x 2 on the journal for methods without ring DoFs, 4 x 4 on
+    ``[journal x, journal y, ring x, ring y]`` for methods with ring DoFs.
+    """
+    m = get_method(method)
+    opt = m.options(**kw)
+    s = m.support
+    if s == "isotropic_spring":
+        return opt["k"] * np.eye(2), np.zeros((2, 2))
+    if s == "orthotropic_spring":
+        return np.diag([opt["kx"], opt["ky"]]), np.zeros((2, 2))
+    if s == "ring_springs":
+        k = opt["k"] * np.eye(2)
+        return film_pair_matrix(k, k), np.zeros((4, 4))
+    k_o, c_o = film_coefficients(bearing.outer, eq.ring, eq.omega_outer, film_model)
+    if s == "outer_film":
+        return k_o, c_o
+    k_i, c_i = film_coefficients(bearing.inner, eq.r_inner, eq.omega_inner, film_model)
+    if s == "series_films":
+        return series_elementwise(k_i, k_o), series_elementwise(c_i, c_o)
+    if s == "films":
+        return film_pair_matrix(k_i, k_o), film_pair_matrix(c_i, c_o)
+    raise AssertionError(s)
+
+
+def linear_system(system, method="J", speed_rpm=150e3, equilibria=None, **kw) -> LinearSystem:
+    """Assemble the global linear system of ``system`` for ``method`` at ``speed_rpm``.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    method : str
+        One of A, B, C, D, E, F, G, I, J.
+    speed_rpm : float
+        Rotor speed [rpm]; > 0 for the film methods (C, D, F, G, I, J).
+    equilibria : tuple of BearingEquilibrium, optional
+        Reuse already-solved equilibria (else they are solved here).
+    **kw
+        Spring stiffnesses of methods A, B, E: ``k``, ``kx``, ``ky`` [N/m].
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ls = frb.linear_system(frb.turbocharger(), "J", 100e3)
+    >>> ls.M.shape
+    (20, 20)
+    """
+    m = get_method(method)
+    speed_rpm = float(speed_rpm)
+    if m.needs_films and not speed_rpm > 0.0:
+        raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for method {m.letter}: linearized films "
+                             "need a rotor speed > 0")
+    if not np.isfinite(speed_rpm):
+        raise ParameterError(f"speed_rpm = {speed_rpm!r} is invalid: it must be finite")
+    rotor = system.rotor
+    n_r = rotor.n_dof
+    n = n_r + (4 if m.ring_dofs else 0)
+    omega = speed_rpm * RPM
+    M = np.zeros((n, n))
+    C = np.zeros((n, n))
+    K = np.zeros((n, n))
+    M[:n_r, :n_r] = rotor.M
+    K[:n_r, :n_r] = rotor.K
+    C[:n_r, :n_r] = omega * rotor.G
+    labels = [f"node{i}.{d}" for i in range(rotor.n_nodes) for d in ("v", "w", "thx", "thy")]
+    if m.needs_films and equilibria is None:
+        loads = system.bearing_loads
+        equilibria = tuple(bearing_equilibrium(b, loads[i], omega, m.letter, system.film_model, system.gravity)
+                           for i, b in enumerate(system.bearings))
+    ring_dofs = [] if m.ring_dofs else None
+    for i, b in enumerate(system.bearings):
+        eq = equilibria[i] if m.needs_films else None
+        kb, cb = bearing_matrices(b, eq, m.letter, system.film_model, **kw)
+        j = 4 * b.node
+        if m.ring_dofs:
+            rr = n_r + 2 * i
+            idx = [j, j + 1, rr, rr + 1]
+            ring_dofs.append((rr, rr + 1))
+            M[rr, rr] = M[rr + 1, rr + 1] = b.ring_mass
+            labels += [f"ring_{b.name}.x", f"ring_{b.name}.y"]
+        else:
+            idx = [j, j + 1]
+            if m.support in ("outer_film", "series_films"):  # ring moves with the journal: lump its mass
+                M[j, j] += b.ring_mass
+                M[j + 1, j + 1] += b.ring_mass
+        K[np.ix_(idx, idx)] += kb
+        C[np.ix_(idx, idx)] += cb
+    return LinearSystem(M, C, K, labels, m.letter, speed_rpm, equilibria, ring_dofs, n_r)

@@ -1,0 +1,150 @@
+"""Figures: holistic Campbell diagram (matplotlib PNG and plotly HTML), RSR and equilibrium-cost figures."""
+from __future__ import annotations
+
+import numpy as np
+
+from .whirl import FILM_NAMES
+
+MARKERS = {"forward": ("^", "triangle-up"), "backward": ("v", "triangle-down"), "mixed": ("o", "circle")}
+#: colour range of modal damping, as in the paper's figures
+D_MIN, D_MAX = -1.0, 0.7
+WHIRL_STYLES = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a")
+
+
+def _default_fmax(cd):
+    f1x = cd.speeds_rpm.max() / 60.0
+    return float(max(1.15 * f1x, 500.0))
+
+
+def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None):
+    """Holistic Campbell diagram: frequency vs speed, colour = modal damping (diverging, centred at 0),
+    marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge;
+    dashed film whirl curves above their onset; optional 1X line. Returns the Figure."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import TwoSlopeNorm
+
+    fmax = fmax_hz or _default_fmax(cd)
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(9, 6))
+    else:
+        fig = ax.figure
+    norm = TwoSlopeNorm(vcenter=0.0, vmin=D_MIN, vmax=D_MAX)
+    cmap = plt.get_cmap("RdBu")
+    S = np.repeat(cd.speeds_rpm[:, None], cd.n_modes, axis=1) / 1e3
+    F, D, P = cd.frequencies_hz, cd.damping, cd.precession
+    sc = None
+    for prec, (mk, _) in MARKERS.items():
+        for unstable in (False, True):
+            sel = (P == prec) & np.isfinite(F) & (F <= fmax) & ((np.nan_to_num(D, nan=1) < 0) == unstable)
+            if not sel.any():
+                continue
+            sc = ax.scatter(S[sel], F[sel], c=np.clip(D[sel], D_MIN, D_MAX), cmap=cmap, norm=norm, marker=mk,
+                            s=46 if unstable else 16, edgecolors="k" if unstable else "none",
+                            linewidths=0.8 if unstable else 0, zorder=3 if unstable else 2)
+    if whirl:
+        for k, name in enumerate(FILM_NAMES):
+            w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
+            if np.isfinite(w).any():
+                ax.plot(cd.speeds_rpm / 1e3, w, ls="--", lw=1.3, color=WHIRL_STYLES[k], label=f"whirl {name}")
+    if one_x:
+        ax.plot(cd.speeds_rpm / 1e3, cd.speeds_rpm / 60.0, color="0.4", lw=1, ls=":", label="1X")
+    for prec, (mk, _) in MARKERS.items():
+        ax.scatter([], [], marker=mk, c="0.5", s=25, label=prec)
+    ax.scatter([], [], marker="o", facecolors="none", edgecolors="k", s=46, label="unstable (D < 0)")
+    ax.set_xlim(cd.speeds_rpm.min() / 1e3, cd.speeds_rpm.max() / 1e3)
+    ax.set_ylim(0, fmax)
+    ax.set_xlabel("rotor speed [krpm]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title(title or f"Holistic Campbell diagram, method {cd.method} ({cd.meta.get('system', '')})", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", ncol=2)
+    if sc is not None:
+        cb = fig.colorbar(sc, ax=ax, pad=0.01)
+        cb.set_label("modal damping D = -Re(λ)/|λ| [-]")
+    return fig
+
+
+def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
+    """Interactive holistic Campbell diagram (plotly); hover shows speed, frequency, D and precession."""
+    import plotly.graph_objects as go
+
+    fmax = fmax_hz or _default_fmax(cd)
+    fig = go.Figure()
+    S = np.repeat(cd.speeds_rpm[:, None], cd.n_modes, axis=1)
+    F, D, P, Kd = cd.frequencies_hz, cd.damping, cd.precession, cd.mode_kind
+    modes = np.repeat(np.arange(cd.n_modes)[None, :], cd.speeds_rpm.size, axis=0)
+    first = True
+    for prec, (_, sym) in MARKERS.items():
+        sel = (P == prec) & np.isfinite(F) & (F <= fmax)
+        if not sel.any():
+            continue
+        uns = np.nan_to_num(D[sel], nan=1) < 0
+        fig.add_trace(go.Scatter(
+            x=S[sel], y=F[sel], mode="markers", name=prec,
+            marker=dict(symbol=sym, size=np.where(uns, 10, 6), color=np.clip(D[sel], D_MIN, D_MAX),
+                        colorscale="RdBu", cmin=D_MIN, cmax=D_MAX, cmid=0.0,
+                        line=dict(width=np.where(uns, 1.2, 0), color="black"),
+                        colorbar=dict(title="D [-]") if first else None, showscale=first),
+            customdata=np.stack([D[sel], modes[sel], Kd[sel]], axis=-1),
+            hovertemplate=("speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>D %{customdata[0]:.4f}<br>" + prec +
+                           " precession<br>mode %{customdata[1]} (%{customdata[2]})<extra></extra>")))
+        first = False
+    if whirl:
+        for k, name in enumerate(FILM_NAMES):
+            w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
+            if np.isfinite(w).any():
+                fig.add_trace(go.Scatter(x=cd.speeds_rpm, y=w, mode="lines", name=f"whirl {name}",
+                                         line=dict(dash="dash", color=WHIRL_STYLES[k]),
+                                         hovertemplate="speed %{x:.0f} rpm<br>whirl %{y:.1f} Hz<extra>" + name +
+                                         "</extra>"))
+    if one_x:
+        fig.add_trace(go.Scatter(x=cd.speeds_rpm, y=cd.speeds_rpm / 60, mode="lines", name="1X",
+                                 line=dict(dash="dot", color="gray")))
+    fig.update_layout(title=f"Holistic Campbell diagram, method {cd.method} ({cd.meta.get('system', '')})",
+                      xaxis_title="rotor speed [rpm]", yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
+                      template="plotly_white", legend=dict(x=1.12))
+    return fig
+
+
+def rsr_figure(results, title="Ring-speed ratio"):
+    """RSR vs speed for several Campbell/equilibrium sweeps; ``results`` maps a label to
+    ``(speeds_rpm, rsr (n, 2))``. Returns the Figure (turbine and compressor bearing side by side)."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    styles = ["-", "--", "-.", ":"]
+    for k, (label, (s, r)) in enumerate(results.items()):
+        for j, ax in enumerate(axes):
+            ax.plot(np.asarray(s) / 1e3, r[:, j], ls=styles[k % 4], lw=1.6, label=f"method {label}")
+    for j, ax in enumerate(axes):
+        ax.set_title(("turbine", "compressor")[j] + " bearing", fontsize=10)
+        ax.set_xlabel("rotor speed [krpm]")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("RSR = ω_FR / ω_R [-]")
+    axes[0].legend()
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def equilibrium_cost_figure(stats, title="Equilibrium cost per speed"):
+    """Bar chart of CPU time [ms], iterations and evaluations per equilibrium for several methods.
+    ``stats`` maps a method letter to a dict with keys ``time_ms``, ``iterations``, ``evaluations``
+    (arrays over speeds)."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(11, 3.6))
+    letters = list(stats)
+    for ax, key, lab in zip(axes, ("time_ms", "iterations", "evaluations"),
+                            ("CPU time per equilibrium [ms]", "iterations [-]", "film evaluations [-]")):
+        vals = [np.mean(stats[k][key]) for k in letters]
+        err = [np.std(stats[k][key]) for k in letters]
+        ax.bar(letters, vals, yerr=err, color=["#4c72b0", "#55a868", "#c44e52", "#8172b2"][:len(letters)])
+        ax.set_title(lab, fontsize=10)
+        ax.grid(alpha=0.3, axis="y")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
