@@ -31,7 +31,7 @@ class BearingEquilibrium:
     """Static state of one floating-ring bearing. Positions in [m], speeds in [rad/s]."""
 
     name: str
-    journal: np.ndarray  # journal centre rel. housing [m]
+    r_inner: np.ndarray  # journal centre minus ring centre [m] (kept itself: it can be far below |ring|)
     ring: np.ndarray  # ring centre rel. housing [m]
     eps_inner: float
     eps_outer: float
@@ -42,9 +42,9 @@ class BearingEquilibrium:
     evaluations: int
 
     @property
-    def r_inner(self) -> np.ndarray:
-        """Journal minus ring centre [m]."""
-        return self.journal - self.ring
+    def journal(self) -> np.ndarray:
+        """Journal centre relative to the housing [m]."""
+        return self.ring + self.r_inner
 
     @property
     def omega_inner(self) -> float:
@@ -108,14 +108,14 @@ def _uncoupled(bearing, w, omega_r, model, g, rsr):
     omega_fr = rsr * omega_r
     r_i, eps_i, it_i = static_position(bearing.inner, f_i, omega_r + omega_fr, model)
     r_o, eps_o, it_o = static_position(bearing.outer, f_o, omega_fr, model)
-    return BearingEquilibrium(bearing.name, r_o + r_i, r_o, eps_i, eps_o, omega_fr, rsr, omega_r, it_i + it_o, 2)
+    return BearingEquilibrium(bearing.name, r_i, r_o, eps_i, eps_o, omega_fr, rsr, omega_r, it_i + it_o, 2)
 
 
 def _outer_only(bearing, w, omega_r, model, g, rsr):
     _, f_o = _loads(bearing, w, g)
     omega_fr = rsr * omega_r
     r_o, eps_o, it = static_position(bearing.outer, f_o, omega_fr, model)
-    return BearingEquilibrium(bearing.name, r_o.copy(), r_o, 0.0, eps_o, omega_fr, rsr, omega_r, it, 1)
+    return BearingEquilibrium(bearing.name, np.zeros(2), r_o, 0.0, eps_o, omega_fr, rsr, omega_r, it, 1)
 
 
 def _coupled(bearing, w, omega_r, model, g, rsr):
@@ -129,8 +129,17 @@ def _coupled(bearing, w, omega_r, model, g, rsr):
     mg = np.array([0.0, bearing.ring_mass * g])
     target = np.array([0.0, w])
 
+    # unknowns u (2 per film) map to r = c u / sqrt(1 + |u|^2): every trial point of the solver lies strictly
+    # inside the clearance, so the Newton-type steps never ask for a film state with eps >= 1
+    def to_r(u, c):
+        return c * u / np.sqrt(1.0 + u @ u)
+
+    def dr_du(u, c):
+        q = 1.0 + u @ u
+        return c * (np.eye(2) / np.sqrt(q) - np.outer(u, u) / q ** 1.5)
+
     def unpack(x):
-        return np.array([x[0] * c_i, x[1] * c_i]), np.array([x[2] * c_o, x[3] * c_o])
+        return to_r(x[:2], c_i), to_r(x[2:], c_o)
 
     def fun(x):
         r_i, r_o = unpack(x)
@@ -142,10 +151,11 @@ def _coupled(bearing, w, omega_r, model, g, rsr):
         r_i, r_o = unpack(x)
         k_i, _ = film_coefficients(bearing.inner, r_i, omega_r + omega_fr, model)
         k_o, _ = film_coefficients(bearing.outer, r_o, omega_fr, model)
+        d_i, d_o = dr_du(x[:2], c_i), dr_du(x[2:], c_o)
         J = np.zeros((4, 4))
-        J[:2, :2] = -k_i * c_i
-        J[2:, :2] = k_i * c_i
-        J[2:, 2:] = -k_o * c_o
+        J[:2, :2] = -k_i @ d_i
+        J[2:, :2] = k_i @ d_i
+        J[2:, 2:] = -k_o @ d_o
         return J / scale_f
 
     sol = root(fun, np.zeros(4), jac=jac, method="hybr", options={"xtol": 1e-13})
@@ -153,7 +163,7 @@ def _coupled(bearing, w, omega_r, model, g, rsr):
         raise ConvergenceError(f"method G equilibrium of the {bearing.name} bearing did not converge at "
                                f"{omega_r / RPM:.0f} rpm: {sol.message} (residual {np.max(np.abs(sol.fun)):.3g})")
     r_i, r_o = unpack(sol.x)
-    return BearingEquilibrium(bearing.name, r_o + r_i, r_o, float(np.hypot(*r_i) / c_i), float(np.hypot(*r_o) / c_o),
+    return BearingEquilibrium(bearing.name, r_i, r_o, float(np.hypot(*r_i) / c_i), float(np.hypot(*r_o) / c_o),
                               omega_fr, rsr, omega_r, int(sol.nfev), int(sol.nfev + sol.njev))
 
 
@@ -192,7 +202,7 @@ def _ring_speed_root(bearing, w, omega_r, model, g, residual_kind):
         raise ConvergenceError(f"ring speed solve of the {bearing.name} bearing failed at {omega_r / RPM:.0f} rpm: "
                                f"{exc}") from exc
     r_i, eps_i, r_o, eps_o = films(omega_fr)
-    return BearingEquilibrium(bearing.name, r_o + r_i, r_o, eps_i, eps_o, omega_fr, omega_fr / omega_r, omega_r,
+    return BearingEquilibrium(bearing.name, r_i, r_o, eps_i, eps_o, omega_fr, omega_fr / omega_r, omega_r,
                               int(res.iterations), 2 * counter["n"])
 
 

@@ -247,7 +247,7 @@ def _eps_from_load_corrected(wbar: float, lam: float):
     lo = eps0
     hi = 1.0 - 1e-14
     eps, res = brentq(lambda x: static_load(x, "short_corrected", lam) - wbar, lo, hi, xtol=1e-15,
-                      rtol=4e-16, full_output=True)
+                      rtol=1e-15, full_output=True)
     return eps, res.iterations
 
 

@@ -72,7 +72,7 @@ def modes(M, C, K) -> Modes:
 
 
 def precession_index(shapes, v_idx, w_idx):
-    """Ψ per node and mode: Im(v̄ conj(w̄)) / (|v̄|² + |w̄|²) ∈ [−1, 1] (+1 circular forward).
+    """Ψ per node and mode: 2 Im(v̄ conj(w̄)) / (|v̄|² + |w̄|²) ∈ [−1, 1] (+1: circular forward).
 
     ``shapes`` (n_dof, m); ``v_idx``, ``w_idx`` the DoF indices of x and y displacement per node.
     Returns ``(psi, amp2)`` each (n_nodes, m).
@@ -80,7 +80,7 @@ def precession_index(shapes, v_idx, w_idx):
     v = shapes[np.asarray(v_idx)]
     w = shapes[np.asarray(w_idx)]
     amp2 = np.abs(v) ** 2 + np.abs(w) ** 2
-    psi = np.imag(v * np.conj(w))
+    psi = 2.0 * np.imag(v * np.conj(w))
     with np.errstate(invalid="ignore", divide="ignore"):
         psi_n = np.where(amp2 > 0, psi / np.where(amp2 > 0, amp2, 1.0), 0.0)
     return psi_n, amp2

@@ -1,0 +1,178 @@
+"""Command line interface ``frb``."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .errors import FRBError, ParameterError
+
+
+class Progress:
+    """Minimal terminal progress line on stderr (cases done/total, elapsed, ETA)."""
+
+    def __init__(self, label: str, stream=sys.stderr, min_interval: float = 0.3):
+        self.label, self.stream, self.min_interval = label, stream, min_interval
+        self.t0 = time.perf_counter()
+        self.last = 0.0
+
+    def __call__(self, done: int, total: int):
+        now = time.perf_counter()
+        if done < total and now - self.last < self.min_interval:
+            return
+        self.last = now
+        el = now - self.t0
+        eta = el / done * (total - done) if done else float("nan")
+        end = "\n" if done >= total else "\r"
+        self.stream.write(f"{self.label}: {done}/{total}  elapsed {el:6.1f} s  ETA {eta:6.1f} s{end}")
+        self.stream.flush()
+
+
+def parse_speeds(text: str) -> np.ndarray:
+    """``"start:stop:count"`` (inclusive linspace) or a comma-separated list, in rpm."""
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            n = int(n)
+            if n < 1:
+                raise ValueError
+            return np.linspace(float(a), float(b), n)
+        return np.array([float(x) for x in text.split(",")])
+    except ValueError:
+        raise ParameterError(f"--speeds = {text!r} is invalid: use START:STOP:COUNT (rpm) or a comma list") from None
+
+
+def load_from_args(args):
+    from .parameters import load_system
+    from .presets import turbocharger
+
+    if getattr(args, "system", None):
+        tc = load_system(args.system)
+        if args.outer_clearance is not None:
+            tc = tc.with_outer_clearance(args.outer_clearance)
+    else:
+        tc = turbocharger(outer_clearance=36e-6 if args.outer_clearance is None else args.outer_clearance)
+    if getattr(args, "film_model", None):
+        tc = tc.with_(film_model=args.film_model)
+    return tc
+
+
+def _system_args(p):
+    p.add_argument("--outer-clearance", type=float, default=None, metavar="M",
+                   help="radial clearance of both outer films [m] (default 36e-6)")
+    p.add_argument("--system", metavar="FILE", help="system description (.toml or .json, see `frb system`)")
+    p.add_argument("--film-model", choices=["short", "short_corrected"], default=None,
+                   help="film model (default: the system's, 'short')")
+
+
+def cmd_campbell(args):
+    from .campbell import campbell
+
+    tc = load_from_args(args)
+    speeds = parse_speeds(args.speeds)
+    kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
+    cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=Progress(f"campbell {args.method}"), **kw)
+    out = Path(args.out)
+    paths = cd.save(out, fmax_hz=args.fmax)
+    print(f"method {cd.method}: {cd.meta['method_title']}; {speeds.size} speeds in {cd.meta['cpu_time_s']:.3f} s")
+    if not args.no_whirl:
+        from .whirl import FILM_NAMES
+
+        for name, s in zip(FILM_NAMES, cd.whirl_onset_rpm):
+            print(f"  film whirl onset {name:>17}: " + ("none in range" if not np.isfinite(s) else f"{s:,.0f} rpm"))
+    ur = cd.unstable_ranges()
+    if len(ur):
+        print("unstable modes (D < 0):")
+        print(ur.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    else:
+        print("no unstable mode in the speed range")
+    print(f"max. simultaneously unstable modes: {int(cd.n_unstable.max())}")
+    print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
+    print(f"results in {out.resolve()}")
+
+
+def cmd_equilibrium(args):
+    from .equilibrium import equilibrium
+
+    tc = load_from_args(args)
+    eq = equilibrium(tc, args.method, args.speed_rpm)
+    print(eq)
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        p = out / f"equilibrium_{eq.method}_{args.speed_rpm:.0f}rpm.csv"
+        eq.to_dataframe().to_csv(p, index=False)
+        print(f"wrote {p.resolve()}")
+
+
+def cmd_system(args):
+    tc = load_from_args(args)
+    p = tc.save(args.out)
+    print(f"wrote {Path(p).resolve()} (edit it and pass it with --system)")
+
+
+def cmd_paper_figures(args):
+    from .paper import paper_figures
+
+    tc = load_from_args(args)
+    paths = paper_figures(tc, args.out, n_speeds=args.n_speeds, progress=lambda msg: print(msg, flush=True))
+    print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
+    print(f"results in {Path(args.out).resolve()}")
+
+
+def build_parser():
+    from . import __version__
+    from .methods import METHODS
+
+    p = argparse.ArgumentParser(prog="frb", description="Rotordynamics of turbochargers on floating-ring bearings "
+                                "(SI units inside; speeds on the command line in rpm).")
+    p.add_argument("--version", action="version", version=f"frbmodel {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    c = sub.add_parser("campbell", help="holistic Campbell diagram for one method (CSV + PNG + HTML)")
+    c.add_argument("--method", default="J", type=str.upper, choices=list(METHODS))
+    c.add_argument("--speeds", default="10000:250000:100", help="START:STOP:COUNT [rpm] or comma list")
+    c.add_argument("--out", default="results/campbell", help="output folder")
+    c.add_argument("--fmax", type=float, default=None, help="upper frequency limit of the plots [Hz]")
+    c.add_argument("--no-whirl", action="store_true", help="skip the film whirl curves")
+    c.add_argument("--k", type=float, default=None, help="spring stiffness of methods A, E [N/m] (1e6)")
+    c.add_argument("--kx", type=float, default=None, help="horizontal spring of method B [N/m] (1e6)")
+    c.add_argument("--ky", type=float, default=None, help="vertical spring of method B [N/m] (2e6)")
+    _system_args(c)
+    c.set_defaults(func=cmd_campbell)
+
+    e = sub.add_parser("equilibrium", help="static equilibrium of both bearings (methods C, D, F, G, I, J)")
+    e.add_argument("--method", default="J", type=str.upper, choices=list(METHODS))
+    e.add_argument("--speed-rpm", type=float, default=150e3, help="rotor speed [rpm]")
+    e.add_argument("--out", default=None, help="also write a CSV into this folder")
+    _system_args(e)
+    e.set_defaults(func=cmd_equilibrium)
+
+    s = sub.add_parser("system", help="write the system description (default: Table 2) to a .toml/.json file")
+    s.add_argument("--out", default="turbocharger.toml")
+    _system_args(s)
+    s.set_defaults(func=cmd_system)
+
+    f = sub.add_parser("paper-figures", help="regenerate the paper's linear figures 4-11")
+    f.add_argument("--out", default="results/paper-figures")
+    f.add_argument("--n-speeds", type=int, default=100, help="speeds per Campbell diagram")
+    _system_args(f)
+    f.set_defaults(func=cmd_paper_figures)
+    return p
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except FRBError as exc:
+        print(f"frb {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
