@@ -13,7 +13,7 @@ from .equilibrium import RPM, bearing_equilibrium
 from .errors import ParameterError
 from .linear import linear_system
 from .methods import get_method
-from .modal import classify_precession, modes, precession_index, ring_energy_fraction, track
+from .modal import batch_modes, classify_precession, precession_index, ring_energy_fraction, speed_modes, track
 from .whirl import FILM_NAMES, bearing_whirl
 
 #: a mode is called a ring mode when the rings carry more than this share of its kinetic energy
@@ -216,7 +216,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
     --------
     >>> import numpy as np, frbmodel as frb
     >>> cd = frb.campbell(frb.turbocharger(), "A", np.array([1.0, 100e3]), whirl=False)
-    >>> [round(f, 1) for f in cd.frequencies_hz[1, :3]]     # physics.md §11
+    >>> [round(float(f), 1) for f in cd.frequencies_hz[1, :3]]     # physics.md §11
     [60.2, 192.5, 297.3]
     """
     m = get_method(method)
@@ -233,12 +233,12 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
     rotor = system.rotor
     nn = rotor.n_nodes
     loads = system.bearing_loads
-    lam_list, shape_list, prec_list, ring_list = [], [], [], []
     rsr = np.full((speeds.size, 2), np.nan)
     ecc = np.full((speeds.size, 4), np.nan)
     whirl_hz = np.full((speeds.size, 4), np.nan)
     margin = np.full((speeds.size, 4), np.nan)
     t_eq = 0.0
+    systems = []
     for i, s in enumerate(speeds):
         omega = s * RPM
         eqs = None
@@ -248,13 +248,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
                         for k, b in enumerate(system.bearings))
             t_eq += time.perf_counter() - te
             rsr[i] = [e.ring_speed_ratio for e in eqs]
-        ls = linear_system(system, m.letter, s, equilibria=eqs, **kw)
-        md = modes(ls.M, ls.C, ls.K)
-        psi, amp2 = precession_index(md.shapes, np.arange(nn) * 4, np.arange(nn) * 4 + 1)
-        lam_list.append(md.eigenvalues)
-        shape_list.append(md.shapes)
-        prec_list.append(classify_precession(psi, amp2))
-        ring_list.append(ring_energy_fraction(md.shapes, ls.M, ls.ring_dofs))
+            systems.append(linear_system(system, m.letter, s, equilibria=eqs, **kw))
         if whirl and omega > 0:
             weqs = eqs if m.letter == "J" else tuple(
                 bearing_equilibrium(b, loads[k], omega, "J", system.film_model, system.gravity)
@@ -264,20 +258,47 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
                 whirl_hz[i, 2 * k:2 * k + 2] = np.array([wi, wo]) / (2 * math.pi)
                 margin[i, 2 * k:2 * k + 2] = [mi, mo]
                 ecc[i, 2 * k:2 * k + 2] = [e.eps_inner, e.eps_outer]
-        if progress is not None:
+        if progress is not None and (m.needs_films or whirl):
             progress(i + 1, speeds.size)
+    if m.needs_films:
+        mode_sets = batch_modes(systems)
+        mass = systems[0].M
+        ring_dofs = systems[0].ring_dofs
+    else:  # speed-independent M, K, bearing damping: assemble once, all speeds in one stacked solve
+        ls0 = linear_system(system, m.letter, 0.0, **kw)
+        G = np.zeros_like(ls0.M)
+        G[:rotor.n_dof, :rotor.n_dof] = rotor.G
+        mode_sets = speed_modes(ls0.M, ls0.K, ls0.C, G, speeds * RPM, ls0.planes())
+        mass, ring_dofs = ls0.M, ls0.ring_dofs
+    lam_list = [md.eigenvalues for md in mode_sets]
+    shape_list = [md.shapes for md in mode_sets]
+    v_idx, w_idx = np.arange(nn) * 4, np.arange(nn) * 4 + 1
+    if len({sh.shape for sh in shape_list}) == 1:  # same mode count at all speeds: one vectorised pass
+        stack = np.stack(shape_list)
+        prec_list = list(classify_precession(*precession_index(stack, v_idx, w_idx)))
+        ring_list = list(ring_energy_fraction(stack, mass, ring_dofs))
+    else:
+        prec_list = [classify_precession(*precession_index(sh, v_idx, w_idx)) for sh in shape_list]
+        ring_list = [ring_energy_fraction(sh, mass, ring_dofs) for sh in shape_list]
     perm = track(lam_list, shape_list)
     n_tr = perm[0].size if perm else 0
     lam = np.full((speeds.size, n_tr), np.nan + 0j)
     prec = np.full((speeds.size, n_tr), "", dtype=object)
     kind = np.full((speeds.size, n_tr), "", dtype=object)
     ringf = np.full((speeds.size, n_tr), np.nan)
-    for i, p in enumerate(perm):
-        ok = p >= 0
-        lam[i, ok] = lam_list[i][p[ok]]
-        prec[i, ok] = prec_list[i][p[ok]]
-        ringf[i, ok] = ring_list[i][p[ok]]
-        kind[i, ok] = np.where(ring_list[i][p[ok]] > RING_MODE_FRACTION, "ring", "rotor")
+    P = np.array(perm)
+    if np.all(P >= 0) and len({x.size for x in lam_list}) == 1:  # full tracks: gather all speeds at once
+        lam = np.take_along_axis(np.stack(lam_list), P, axis=1)
+        prec = np.take_along_axis(np.stack(prec_list), P, axis=1)
+        ringf = np.take_along_axis(np.stack(ring_list), P, axis=1)
+        kind = np.where(ringf > RING_MODE_FRACTION, "ring", "rotor").astype(object)
+    else:
+        for i, p in enumerate(perm):
+            ok = p >= 0
+            lam[i, ok] = lam_list[i][p[ok]]
+            prec[i, ok] = prec_list[i][p[ok]]
+            ringf[i, ok] = ring_list[i][p[ok]]
+            kind[i, ok] = np.where(ring_list[i][p[ok]] > RING_MODE_FRACTION, "ring", "rotor")
     # order tracks by their mean frequency
     order = np.argsort(np.nanmean(np.where(np.isfinite(lam.imag), lam.imag, np.nan), axis=0))
     lam, prec, kind, ringf = lam[:, order], prec[:, order], kind[:, order], ringf[:, order]

@@ -352,7 +352,7 @@ def film_coefficients(film: Film, e, omega_sum: float, model: str = "short"):
     --------
     >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
     >>> K, C = film_coefficients(f, [9.4691e-6, -3.7916e-6], 3000.0)
-    >>> round(K[0, 0] / 1e5, 2), round(C[1, 1], 0)       # physics.md §4.3
+    >>> round(float(K[0, 0]) / 1e5, 2), round(float(C[1, 1]), 0)       # physics.md §4.3
     (3.98, 449.0)
     """
     model = check_model(model)

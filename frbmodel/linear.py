@@ -42,6 +42,20 @@ class LinearSystem:
     ring_dofs: list | None
     n_rotor_dof: int
 
+    def planes(self):
+        """``(a, b, sign)``: DoF indices of the x–z plane ``a`` = (v, θy, ring x) and the matching y–z plane
+        ``b`` = (w, θx, ring y), with ``sign`` mapping b to (w, −θx, ring y) so that the complex coordinate
+        ``a + i·sign·b`` is (v + i w, θy − i θx, x + i y)."""
+        nn = self.n_rotor_dof // 4
+        a = [4 * i + k for i in range(nn) for k in (0, 3)]
+        b = [4 * i + k for i in range(nn) for k in (1, 2)]
+        sign = [1.0, -1.0] * nn
+        for rx, ry in self.ring_dofs or []:
+            a.append(rx)
+            b.append(ry)
+            sign.append(1.0)
+        return np.array(a), np.array(b), np.array(sign)
+
 
 def film_pair_matrix(k_inner, k_outer):
     """Journal/ring coupling of two films (paper eq. 27): [[K_I, −K_I], [−K_I, K_I + K_O]] (4 x 4)."""

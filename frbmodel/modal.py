@@ -57,6 +57,15 @@ class Modes:
 def modes_from_state(A, n_dof):
     """Eigen-decomposition of a state matrix whose first ``n_dof`` states are displacements."""
     lam, vec = sla.eig(A, check_finite=True)
+    return _select(lam, vec, n_dof)
+
+
+def modes(M, C, K) -> Modes:
+    """Under-damped modes of ``M q̈ + C q̇ + K q = 0``."""
+    return modes_from_state(state_matrix(M, C, K), M.shape[0])
+
+
+def _select(lam, vec, n_dof):
     keep = lam.imag > REAL_TOL * np.abs(lam)
     lam, vec = lam[keep], vec[:n_dof, keep]
     order = np.argsort(lam.imag)
@@ -66,19 +75,117 @@ def modes_from_state(A, n_dof):
     return Modes(lam, vec / norms)
 
 
-def modes(M, C, K) -> Modes:
-    """Under-damped modes of ``M q̈ + C q̇ + K q = 0``."""
-    return modes_from_state(state_matrix(M, C, K), M.shape[0])
+def isotropic_complex_form(M, C, K, a, b, sign, tol=1e-12):
+    """Complex-coordinate matrices ``(Mc, Gc, Kc)`` of an undamped isotropic gyroscopic system, or None.
+
+    For an axisymmetric rotor on isotropic, undamped supports the real equations split into two identical
+    planes ``a`` and ``b`` coupled only by the gyroscopic matrix, and z = a + i·sign·b obeys
+    ``Mc z̈ − i Gc ż + Kc z = 0`` with real symmetric ``Mc, Gc, Kc`` of half the size (the classical complex
+    coordinates of rotordynamics). Returns None when the system is not of that form.
+    """
+    S = sign
+    Maa, Kaa = M[np.ix_(a, a)], K[np.ix_(a, a)]
+    Mbb, Kbb = S[:, None] * M[np.ix_(b, b)] * S[None, :], S[:, None] * K[np.ix_(b, b)] * S[None, :]
+    Gab = C[np.ix_(a, b)] * S[None, :]
+    Gba = S[:, None] * C[np.ix_(b, a)]
+    scale_m, scale_k = np.abs(Maa).max(), np.abs(Kaa).max()
+    scale_g = max(np.abs(Gab).max(), 1e-300)
+    ok = (np.abs(Maa - Mbb).max() <= tol * scale_m and np.abs(Kaa - Kbb).max() <= tol * scale_k
+          and np.abs(M[np.ix_(a, b)]).max() <= tol * scale_m and np.abs(K[np.ix_(a, b)]).max() <= tol * scale_k
+          and np.abs(C[np.ix_(a, a)]).max() <= tol * scale_g and np.abs(C[np.ix_(b, b)]).max() <= tol * scale_g
+          and np.abs(Gab + Gba).max() <= tol * scale_g and np.abs(Gab - Gab.T).max() <= tol * scale_g)
+    return (Maa, Gab, Kaa) if ok else None
+
+
+def batch_modes(systems):
+    """Under-damped modes of a list of linear systems (objects with ``M``, ``C``, ``K``): the
+    eigen-decompositions of all of them in one stacked LAPACK call on the state matrices."""
+    if not systems:
+        return []
+    n = systems[0].M.shape[0]
+    Minv = np.linalg.inv(systems[0].M)
+    A = np.zeros((len(systems), 2 * n, 2 * n))
+    A[:, :n, n:] = np.eye(n)
+    for k, s in enumerate(systems):
+        if s.M is not systems[0].M and not np.array_equal(s.M, systems[0].M):
+            Minv = np.linalg.inv(s.M)
+        A[k, n:, :n] = -Minv @ s.K
+        A[k, n:, n:] = -Minv @ s.C
+    lam, vec = np.linalg.eig(A)
+    return [_select(lam[k], vec[k], n) for k in range(len(systems))]
+
+
+def speed_modes(M, K, C0, G, omegas, planes=None):
+    """Modes of ``M q̈ + (C0 + Ω G) q̇ + K q = 0`` at all speeds ``omegas`` [rad/s] (M, K, C0 constant).
+
+    If the system is undamped and isotropic (methods A and E: axisymmetric rotor on isotropic springs) it is
+    solved in complex coordinates z = a + i·sign·b (``planes = (a, b, sign)``) as a Hermitian-definite
+    problem of half the size: exact, and the sign of each frequency is its precession. Otherwise the state
+    matrices A0 + Ω A1 of all speeds go to one stacked eigen-decomposition.
+    """
+    omegas = np.asarray(omegas, dtype=float)
+    n = M.shape[0]
+    if planes is not None and not np.any(C0):
+        a, b, sign = planes
+        form = isotropic_complex_form(M, G, K, a, b, sign)
+        if form is not None:
+            try:
+                return _isotropic_modes(form, omegas, n, a, b, sign)
+            except np.linalg.LinAlgError:  # K not positive definite (free rotor): general path below
+                pass
+    Minv = np.linalg.inv(M)
+    A = np.zeros((omegas.size, 2 * n, 2 * n))
+    A[:, :n, n:] = np.eye(n)
+    A[:, n:, :n] = -Minv @ K
+    A[:, n:, n:] = -Minv @ C0 - omegas[:, None, None] * (Minv @ G)
+    lam, vec = np.linalg.eig(A)
+    return [_select(lam[k], vec[k], n) for k in range(omegas.size)]
+
+
+def _isotropic_modes(form, omegas, n_dof, a, b, sign):
+    """Complex-coordinate solution of ``Mc z̈ − iΩΓ ż + Kc z = 0``.
+
+    With z = e^{iωt} z0 and the state y = [z; ż] the problem is ω B y = [[0, −iKc], [iKc, ΩΓ]] y,
+    B = diag(Kc, Mc). Scaling the first block, y = [i y1; y2], makes it real symmetric-definite:
+    ω B y' = [[0, −Kc], [−Kc, ΩΓ]] y', solved for all speeds in one stacked real ``eigh`` after a
+    Cholesky reduction with the speed-independent B. z0 = i y1' (a real shape: circular orbits).
+    """
+    Mc, Gam, Kc = form
+    m = Mc.shape[0]
+    B = np.zeros((2 * m, 2 * m))
+    B[:m, :m], B[m:, m:] = Kc, Mc
+    Linv = np.linalg.inv(np.linalg.cholesky(B))  # LinAlgError if K is not positive definite
+    H0 = np.zeros((2 * m, 2 * m))
+    H0[:m, m:] = -Kc
+    H0[m:, :m] = -Kc
+    H1 = np.zeros((2 * m, 2 * m))
+    H1[m:, m:] = Gam
+    H0t = Linv @ H0 @ Linv.T
+    H1t = Linv @ H1 @ Linv.T
+    w, x = np.linalg.eigh(H0t[None] + omegas[:, None, None] * H1t[None])
+    order = np.argsort(np.abs(w), axis=1)
+    w = np.take_along_axis(w, order, axis=1)
+    x = np.take_along_axis(x, order[:, None, :], axis=2)
+    z = Linv.T[:m] @ x  # (k, m, 2m) real displacement shapes (the factor i is a complex scale)
+    z /= np.linalg.norm(z, axis=1, keepdims=True) * np.sqrt(2.0)
+    # real-coordinate eigenvector of the eigenvalue i|ω| (z real): forward v̄ = z, w̄ = −i z;
+    # backward v̄ = z, w̄ = +i z
+    fwd = np.where(w > 0, -1.0, 1.0)[:, None, :]
+    shapes = np.zeros((omegas.size, n_dof, 2 * m), dtype=complex)
+    shapes[:, a] = z
+    shapes[:, b] = sign[None, :, None] * (1j * fwd) * z
+    lam = 1j * np.abs(w)
+    return [Modes(lam[k], shapes[k]) for k in range(omegas.size)]
 
 
 def precession_index(shapes, v_idx, w_idx):
     """Ψ per node and mode: 2 Im(v̄ conj(w̄)) / (|v̄|² + |w̄|²) ∈ [−1, 1] (+1: circular forward).
 
-    ``shapes`` (n_dof, m); ``v_idx``, ``w_idx`` the DoF indices of x and y displacement per node.
-    Returns ``(psi, amp2)`` each (n_nodes, m).
+    ``shapes`` (..., n_dof, m); ``v_idx``, ``w_idx`` the DoF indices of x and y displacement per node.
+    Returns ``(psi, amp2)`` each (..., n_nodes, m).
     """
-    v = shapes[np.asarray(v_idx)]
-    w = shapes[np.asarray(w_idx)]
+    v = shapes[..., np.asarray(v_idx), :]
+    w = shapes[..., np.asarray(w_idx), :]
     amp2 = np.abs(v) ** 2 + np.abs(w) ** 2
     psi = 2.0 * np.imag(v * np.conj(w))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -92,29 +199,25 @@ def classify_precession(psi, amp2):
     Nodes with negligible amplitude or a planar orbit do not vote. A mode whose voting nodes all have
     Ψ > 0 is forward, all Ψ < 0 backward, otherwise mixed (the paper's "combined precession").
     """
-    out = []
-    amax = amp2.max(axis=0)
-    for j in range(psi.shape[1]):
-        vote = (amp2[:, j] > NODE_AMP_TOL * amax[j]) & (np.abs(psi[:, j]) > PSI_TOL)
-        p = psi[vote, j]
-        if p.size == 0:
-            out.append("mixed")
-        elif np.all(p > 0):
-            out.append("forward")
-        elif np.all(p < 0):
-            out.append("backward")
-        else:
-            out.append("mixed")
-    return np.array(out, dtype=object)
+    amax = amp2.max(axis=-2, keepdims=True)
+    vote = (amp2 > NODE_AMP_TOL * amax) & (np.abs(psi) > PSI_TOL)
+    pos = np.all((psi > 0) | ~vote, axis=-2)
+    neg = np.all((psi < 0) | ~vote, axis=-2)
+    anyv = np.any(vote, axis=-2)
+    out = np.full(pos.shape, "mixed", dtype=object)
+    out[anyv & pos] = "forward"
+    out[anyv & neg] = "backward"
+    return out
 
 
 def ring_energy_fraction(shapes, M, ring_dofs):
-    """Share of the modal kinetic energy u^H M u carried by the ring DoFs, per mode (m,)."""
+    """Share of the modal kinetic energy u^H M u carried by the ring DoFs, per mode (..., m)."""
     if not ring_dofs:
-        return np.zeros(shapes.shape[1])
-    total = np.real(np.einsum("im,ij,jm->m", np.conj(shapes), M, shapes))
+        return np.zeros(shapes.shape[:-2] + shapes.shape[-1:])
+    total = np.real(np.einsum("...im,ij,...jm->...m", np.conj(shapes), M, shapes))
     idx = np.array(ring_dofs).ravel()
-    ring = np.real(np.einsum("im,ij,jm->m", np.conj(shapes[idx]), M[np.ix_(idx, idx)], shapes[idx]))
+    sr = shapes[..., idx, :]
+    ring = np.real(np.einsum("...im,ij,...jm->...m", np.conj(sr), M[np.ix_(idx, idx)], sr))
     return ring / total
 
 
@@ -136,31 +239,56 @@ def track(eigenvalue_list, shape_list, w_lambda=0.3):
     """
     from scipy.optimize import linear_sum_assignment
 
-    n_steps = len(eigenvalue_list)
-    tracks_last_shape = []
-    tracks_last_lam = []
+    fast = _track_constant(eigenvalue_list, shape_list, w_lambda)
+    if fast is not None:
+        return fast
+    last_shape = None  # (n_dof, n_tracks) unit-norm shapes of each track's last appearance
+    last_lam = np.zeros(0, dtype=complex)
     assignment = []
-    for k in range(n_steps):
-        lam, sh = eigenvalue_list[k], shape_list[k]
-        cur = -np.ones(len(tracks_last_lam), dtype=int)
+    for lam, sh in zip(eigenvalue_list, shape_list):
+        n_tr = last_lam.size
+        cur = -np.ones(n_tr, dtype=int)
         used = np.zeros(lam.size, dtype=bool)
-        if tracks_last_lam and lam.size:
-            prev_sh = np.column_stack(tracks_last_shape)
-            prev_lam = np.array(tracks_last_lam)
-            cost = 1.0 - mac(prev_sh, sh) + w_lambda * np.abs(prev_lam[:, None] - lam[None, :]) / np.abs(
-                prev_lam)[:, None]
-            r, c = linear_sum_assignment(cost)
-            for ri, ci in zip(r, c):
-                if cost[ri, ci] < 1.5:  # a poor match rather opens a new track
-                    cur[ri] = ci
-                    used[ci] = True
-                    tracks_last_shape[ri] = sh[:, ci]
-                    tracks_last_lam[ri] = lam[ci]
+        if n_tr and lam.size:
+            # shapes are unit norm, so MAC = |u_a^H u_b|²
+            cost = 1.0 - np.abs(np.conj(last_shape).T @ sh) ** 2 \
+                + w_lambda * np.abs(last_lam[:, None] - lam[None, :]) / np.abs(last_lam)[:, None]
+            rmin = cost.argmin(axis=1)
+            if n_tr <= lam.size and np.bincount(rmin, minlength=lam.size).max() == 1:
+                r, c = np.arange(n_tr), rmin  # every track's best mode is distinct: that is the optimum
+            else:
+                r, c = linear_sum_assignment(cost)
+            good = cost[r, c] < 1.5  # a poor match rather opens a new track
+            r, c = r[good], c[good]
+            cur[r] = c
+            used[c] = True
+            last_shape[:, r] = sh[:, c]
+            last_lam[r] = lam[c]
         new = np.flatnonzero(~used)
-        for ci in new:
-            tracks_last_shape.append(sh[:, ci])
-            tracks_last_lam.append(lam[ci])
-        cur = np.concatenate([cur, new])
-        assignment.append(cur)
-    n_tracks = len(tracks_last_lam)
+        if new.size:
+            last_shape = sh[:, new] if last_shape is None else np.concatenate([last_shape, sh[:, new]], axis=1)
+            last_lam = np.concatenate([last_lam, lam[new]])
+        assignment.append(np.concatenate([cur, new]))
+    n_tracks = last_lam.size
     return [np.concatenate([a, -np.ones(n_tracks - a.size, dtype=int)]) for a in assignment]
+
+
+def _track_constant(eigenvalue_list, shape_list, w_lambda):
+    """Vectorised tracking when every step has the same modes count and each mode's best match at the next
+    step is distinct (no ambiguity): all consecutive cost matrices in one batched product. None otherwise."""
+    sizes = {lam.size for lam in eigenvalue_list}
+    if len(sizes) != 1 or len(eigenvalue_list) < 2 or 0 in sizes:
+        return None
+    L = np.stack(eigenvalue_list)
+    S = np.stack(shape_list)
+    mac2 = np.abs(np.einsum("kim,kin->kmn", np.conj(S[:-1]), S[1:])) ** 2
+    cost = 1.0 - mac2 + w_lambda * np.abs(L[:-1, :, None] - L[1:, None, :]) / np.abs(L[:-1, :, None])
+    best = cost.argmin(axis=2)  # (steps-1, m): best next-step mode of each current mode
+    m = L.shape[1]
+    if np.any(np.sort(best, axis=1) != np.arange(m)[None, :]) or np.any(
+            np.take_along_axis(cost, best[:, :, None], axis=2) >= 1.5):
+        return None
+    perm = [np.arange(m)]
+    for b in best:
+        perm.append(b[perm[-1]])
+    return perm

@@ -84,7 +84,7 @@ class Turbocharger:
     --------
     >>> import frbmodel as frb
     >>> tc = frb.turbocharger(outer_clearance=36e-6)
-    >>> [round(w, 4) for w in tc.bearing_loads]   # static reactions [N], physics.md §10
+    >>> [round(float(w), 4) for w in tc.bearing_loads]   # static reactions [N], physics.md §10
     [5.3093, -0.1843]
     """
 

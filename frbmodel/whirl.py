@@ -76,7 +76,7 @@ def film_onset_speeds(system, method="J", speed_range_rpm=(500.0, 400e3)):
     --------
     >>> import frbmodel as frb
     >>> on = frb.film_onset_speeds(frb.turbocharger(36e-6))
-    >>> [round(x / 1e3, 1) for x in on]        # krpm, physics.md §11
+    >>> [round(float(x) / 1e3, 1) for x in on]        # krpm, physics.md §11
     [11.1, 68.1, 11.8, 69.2]
     """
     from scipy.optimize import brentq

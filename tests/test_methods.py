@@ -129,3 +129,26 @@ def test_bad_method_and_options():
         frb.campbell(frb.turbocharger(), "A", [1e5], k=-1.0)
     with pytest.raises(frb.ParameterError, match="not used by method J"):
         frb.campbell(frb.turbocharger(), "J", [1e5], k=1e6)
+
+
+@pytest.mark.parametrize("method", ["A", "E"])
+def test_complex_coordinate_path_equals_state_space_path(method):
+    """The half-size Hermitian solve used for undamped isotropic systems must reproduce the general
+    state-space eigenvalues and precession at every speed."""
+    from frbmodel.modal import classify_precession, modes, precession_index, speed_modes
+
+    tc = frb.turbocharger()
+    ls0 = linear_system(tc, method, 0.0)
+    G = np.zeros_like(ls0.M)
+    G[:16, :16] = tc.rotor.G
+    speeds = np.array([1e3, 80e3, 240e3])
+    fast = speed_modes(ls0.M, ls0.K, ls0.C, G, speeds * np.pi / 30, ls0.planes())
+    v, w = np.arange(4) * 4, np.arange(4) * 4 + 1
+    for k, s in enumerate(speeds):
+        ref = modes(ls0.M, ls0.C + s * np.pi / 30 * G, ls0.K)
+        # both are exact; eigenvalues to solver precision relative to the largest one
+        np.testing.assert_allclose(fast[k].eigenvalues, ref.eigenvalues, rtol=1e-9, atol=1e-10 * abs(ref.eigenvalues).max())
+        pf = classify_precession(*precession_index(fast[k].shapes, v, w))
+        pr = classify_precession(*precession_index(ref.shapes, v, w))
+        low = ref.frequencies_hz < 3000
+        assert list(pf[low]) == list(pr[low])
