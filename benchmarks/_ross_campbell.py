@@ -1,6 +1,6 @@
 """Time ROSS's run_campbell on the Table 2 rotor with method-A bearings (k = 1e6 N/m, no damping).
 
-Run by benchmarks/linear.py in an interpreter that has ross-rotordynamics (Python >= 3.12). Prints one JSON
+Usage: python _ross_campbell.py REPEAT N1 [N2 ...]. Run by benchmarks/linear.py in an interpreter that has ross-rotordynamics (Python >= 3.12). Prints one JSON
 line: {"version", "times_s": {n_speeds: best wall time}, "freq_hz_100krpm": [...]}.
 """
 import json
@@ -24,7 +24,7 @@ def build_rotor():
     return rs.Rotor(shaft, disks, bearings)
 
 
-def main(counts):
+def main(counts, repeat):
     import ross as rs
 
     rotor = build_rotor()
@@ -32,7 +32,8 @@ def main(counts):
     for n in counts:
         speeds = np.linspace(10e3, 250e3, n) * np.pi / 30
         best = np.inf
-        for _ in range(2):
+        rotor.run_campbell(speeds[:2], frequencies=8)  # warm-up
+        for _ in range(repeat if n <= 50 else 1):
             t0 = time.perf_counter()
             rotor.run_campbell(speeds, frequencies=8)
             best = min(best, time.perf_counter() - t0)
@@ -43,4 +44,5 @@ def main(counts):
 
 
 if __name__ == "__main__":
-    main([int(x) for x in sys.argv[1:]] or [26])
+    args = [int(x) for x in sys.argv[1:]]
+    main(args[1:] or [26], args[0] if args else 5)

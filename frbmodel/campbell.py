@@ -13,7 +13,8 @@ from .equilibrium import RPM, bearing_equilibrium
 from .errors import ParameterError
 from .linear import linear_system
 from .methods import get_method
-from .modal import batch_modes, classify_precession, precession_index, ring_energy_fraction, speed_modes, track
+from .modal import (batch_modes, classify_precession, precession_index, ring_energy_fraction, shape_class,
+                    speed_modes, track)
 from .whirl import FILM_NAMES, bearing_whirl
 
 #: a mode is called a ring mode when the rings carry more than this share of its kinetic energy
@@ -30,7 +31,8 @@ class CampbellResult:
     frequencies_hz : (n, m) damped natural frequencies [Hz]
     damping : (n, m) modal damping D = −Re λ / |λ| [-]; D < 0 is unstable
     precession : (n, m) "forward" | "backward" | "mixed" ("" where the mode is absent)
-    mode_kind : (n, m) "rotor" | "ring" (ring modes: rings carry > 50 % of the kinetic energy)
+    mode_kind : (n, m) "cylindrical" | "conical" | "bending" (rotor modes, from the shaft's displacement
+        pattern) or "ring" (the rings carry > 50 % of the kinetic energy)
     ring_fraction : (n, m) ring share of the modal kinetic energy [-]
     eigenvalues : (n, m) complex [1/s]
     ring_speed_ratio : (n, 2) RSR of turbine / compressor bearing (NaN for methods without film equilibrium)
@@ -277,28 +279,31 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
         stack = np.stack(shape_list)
         prec_list = list(classify_precession(*precession_index(stack, v_idx, w_idx)))
         ring_list = list(ring_energy_fraction(stack, mass, ring_dofs))
+        form_list = list(shape_class(stack, v_idx, w_idx, rotor.node_z))
     else:
         prec_list = [classify_precession(*precession_index(sh, v_idx, w_idx)) for sh in shape_list]
         ring_list = [ring_energy_fraction(sh, mass, ring_dofs) for sh in shape_list]
+        form_list = [shape_class(sh, v_idx, w_idx, rotor.node_z) for sh in shape_list]
     perm = track(lam_list, shape_list)
     n_tr = perm[0].size if perm else 0
     lam = np.full((speeds.size, n_tr), np.nan + 0j)
     prec = np.full((speeds.size, n_tr), "", dtype=object)
-    kind = np.full((speeds.size, n_tr), "", dtype=object)
+    form = np.full((speeds.size, n_tr), "", dtype=object)
     ringf = np.full((speeds.size, n_tr), np.nan)
     P = np.array(perm)
     if np.all(P >= 0) and len({x.size for x in lam_list}) == 1:  # full tracks: gather all speeds at once
         lam = np.take_along_axis(np.stack(lam_list), P, axis=1)
         prec = np.take_along_axis(np.stack(prec_list), P, axis=1)
         ringf = np.take_along_axis(np.stack(ring_list), P, axis=1)
-        kind = np.where(ringf > RING_MODE_FRACTION, "ring", "rotor").astype(object)
+        form = np.take_along_axis(np.stack(form_list), P, axis=1)
     else:
         for i, p in enumerate(perm):
             ok = p >= 0
             lam[i, ok] = lam_list[i][p[ok]]
             prec[i, ok] = prec_list[i][p[ok]]
             ringf[i, ok] = ring_list[i][p[ok]]
-            kind[i, ok] = np.where(ring_list[i][p[ok]] > RING_MODE_FRACTION, "ring", "rotor")
+            form[i, ok] = form_list[i][p[ok]]
+    kind = np.where(np.isfinite(ringf), np.where(ringf > RING_MODE_FRACTION, "ring", form), "").astype(object)
     # order tracks by their mean frequency
     order = np.argsort(np.nanmean(np.where(np.isfinite(lam.imag), lam.imag, np.nan), axis=0))
     lam, prec, kind, ringf = lam[:, order], prec[:, order], kind[:, order], ringf[:, order]

@@ -210,6 +210,41 @@ def classify_precession(psi, amp2):
     return out
 
 
+#: relative residual of a straight-line fit above which a shaft mode is called "bending"
+BENDING_RESIDUAL = 0.25
+
+
+def shape_class(shapes, v_idx, w_idx, z):
+    """'cylindrical', 'conical' or 'bending' per mode from the shaft's lateral displacement pattern.
+
+    The dominant whirl component of each node (forward r_f = (v̄ + i w̄)/2 or backward
+    r_b = (conj v̄ + i conj w̄)/2, whichever carries more energy over the shaft) is phase-aligned to its
+    largest node, giving a real deflection line x(z) at the node positions ``z`` [m]. If a straight line
+    leaves a relative residual above ``BENDING_RESIDUAL`` the mode is "bending"; otherwise it is a rigid-shaft
+    mode: "conical" if the line crosses zero inside the shaft, else "cylindrical". Works on (..., n_dof, m).
+    """
+    v = shapes[..., np.asarray(v_idx), :]
+    w = shapes[..., np.asarray(w_idx), :]
+    rf = 0.5 * (v + 1j * w)
+    rb = 0.5 * (np.conj(v) + 1j * np.conj(w))
+    use_f = np.sum(np.abs(rf) ** 2, axis=-2, keepdims=True) >= np.sum(np.abs(rb) ** 2, axis=-2, keepdims=True)
+    r = np.where(use_f, rf, rb)
+    k = np.argmax(np.abs(r), axis=-2)
+    ref = np.take_along_axis(r, k[..., None, :], axis=-2)
+    x = np.real(r * np.conj(ref) / np.where(np.abs(ref) > 0, np.abs(ref), 1.0))  # (..., n_nodes, m)
+    z = np.asarray(z, dtype=float)
+    V = np.column_stack([np.ones_like(z), z])  # least-squares straight line through the nodes
+    P = V @ np.linalg.pinv(V)
+    fit = np.einsum("ij,...jm->...im", P, x)
+    resid = np.linalg.norm(x - fit, axis=-2) / np.maximum(np.linalg.norm(x, axis=-2), 1e-300)
+    ends = fit[..., [0, -1], :]
+    crosses = ends[..., 0, :] * ends[..., 1, :] < 0
+    out = np.full(resid.shape, "cylindrical", dtype=object)
+    out[crosses] = "conical"
+    out[resid > BENDING_RESIDUAL] = "bending"
+    return out
+
+
 def ring_energy_fraction(shapes, M, ring_dofs):
     """Share of the modal kinetic energy u^H M u carried by the ring DoFs, per mode (..., m)."""
     if not ring_dofs:
@@ -281,7 +316,7 @@ def _track_constant(eigenvalue_list, shape_list, w_lambda):
         return None
     L = np.stack(eigenvalue_list)
     S = np.stack(shape_list)
-    mac2 = np.abs(np.einsum("kim,kin->kmn", np.conj(S[:-1]), S[1:])) ** 2
+    mac2 = np.abs(np.conj(S[:-1]).transpose(0, 2, 1) @ S[1:]) ** 2  # unit-norm shapes: MAC = |u^H v|²
     cost = 1.0 - mac2 + w_lambda * np.abs(L[:-1, :, None] - L[1:, None, :]) / np.abs(L[:-1, :, None])
     best = cost.argmin(axis=2)  # (steps-1, m): best next-step mode of each current mode
     m = L.shape[1]

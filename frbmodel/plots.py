@@ -48,13 +48,15 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
         for k, name in enumerate(FILM_NAMES):
             w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
             if np.isfinite(w).any():
-                ax.plot(cd.speeds_rpm / 1e3, w, ls="--", lw=1.3, color=WHIRL_STYLES[k], label=f"whirl {name}")
+                ax.plot(cd.speeds_rpm / 1e3, w, ls="--" if k < 2 else (0, (6, 2, 1, 2)), lw=1.3,
+                        color=WHIRL_STYLES[k], label=f"whirl {name}")
     if one_x:
         ax.plot(cd.speeds_rpm / 1e3, cd.speeds_rpm / 60.0, color="0.4", lw=1, ls=":", label="1X")
     for prec, (mk, _) in MARKERS.items():
         ax.scatter([], [], marker=mk, c="0.5", s=25, label=prec)
     ax.scatter([], [], marker="o", facecolors="none", edgecolors="k", s=46, label="unstable (D < 0)")
-    ax.set_xlim(cd.speeds_rpm.min() / 1e3, cd.speeds_rpm.max() / 1e3)
+    lo, hi = cd.speeds_rpm.min() / 1e3, cd.speeds_rpm.max() / 1e3
+    ax.set_xlim(lo - 0.05 * max(hi, 1.0) if hi == lo else lo, hi + 0.05 * max(hi, 1.0) if hi == lo else hi)
     ax.set_ylim(0, fmax)
     ax.set_xlabel("rotor speed [krpm]")
     ax.set_ylabel("frequency [Hz]")
@@ -97,7 +99,7 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
             w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
             if np.isfinite(w).any():
                 fig.add_trace(go.Scatter(x=cd.speeds_rpm, y=w, mode="lines", name=f"whirl {name}",
-                                         line=dict(dash="dash", color=WHIRL_STYLES[k]),
+                                         line=dict(dash="dash" if k < 2 else "dashdot", color=WHIRL_STYLES[k]),
                                          hovertemplate="speed %{x:.0f} rpm<br>whirl %{y:.1f} Hz<extra>" + name +
                                          "</extra>"))
     if one_x:
