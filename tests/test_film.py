@@ -244,3 +244,17 @@ def test_invalid_film_parameters(field, value):
 def test_unknown_film_model():
     with pytest.raises(frb.ParameterError, match="film model"):
         film_force(TURB_INNER, [0, 0], [0, 0], 1.0, model="long")
+
+
+def test_turbine_film_coefficients_physics_11():
+    """physics.md §11: turbine inner and outer film at 100 krpm with RSR (6) (method F equilibrium)."""
+    tc = frb.turbocharger(36e-6)
+    eq = frb.equilibrium(tc, "F", 100e3).bearings[0]
+    b = tc.bearings[0]
+    Ki, Ci = film_coefficients(b.inner, eq.r_inner, eq.omega_inner)
+    Ko, Co = film_coefficients(b.outer, eq.ring, eq.omega_outer)
+    # reference values are given to 4-6 significant digits
+    np.testing.assert_allclose(Ki, [[3.9597e5, 1.85535e6], [-1.93596e6, 2.0472e5]], rtol=2e-4)
+    np.testing.assert_allclose(Ci, [[298.36, -31.55], [-31.55, 305.53]], rtol=5e-4)
+    np.testing.assert_allclose(Ko, [[3.7584e5, 9.9967e5], [-1.13199e6, 2.0705e5]], rtol=2e-4)
+    np.testing.assert_allclose(Co, [[987.25, -180.57], [-180.57, 1058.26]], rtol=5e-4)
