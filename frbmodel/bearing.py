@@ -6,7 +6,20 @@ sum of :func:`frbmodel.film.film_torques` of both films; the RSR formulas follow
 from __future__ import annotations
 
 from .errors import ParameterError
-from .film import film_torques, offset_torque_coefficient, petroff_coefficient
+from numba import njit
+
+from .film import film_torques, film_torques_kernel, offset_torque_coefficient, petroff_coefficient
+
+@njit(cache=True)
+def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_y, fo_x, fo_y, omega_rotor,
+                       omega_ring):
+    """M^I + M^O [N m] on the ring (scalars). ``*_geom`` = (radius, length, clearance, viscosity) arrays."""
+    _, t_i = film_torques_kernel(inner_geom[0], inner_geom[1], inner_geom[2], inner_geom[3], ri_x, ri_y, fi_x, fi_y,
+                                 omega_rotor, omega_ring)
+    t_o, _ = film_torques_kernel(outer_geom[0], outer_geom[1], outer_geom[2], outer_geom[3], ro_x, ro_y, fo_x, fo_y,
+                                 omega_ring, 0.0)
+    return t_i + t_o
+
 
 def ring_torque(bearing, r_inner, force_inner, r_outer, force_outer, omega_rotor, omega_ring):
     """Total torque [N m] on the ring (CCW about +z), M^I + M^O of physics.md §6.2 / §7.2.

@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass, asdict
 
 import numpy as np
+from numba import njit
 
 from .errors import FilmContactError, ParameterError, check_positive
 
@@ -79,37 +80,78 @@ def check_model(model: str) -> str:
 
 
 # --------------------------------------------------------------------------------------------------
-# Short-bearing π-film: J integrals and dynamic forces (physics.md §2.4)
+# Short-bearing π-film: the force kernel (physics.md §2.4). This is the one implementation of the dynamic
+# film force; the vectorised public API, the equilibria, the run-up and the FMUs all call it.
 # --------------------------------------------------------------------------------------------------
-def _j_integrals(eps, alpha):
-    """Closed-form J_sc, J_ss, J_cc over ϑ ∈ [α-π, α] (physics.md §2.4). Works on arrays."""
+#: correction polynomial of the plain short film: f = 1
+NO_CORRECTION = np.array([1.0])
+
+
+@njit(cache=True)
+def _polyval(p, x):
+    acc = 0.0
+    for cf in p:
+        acc = acc * x + cf
+    return acc
+
+
+@njit(cache=True)
+def film_force_kernel(radius, length, clearance, viscosity, poly_r, poly_t, rx, ry, vx, vy, omega_sum, eps_cap):
+    """Film force on the inner member ``(fx, fy, eps)`` for one relative state (scalars, SI units).
+
+    ``poly_r``, ``poly_t``: correction polynomials in ε (``NO_CORRECTION`` for the short film).
+    ``eps_cap``: if ε exceeds it, the force is evaluated at ε = eps_cap along the same direction (a numerical
+    guard for trial states of an implicit integrator); pass ``inf`` for none — then ε >= 1 gives NaN.
+    """
+    ecc = math.sqrt(rx * rx + ry * ry)
+    if ecc > 0.0:
+        cphi, sphi = rx / ecc, ry / ecc
+    else:
+        cphi, sphi = 1.0, 0.0  # direction is arbitrary at e = 0; the force is continuous there
+    eps = ecc / clearance
+    eps_true = eps
+    if eps > eps_cap:
+        eps = eps_cap
+    if not eps < 1.0:
+        return math.nan, math.nan, eps_true
+    v_r = vx * cphi + vy * sphi  # radial relative velocity = c ε̇
+    v_t = -vx * sphi + vy * cphi  # tangential relative velocity = e φ̇
+    a = eps * omega_sum - 2.0 * v_t / clearance  # ε (ω_s − 2 φ̇)
+    b = 2.0 * v_r / clearance  # 2 ε̇
+    alpha = math.atan2(b, a)
     s2 = 1.0 - eps * eps
-    s = np.sqrt(s2)
-    ca, sa = np.cos(alpha), np.sin(alpha)
+    s = math.sqrt(s2)
+    ca, sa = math.cos(alpha), math.sin(alpha)
     dp = 1.0 - eps * ca
     dm = 1.0 + eps * ca
     idp2, idm2 = 1.0 / (dp * dp), 1.0 / (dm * dm)
-    dphi = (2.0 / s) * (0.5 * PI + np.arctan(eps * sa / s))
+    dphi = (2.0 / s) * (0.5 * PI + math.atan(eps * sa / s))
     j_sc = -0.5 * ca * ca * (idp2 - idm2)
     j_ss = (sa * (eps - ca) * idp2 + sa * (eps + ca) * idm2) / (2.0 * s2) + dphi / (2.0 * s2)
     j_cc = (sa * ca / (2.0 * s2)) * (idp2 - idm2) + (3.0 * eps * sa / (2.0 * s2 * s2)) * (1.0 / dp + 1.0 / dm) \
         + (1.0 + 2.0 * eps * eps) * dphi / (2.0 * s2 * s2)
-    return j_sc, j_ss, j_cc
+    kf = viscosity * radius * length ** 3 / (2.0 * clearance * clearance)
+    f_r = kf * (a * j_sc - b * j_cc) * _polyval(poly_r, eps)
+    f_t = kf * (a * j_ss - b * j_sc) * _polyval(poly_t, eps)
+    return f_r * cphi - f_t * sphi, f_r * sphi + f_t * cphi, eps_true
 
 
-def _polar_state(film: Film, e, e_dot):
-    """ε, unit vectors and the a, b groups of §2.2 from Cartesian relative state (arrays (..., 2))."""
-    c = film.clearance
-    rx, ry = e[..., 0], e[..., 1]
-    vx, vy = e_dot[..., 0], e_dot[..., 1]
-    ecc = np.hypot(rx, ry)
-    safe = ecc > 0.0
-    inv = np.where(safe, 1.0 / np.where(safe, ecc, 1.0), 0.0)
-    cphi = np.where(safe, rx * inv, 1.0)  # direction is arbitrary at e = 0; the force is continuous there
-    sphi = np.where(safe, ry * inv, 0.0)
-    v_r = vx * cphi + vy * sphi  # radial relative velocity  = c ε̇
-    v_t = -vx * sphi + vy * cphi  # tangential relative velocity = e φ̇
-    return ecc / c, cphi, sphi, v_r, v_t
+@njit(cache=True)
+def _film_force_loop(radius, length, clearance, viscosity, poly_r, poly_t, rx, ry, vx, vy, ws, out):
+    for k in range(rx.size):
+        fx, fy, _ = film_force_kernel(radius, length, clearance, viscosity, poly_r, poly_t, rx[k], ry[k], vx[k],
+                                      vy[k], ws[k], math.inf)
+        out[k, 0] = fx
+        out[k, 1] = fy
+
+
+def correction_polys(film: "Film", model: str):
+    """``(poly_r, poly_t)`` of the film model for this film (``NO_CORRECTION`` for the short film)."""
+    if model == "short_corrected":
+        from .finite_length import correction_polynomials
+
+        return correction_polynomials(film.length_to_diameter)
+    return NO_CORRECTION, NO_CORRECTION
 
 
 def eccentricity_ratio(film: Film, e):
@@ -159,28 +201,20 @@ def film_force(film: Film, e, e_dot, omega_sum, model: str = "short"):
     5.62
     """
     model = check_model(model)
-    e = np.asarray(e, dtype=float)
-    e_dot = np.asarray(e_dot, dtype=float)
-    eps, cphi, sphi, v_r, v_t = _polar_state(film, e, e_dot)
-    _check_contact(eps)
-    c = film.clearance
-    a = eps * np.asarray(omega_sum, dtype=float) - 2.0 * v_t / c  # ε (ω_s − 2 φ̇)
-    b = 2.0 * v_r / c  # 2 ε̇
-    alpha = np.arctan2(b, a)
-    j_sc, j_ss, j_cc = _j_integrals(eps, alpha)
-    kf = film.viscosity * film.radius * film.length ** 3 / (2.0 * c * c)
-    f_r = kf * (a * j_sc - b * j_cc)
-    f_t = kf * (a * j_ss - b * j_sc)
-    if model == "short_corrected":
-        from .finite_length import correction_factors
-
-        fr_fac, ft_fac, _, _ = correction_factors(eps, film.length_to_diameter)
-        f_r = f_r * fr_fac
-        f_t = f_t * ft_fac
-    out = np.empty(np.broadcast(f_r, cphi).shape + (2,))
-    out[..., 0] = f_r * cphi - f_t * sphi
-    out[..., 1] = f_r * sphi + f_t * cphi
-    return out
+    e, e_dot, ws = np.broadcast_arrays(np.asarray(e, dtype=float), np.asarray(e_dot, dtype=float),
+                                       np.asarray(omega_sum, dtype=float)[..., None])
+    shape = e.shape[:-1]
+    n = int(np.prod(shape))
+    out = np.empty((n, 2))
+    pr, pt = correction_polys(film, model)
+    flat = [np.array(a, dtype=float).reshape(n) for a in (e[..., 0], e[..., 1], e_dot[..., 0], e_dot[..., 1],
+                                                         ws[..., 0])]
+    _film_force_loop(film.radius, film.length, film.clearance, film.viscosity, pr, pt, *flat, out)
+    if not np.all(np.isfinite(out)):
+        _check_contact(eccentricity_ratio(film, e))
+        raise ParameterError("film force is not finite: check the inputs for NaN or inf "
+                             f"(e = {e!r} m, e_dot = {e_dot!r} m/s, omega_sum = {omega_sum!r} rad/s)")
+    return out.reshape(shape + (2,))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -376,9 +410,29 @@ def film_coefficients(film: Film, e, omega_sum: float, model: str = "short"):
 # --------------------------------------------------------------------------------------------------
 # Wall torques (physics.md §6)
 # --------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def petroff_kernel(radius, length, clearance, viscosity, eps):
+    """A = 2π μ R³ L / (c sqrt(1-ε²)) [N m s] (scalar or array ε)."""
+    return 2.0 * PI * viscosity * radius ** 3 * length / (clearance * np.sqrt(1.0 - eps * eps))
+
+
+@njit(cache=True)
+def film_torques_kernel(radius, length, clearance, viscosity, rx, ry, fx, fy, omega_inner, omega_outer):
+    """Wall torques ``(T_inner_wall, T_outer_wall)`` [N m] of one film (scalars or equal-shape arrays).
+
+    ``T_inner = +M_P(ω_outer − ω_inner) − (e × F)/2``, ``T_outer = −M_P(ω_outer − ω_inner) − (e × F)/2``
+    (physics.md §6.1), e = (rx, ry) inner minus outer centre, F = (fx, fy) the force on the inner member.
+    """
+    eps = np.sqrt(rx * rx + ry * ry) / clearance
+    mp = petroff_kernel(radius, length, clearance, viscosity, eps) * (omega_outer - omega_inner)
+    half_cross = 0.5 * (rx * fy - ry * fx)
+    return mp - half_cross, -mp - half_cross
+
+
 def petroff_coefficient(film: Film, eps):
     """A = 2π μ R³ L / (c sqrt(1-ε²)) [N m s]: Petroff torque per unit speed difference."""
-    return 2.0 * PI * film.viscosity * film.radius ** 3 * film.length / (film.clearance * np.sqrt(1.0 - eps * eps))
+    eps = np.asarray(eps, dtype=float) if np.ndim(eps) else float(eps)
+    return petroff_kernel(film.radius, film.length, film.clearance, film.viscosity, eps)
 
 
 def film_torques(film: Film, e, force, omega_inner, omega_outer):
@@ -388,12 +442,13 @@ def film_torques(film: Film, e, force, omega_inner, omega_outer):
     with ``e × F = e_x F_y − e_y F_x`` and F the film force on the inner member (physics.md §6.1).
     Works on arrays (..., 2).
     """
-    e = np.asarray(e, dtype=float)
-    force = np.asarray(force, dtype=float)
-    eps = np.hypot(e[..., 0], e[..., 1]) / film.clearance
-    mp = petroff_coefficient(film, eps) * (np.asarray(omega_outer) - np.asarray(omega_inner))
-    half_cross = 0.5 * (e[..., 0] * force[..., 1] - e[..., 1] * force[..., 0])
-    return mp - half_cross, -mp - half_cross
+    e, force = np.asarray(e, dtype=float), np.asarray(force, dtype=float)
+    args = np.broadcast_arrays(e[..., 0], e[..., 1], force[..., 0], force[..., 1],
+                               np.asarray(omega_inner, dtype=float), np.asarray(omega_outer, dtype=float))
+    if args[0].ndim == 0:
+        return film_torques_kernel(film.radius, film.length, film.clearance, film.viscosity, *map(float, args))
+    args = [np.array(a) for a in args]
+    return film_torques_kernel(film.radius, film.length, film.clearance, film.viscosity, *args)
 
 
 def offset_torque_coefficient(film: Film, eps: float, model: str = "short") -> float:
