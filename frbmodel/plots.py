@@ -150,3 +150,114 @@ def equilibrium_cost_figure(stats, title="Equilibrium cost per speed"):
     fig.suptitle(title)
     fig.tight_layout()
     return fig
+
+
+def _unstable_lines(cd, fmax):
+    """(speed_krpm, f_hz) arrays per mode, NaN where the mode is stable."""
+    out = []
+    for j in range(cd.n_modes):
+        f = np.where(np.nan_to_num(cd.damping[:, j], nan=1.0) < 0, cd.frequencies_hz[:, j], np.nan)
+        if np.isfinite(f).any() and np.nanmin(f) < fmax:
+            out.append((cd.speeds_rpm / 1e3, f, j))
+    return out
+
+
+def linear_rsr(system, speeds_rpm, methods="FIJ"):
+    """RSR (n, 2) of the linear methods' equilibria over ``speeds_rpm`` (dict letter -> array)."""
+    from .equilibrium import equilibrium
+
+    return {m: np.array([[b.ring_speed_ratio for b in equilibrium(system, m, s).bearings] for s in speeds_rpm])
+            for m in methods}
+
+
+def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None):
+    """The paper's Figs. 12–14: spectrogram (25 dB, log) with unstable Campbell modes (solid), film whirl
+    curves (dashed), 1X (dotted), component labels; RSR of the run-up vs the linear methods beside it."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    run = sp.run
+    fmax = fmax_hz or float(min(sp.freqs_hz[-1], 1.1 * sp.speeds_rpm.max() / 60.0))
+    if rsr and run is not None:
+        fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6), gridspec_kw={"width_ratios": [2.3, 1]})
+    else:
+        fig, ax = plt.subplots(figsize=(10, 6))
+        ax2 = None
+    sel = sp.freqs_hz <= fmax
+    mesh = ax.pcolormesh(sp.speeds_rpm / 1e3, sp.freqs_hz[sel], sp.db()[sel], shading="nearest", cmap="magma",
+                         vmin=-sp.db_range, vmax=0.0, rasterized=True)
+    cb = fig.colorbar(mesh, ax=ax, pad=0.01)
+    cb.set_label(f"orbit amplitude [dB re max], {sp.db_range:g} dB range")
+    s_all = sp.speeds_rpm
+    ax.plot(s_all / 1e3, s_all / 60.0, ":", color="w", lw=1, label="1X")
+    if campbell is not None:
+        first = True
+        for sk, f, _ in _unstable_lines(campbell, fmax):
+            ax.plot(sk, f, "-", color="#00e5ff", lw=1.6, label=f"unstable modes, method {campbell.method}" if first else None)
+            first = False
+        if whirl:
+            for k, name in enumerate(FILM_NAMES):
+                w = np.where(campbell.whirl_margin[:, k] > 0, campbell.whirl_hz[:, k], np.nan)
+                if np.isfinite(w).any():
+                    ax.plot(campbell.speeds_rpm / 1e3, w, ls="--" if k < 2 else (0, (6, 2, 1, 2)), lw=1.2,
+                            color=WHIRL_STYLES[k], label=f"whirl {name}")
+    if components:
+        for c in sp.components():
+            ax.annotate(c.label, (c.onset_rpm / 1e3, c.onset_hz), color="w", fontsize=9, fontweight="bold",
+                        xytext=(3, 4), textcoords="offset points")
+    ax.set_xlim(s_all.min() / 1e3, s_all.max() / 1e3)
+    ax.set_ylim(0, fmax)
+    ax.set_xlabel("rotor speed [krpm]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.legend(fontsize=7, loc="upper left", framealpha=0.6)
+    ax.set_title(title or f"Run-up spectrogram, {sp.node} (orbit x + iy)", fontsize=10)
+    if ax2 is not None:
+        names = ("turbine", "compressor")
+        rr = run.ring_speed_ratio
+        for j in range(2):
+            ax2.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"run-up, {names[j]}")
+        sys_d = (run.meta or {}).get("system")
+        if sys_d:
+            from .parameters import Turbocharger
+
+            tc = Turbocharger.from_dict(sys_d)
+            speeds = np.linspace(max(run.speed_rpm.min(), 1e3), run.speed_rpm.max(), 25)
+            styles = {"F": "-", "I": "-.", "J": "--"}
+            for m, arr in linear_rsr(tc, speeds).items():
+                for j in range(2):
+                    ax2.plot(speeds / 1e3, arr[:, j], styles[m], color="k" if j == 0 else "0.55", lw=1.2,
+                             label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {names[j]}")
+        ax2.set_xlabel("rotor speed [krpm]")
+        ax2.set_ylabel("RSR = ω_FR / ω_R [-]")
+        ax2.grid(alpha=0.3)
+        ax2.legend(fontsize=7)
+        ax2.set_title("ring-speed ratio", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def composite_plotly(sp, campbell=None, fmax_hz=None):
+    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and 1X."""
+    import plotly.graph_objects as go
+
+    fmax = fmax_hz or float(min(sp.freqs_hz[-1], 1.1 * sp.speeds_rpm.max() / 60.0))
+    sel = sp.freqs_hz <= fmax
+    fig = go.Figure(go.Heatmap(x=sp.speeds_rpm, y=sp.freqs_hz[sel], z=sp.db()[sel], zmin=-sp.db_range, zmax=0,
+                               colorscale="Magma", colorbar=dict(title="dB"),
+                               hovertemplate="speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>%{z:.1f} dB<extra></extra>"))
+    fig.add_trace(go.Scatter(x=sp.speeds_rpm, y=sp.speeds_rpm / 60, mode="lines", name="1X",
+                             line=dict(dash="dot", color="white")))
+    if campbell is not None:
+        for sk, f, j in _unstable_lines(campbell, fmax):
+            fig.add_trace(go.Scatter(x=sk * 1e3, y=f, mode="lines", name=f"unstable mode {j}",
+                                     line=dict(color="#00e5ff")))
+        for k, name in enumerate(FILM_NAMES):
+            w = np.where(campbell.whirl_margin[:, k] > 0, campbell.whirl_hz[:, k], np.nan)
+            if np.isfinite(w).any():
+                fig.add_trace(go.Scatter(x=campbell.speeds_rpm, y=w, mode="lines", name=f"whirl {name}",
+                                         line=dict(dash="dash", color=WHIRL_STYLES[k])))
+    fig.update_layout(xaxis_title="rotor speed [rpm]", yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
+                      title=f"Run-up spectrogram, {sp.node}")
+    return fig

@@ -1,0 +1,170 @@
+"""Nonlinear run-up: checks against the linear analysis, the static equilibrium, tolerance sensitivity,
+contact handling, file output and bad input."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.signal import find_peaks
+
+import frbmodel as frb
+from frbmodel.runup import RunupResult, RunupStopped, SpeedProfile, Unbalance, runup
+from frbmodel.spectral import spectrogram
+
+
+@pytest.fixture(scope="module")
+def tc():
+    return frb.turbocharger(36e-6)
+
+
+def test_linear_springs_free_vibration_shows_campbell_frequencies(tc):
+    """Journals on method-A springs (no films): the free vibration after the initial offset must contain the
+    Campbell natural frequencies, each in its own whirl direction."""
+    rpm, fs = 60e3, 10000.0
+    r = runup(tc, profile=SpeedProfile.constant(rpm, 0.4), duration=0.4, linear_springs=1e6, output_rate_hz=fs,
+              progress=False)
+    z = r.displacement["turbine_wheel"] @ np.array([1.0, 1j])
+    z = z - z.mean()
+    w = np.hanning(z.size)
+    nf = 2 ** 20
+    Z = np.fft.fft(z * w, nf) / w.sum()
+    f = np.fft.fftfreq(nf, 1 / fs)
+    cd = frb.campbell(tc, "A", [rpm], whirl=False)
+    checked = 0
+    for fc, prec in zip(cd.frequencies_hz[0], cd.precession[0]):
+        if fc > 0.4 * fs:
+            continue
+        sgn = 1 if prec == "forward" else -1
+        sel = (sgn * f > 0.97 * fc) & (sgn * f < 1.03 * fc)
+        amp = np.abs(Z[sel])
+        if amp.max() < 1e-3 * np.abs(Z).max():
+            continue  # mode not excited by the initial offset
+        f_peak = abs(f[sel][np.argmax(amp)])
+        # acceptance: within 1 %; the FFT of a 0.4 s record, zero-padded, resolves well below that
+        assert f_peak == pytest.approx(fc, rel=0.01)
+        checked += 1
+    assert checked >= 6  # conical and cylindrical pairs plus bending modes are excited
+
+
+def test_stable_constant_speed_settles_to_method_j_equilibrium(tc):
+    rpm = 1500.0  # method J is stable below ~2.4 krpm (all modes D > 0)
+    cd = frb.campbell(tc, "J", [rpm], whirl=False)
+    assert np.nanmin(cd.damping) > 0
+    r = runup(tc, profile=SpeedProfile.constant(rpm, 0.6), duration=0.6, output_rate_hz=2000, progress=False)
+    eq = frb.equilibrium(tc, "J", rpm)
+    for i, b in enumerate(eq.bearings):
+        c = tc.bearings[i].outer.clearance
+        # acceptance: within 1 % of the clearance (the slowest mode decays over ~0.2 s at this speed)
+        assert np.abs(r.journal[b.name][-1] - b.journal).max() < 0.01 * c
+        assert np.abs(r.ring[b.name][-1] - b.ring).max() < 0.01 * c
+        assert r.ring_speed_ratio[-1, i] == pytest.approx(b.ring_speed_ratio, rel=0.01)
+
+
+def test_tighter_tolerance_does_not_move_onsets(tc):
+    res = []
+    for rtol, atol_scale in ((1e-6, 1.0), (1e-7, 0.1)):
+        r = runup(tc, speed_rpm=(20e3, 60e3), duration=0.25, output_rate_hz=10000, progress=False, rtol=rtol,
+                  atol_scale=atol_scale)
+        res.append(spectrogram(r, "turbine_wheel", segment_s=0.01).components())
+    a, b = res
+    assert len(a) == len(b) and len(a) >= 2
+    for ca, cb in zip(a, b):
+        assert ca.label == cb.label and ca.direction == cb.direction
+        # acceptance: < 1 % change of the detected onset speeds
+        assert cb.onset_threshold_rpm == pytest.approx(ca.onset_threshold_rpm, rel=0.01)
+        assert cb.onset_rpm == pytest.approx(ca.onset_rpm, rel=0.01)
+        assert cb.onset_hz == pytest.approx(ca.onset_hz, rel=0.01)
+
+
+def test_contact_stop_names_bearing_film_time_speed_and_keeps_results(tc, tmp_path):
+    with pytest.raises(RunupStopped) as ei:
+        runup(tc, speed_rpm=(20e3, 40e3), duration=0.2, contact_eps=0.45, out_dir=tmp_path, progress=False,
+              output_rate_hz=5000)
+    msg = str(ei.value)
+    assert "bearing" in msg and "film" in msg and "t = " in msg and "rpm" in msg and "eccentricity ratio" in msg
+    part = ei.value.result
+    assert part.status == "stopped" and 0 < part.time.size < 1001
+    assert part.eccentricity.max() > 0.45
+    meta = json.loads((tmp_path / "runup.json").read_text())
+    assert meta["status"] == "stopped" and meta["message"] == msg
+    on_disk = RunupResult.load(tmp_path)
+    np.testing.assert_allclose(on_disk.time, part.time)
+    np.testing.assert_allclose(on_disk.journal["turbine"], part.journal["turbine"], rtol=1e-8)
+
+
+def test_results_file_is_self_describing(tc, tmp_path):
+    r = runup(tc, speed_rpm=(30e3, 32e3), duration=0.02, out_dir=tmp_path, progress=False,
+              unbalance=[Unbalance("turbine_wheel", 2e-6, 0.3)])
+    df = pd.read_csv(tmp_path / "runup.csv")
+    assert "turbine_wheel x [m]" in df.columns and "speed [rpm]" in df.columns and "RSR turbine [-]" in df.columns
+    np.testing.assert_allclose(df["speed [rpm]"].iloc[[0, -1]], [30e3, 32e3], rtol=1e-9)
+    np.testing.assert_allclose(df["turbine_wheel y [m]"], r.displacement["turbine_wheel"][:, 1], rtol=1e-8)
+    meta = json.loads((tmp_path / "runup.json").read_text())
+    assert meta["status"] == "finished" and meta["units"].startswith("SI")
+
+
+def test_unbalance_response_equals_linear_frequency_response(tc):
+    """Journals on springs, no films: the 1X forward orbit of the turbine wheel must equal the steady-state
+    response (K − Ω²M + iΩ·ΩG) X = F̂ of the linear rotor to the rotating unbalance force."""
+    rpm, me, fs = 30e3, 5e-6, 10000.0
+    r = runup(tc, profile=SpeedProfile.constant(rpm, 0.4), duration=0.4, linear_springs=1e6, perturbation=0.0,
+              unbalance=[Unbalance("turbine_wheel", me)], output_rate_hz=fs, progress=False)
+    z = r.displacement["turbine_wheel"] @ np.array([1.0, 1j])
+    z = z - z.mean()
+    w = np.hanning(z.size)
+    Z = np.fft.fft(z * w, 2 ** 18) / w.sum()
+    f = np.fft.fftfreq(2 ** 18, 1 / fs)
+    k = np.argmin(np.abs(f - rpm / 60))
+    sim = np.abs(Z[k - 3:k + 4]).max()
+    # independent linear solution
+    Om = rpm * np.pi / 30
+    rot = tc.rotor
+    K = rot.K.copy()
+    for b in tc.bearings:
+        K[4 * b.node, 4 * b.node] += 1e6
+        K[4 * b.node + 1, 4 * b.node + 1] += 1e6
+    F = np.zeros(rot.n_dof, complex)
+    F[0], F[1] = me * Om ** 2, -1j * me * Om ** 2  # (cos, sin) = Re((1, −i) e^{iΩt})
+    X = np.linalg.solve(K - Om ** 2 * rot.M + 1j * Om * Om * rot.G, F)
+    forward = abs(X[0] + 1j * X[1]) / 2
+    # the free vibration started by switching the unbalance on never decays (undamped springs) but lies at
+    # other frequencies; Hann leakage and the 2.5 Hz bin width leave a few per cent
+    assert sim == pytest.approx(forward, rel=0.03)
+    assert np.abs(Z[np.argmin(np.abs(f + rpm / 60))]) < 0.05 * sim  # no backward 1X
+
+
+@pytest.mark.parametrize("kw,match", [
+    (dict(duration=0.0), "duration"),
+    (dict(duration=0.1, speed_rpm=(-1.0, 1e4)), "start speed"),
+    (dict(duration=0.1, contact_eps=1.2), "contact_eps"),
+    (dict(duration=0.1, unbalance=[Unbalance("no_such_wheel", 1e-6)]), "disc name"),
+    (dict(duration=0.1, unbalance=[Unbalance("turbine_wheel", -1e-6)]), "unbalance"),
+    (dict(duration=0.1, film_model="long"), "film model"),
+])
+def test_bad_input(tc, kw, match):
+    with pytest.raises(frb.ParameterError, match=match):
+        runup(tc, progress=False, **kw)
+
+
+def test_synthetic_spectrogram_components():
+    """Spectral tracking on a synthetic orbit with known components: forward 0.4X starting at 30 % of the
+    run, backward 0.1X throughout, 1X throughout."""
+    fs, T = 10000.0, 1.0
+    t = np.arange(0, T, 1 / fs)
+    rpm = 30e3 + 30e3 * t / T
+    phase = 2 * np.pi * np.cumsum(rpm / 60.0) / fs
+    grow = np.where(t > 0.3, 1.0, 0.0)
+    z = 2e-6 * np.exp(1j * phase) + 5e-6 * grow * np.exp(1j * 0.4 * phase) + 3e-6 * np.exp(-1j * 0.1 * phase)
+    disp = {"turbine_wheel": np.column_stack([z.real, z.imag])}
+    zeros2 = np.zeros((t.size, 2))
+    run = RunupResult(t, rpm, np.zeros((t.size, 2)), {"turbine": zeros2, "compressor": zeros2},
+                      {"turbine": zeros2, "compressor": zeros2}, np.zeros((t.size, 4)), disp)
+    comps = {c.label: c for c in spectrogram(run, "turbine_wheel", segment_s=0.04).components(min_amplitude=5e-7)}
+    assert set(comps) == {"1X", "sub1", "sub2"}
+    back = [c for c in comps.values() if c.direction == "backward"]
+    fwd_sub = [c for c in comps.values() if c.label != "1X" and c.direction == "forward"]
+    assert len(back) == 1 and len(fwd_sub) == 1
+    np.testing.assert_allclose(back[0].ratio, 0.1, atol=0.01)
+    np.testing.assert_allclose(fwd_sub[0].ratio, 0.4, atol=0.01)
+    # the forward component switches on at t = 0.3 s (39 krpm); segments of 0.04 s smear it by ~1.2 krpm
+    assert fwd_sub[0].onset_threshold_rpm == pytest.approx(39e3, abs=1.5e3)
