@@ -23,11 +23,14 @@ from .linear import linear_system
 from .modal import modes
 from .whirl import film_onset_speeds
 from .campbell import campbell, CampbellResult
+from .runup import RunupResult, RunupStopped, SpeedProfile, Unbalance, runup
+from .spectral import spectrogram
 
 __all__ = [
     "__version__", "ConvergenceError", "FilmContactError", "FRBError", "ParameterError", "FILM_MODELS", "Film",
     "film_coefficients", "film_force", "film_torques", "static_eccentricity", "static_position", "Disc", "Rotor",
     "ShaftElement", "FloatingRingBearing", "Turbocharger", "load_system", "PAPER_OUTER_CLEARANCES", "turbocharger",
     "ring_speed_ratio", "ring_torque", "METHODS", "get_method", "equilibrium", "EquilibriumResult", "linear_system",
-    "modes", "film_onset_speeds", "campbell", "CampbellResult",
+    "modes", "film_onset_speeds", "campbell", "CampbellResult", "RunupResult", "RunupStopped", "SpeedProfile",
+    "Unbalance", "runup", "spectrogram",
 ]

@@ -123,6 +123,88 @@ def cmd_paper_figures(args):
     print(f"results in {Path(args.out).resolve()}")
 
 
+def _parse_unbalance(items):
+    from .runup import Unbalance
+
+    out = []
+    for it in items or []:
+        try:
+            disc, amount, *phase = it.split(":")
+            out.append(Unbalance(disc, float(amount), float(phase[0]) if phase else 0.0))
+        except ValueError:
+            raise ParameterError(f"--unbalance {it!r} is invalid: use DISC:AMOUNT[:PHASE] with AMOUNT in kg m and "
+                                 "PHASE in rad, e.g. turbine_wheel:1e-6:0") from None
+    return out
+
+
+def _profile(args):
+    from .runup import SpeedProfile
+
+    a, b = _speed_pair(args.speeds)
+    if args.profile == "ramp":
+        return SpeedProfile.ramp(a, b, args.duration)
+    if args.profile == "exponential":
+        return SpeedProfile.exponential(a, b, args.duration)
+    return SpeedProfile.constant(a, args.duration)
+
+
+def _speed_pair(text):
+    try:
+        a, b = (float(x) for x in text.split(":")[:2])
+    except ValueError:
+        raise ParameterError(f"--speeds = {text!r} is invalid: use START:END in rpm") from None
+    return a, b
+
+
+def cmd_runup(args):
+    import matplotlib.pyplot as plt
+
+    from .campbell import campbell
+    from .runup import RunupStopped, runup
+    from .spectral import spectrogram
+
+    tc = load_from_args(args)
+    out = Path(args.out)
+    prof = _profile(args)
+    print(f"run-up: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
+    code = 0
+    try:
+        run = runup(tc, profile=prof, duration=args.duration, unbalance=_parse_unbalance(args.unbalance),
+                    output_rate_hz=args.rate, rtol=args.rtol, out_dir=out, progress=True)
+    except RunupStopped as exc:
+        print(f"frb runup: stopped: {exc}", file=sys.stderr)
+        run, code = exc.result, 3
+    print(f"wall time {run.meta.get('wall_time_s', float('nan')):.1f} s, {run.meta.get('rhs_evaluations')} RHS and "
+          f"{run.meta.get('jacobian_evaluations')} Jacobian evaluations, {run.time.size} samples")
+    if not args.no_figure and run.time.size >= 64:
+        lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
+        cd = campbell(tc, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
+        for node in ("turbine_wheel", "compressor_wheel"):
+            sp = spectrogram(run, node)
+            fig = sp.plot(campbell=cd, xscale="log" if args.profile == "exponential" else "linear")
+            fig.savefig(out / f"composite_{node}.png", dpi=110, bbox_inches="tight")
+            plt.close(fig)
+            sp.plot_html(out / f"composite_{node}.html", campbell=cd)
+            tab = sp.components_table()
+            tab.to_csv(out / f"components_{node}.csv", index=False)
+            print(f"components at the {node}:")
+            print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
+    print(f"results in {out.resolve()}")
+    return code
+
+
+def cmd_compare(args):
+    from .compare import compare
+
+    tc = load_from_args(args)
+    cl = [float(x) for x in args.clearances.split(",")]
+    a, b = _speed_pair(args.speeds)
+    table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out,
+                           progress=lambda m: print(m, flush=True), fmax_hz=args.fmax)
+    print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print(f"results in {Path(args.out).resolve()}")
+
+
 def build_parser():
     from . import __version__
     from .methods import METHODS
@@ -156,6 +238,29 @@ def build_parser():
     _system_args(s)
     s.set_defaults(func=cmd_system)
 
+    r = sub.add_parser("runup", help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
+    r.add_argument("--speeds", default="20000:250000", help="START:END [rpm]")
+    r.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
+    r.add_argument("--profile", choices=["ramp", "exponential", "constant"], default="ramp")
+    r.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
+                   help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable)")
+    r.add_argument("--rate", type=float, default=20e3, help="output sampling rate [Hz]")
+    r.add_argument("--rtol", type=float, default=1e-6, help="integrator relative tolerance")
+    r.add_argument("--no-figure", action="store_true")
+    r.add_argument("--out", default="results/runup")
+    _system_args(r)
+    r.set_defaults(func=cmd_runup)
+
+    m = sub.add_parser("compare", help="run-ups vs method-J stability per outer clearance (Figs. 12-14 + table)")
+    m.add_argument("--clearances", default="36e-6,40e-6,42e-6,46e-6", help="outer clearances [m], comma list")
+    m.add_argument("--speeds", default="1000:250000", help="START:END [rpm]")
+    m.add_argument("--duration", type=float, default=4.0, help="simulated time per run-up [s]")
+    m.add_argument("--profile", choices=["ramp", "exponential"], default="exponential")
+    m.add_argument("--fmax", type=float, default=1000.0, help="upper frequency of the figures [Hz]")
+    m.add_argument("--out", default="results/compare")
+    _system_args(m)
+    m.set_defaults(func=cmd_compare)
+
     f = sub.add_parser("paper-figures", help="regenerate the paper's linear figures 4-11")
     f.add_argument("--out", default="results/paper-figures")
     f.add_argument("--n-speeds", type=int, default=100, help="speeds per Campbell diagram")
@@ -167,11 +272,10 @@ def build_parser():
 def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
+        return args.func(args) or 0
     except FRBError as exc:
         print(f"frb {args.command}: error: {exc}", file=sys.stderr)
         return 2
-    return 0
 
 
 if __name__ == "__main__":

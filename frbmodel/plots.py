@@ -170,7 +170,8 @@ def linear_rsr(system, speeds_rpm, methods="FIJ"):
             for m in methods}
 
 
-def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None):
+def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None,
+                     xscale="linear"):
     """The paper's Figs. 12–14: spectrogram (25 dB, log) with unstable Campbell modes (solid), film whirl
     curves (dashed), 1X (dotted), component labels; RSR of the run-up vs the linear methods beside it."""
     import matplotlib
@@ -209,6 +210,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
                         xytext=(3, 4), textcoords="offset points")
     ax.set_xlim(s_all.min() / 1e3, s_all.max() / 1e3)
     ax.set_ylim(0, fmax)
+    ax.set_xscale(xscale)
     ax.set_xlabel("rotor speed [krpm]")
     ax.set_ylabel("frequency [Hz]")
     ax.legend(fontsize=7, loc="upper left", framealpha=0.6)
@@ -229,6 +231,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
                 for j in range(2):
                     ax2.plot(speeds / 1e3, arr[:, j], styles[m], color="k" if j == 0 else "0.55", lw=1.2,
                              label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {names[j]}")
+        ax2.set_xscale(xscale)
         ax2.set_xlabel("rotor speed [krpm]")
         ax2.set_ylabel("RSR = ω_FR / ω_R [-]")
         ax2.grid(alpha=0.3)

@@ -166,6 +166,15 @@ class SpeedProfile:
                    f"constant {speed_rpm:.0f} rpm")
 
     @classmethod
+    def exponential(cls, start_rpm, end_rpm, duration, n=20001):
+        """Constant relative acceleration: Ω(t) = Ω0 (Ω1/Ω0)^(t/T) — equal time per speed octave, so low-speed
+        onsets get as many vibration periods as high-speed ones."""
+        t = np.linspace(0.0, duration, n)
+        rate = math.log(end_rpm / start_rpm) / duration
+        w = start_rpm * RPM * np.exp(rate * t)
+        return cls(t, w, rate * w, f"exponential ramp {start_rpm:.0f} -> {end_rpm:.0f} rpm in {duration:g} s")
+
+    @classmethod
     def from_function(cls, fun, duration, n=20001):
         """``fun(t [s]) -> speed [rpm]``, tabulated on ``n`` points; Ω̇ by central differences."""
         t = np.linspace(0.0, duration, n)

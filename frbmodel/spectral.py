@@ -43,6 +43,11 @@ class Component:
 
     @property
     def onset_hz(self) -> float:
+        """Frequency at the onset speed [Hz], from the first detected f/f_rot (constant-ratio extrapolation)."""
+        return float(self.freqs_hz[0] / self.speeds_rpm[0] * self.onset_rpm)
+
+    @property
+    def first_detection_hz(self) -> float:
         return float(self.freqs_hz[0])
 
     @property
@@ -83,10 +88,10 @@ class SpectrogramResult:
         return 20 * np.log10(np.maximum(a, 1e-300) / a.max())
 
     # ---------------------------------------------------------------- components
-    def components(self, min_segments=4, min_amplitude=None):
+    def components(self, min_segments=6, min_amplitude=None):
         """Tracked components with labels: "1X" and the sub-synchronous "sub1", "sub2", "sub3", ... in the
         order of their onset. A spectral peak counts when it lies within ``db_range`` of its segment's
-        largest peak and above ``min_amplitude`` [m] (default: 3 % of the smallest film clearance of the run's
+        largest peak and above ``min_amplitude`` [m] (default: 5 % of the smallest film clearance of the run's
         system, else 1e-7 m) — so components well below the dominant one of the whole run are still found.
 
         Each component carries two onset estimates: ``onset_threshold_rpm`` (first detection, interpolated
@@ -112,16 +117,19 @@ class SpectrogramResult:
                 idx, _ = find_peaks(spec, height=thr)
                 peaks += [(self.freqs_hz[i], spec[i], sign) for i in idx]
             used = set()
-            # harmonics (2x, 3x) of a stronger peak of the same segment are not components of their own
+            # harmonics (2x, 3x) of a stronger peak, and the mirror (−f) of a stronger peak (an elliptic orbit
+            # whirls at +f and −f at once), are not components of their own
             for p, (f, a, sgn) in enumerate(peaks):
                 for q, (f2, a2, sgn2) in enumerate(peaks):
-                    if a2 > a and f2 < f and any(abs(f - h * f2) < max(1.5 * df, 0.02 * f) for h in (2, 3)):
+                    tol = max(1.5 * df, 0.02 * f)
+                    if a2 > a and ((f2 < f and any(abs(f - h * f2) < tol for h in (2, 3))) or
+                                   (sgn2 != sgn and abs(f - f2) < tol)):
                         used.add(p)
                         break
             for p, (f, a, sgn) in enumerate(peaks):
                 if p in used:
                     continue
-                if abs(f / frot - 1.0) < SYNC_TOL + 1.5 * df / frot and sgn > 0:
+                if abs(f / frot - 1.0) < SYNC_TOL + 0.5 * df / frot and sgn > 0:
                     sync["k"].append(k), sync["f"].append(f), sync["a"].append(a), sync["dir"].append(sgn)
                     sync["thr"].append(thr)
                     used.add(p)
@@ -147,6 +155,7 @@ class SpectrogramResult:
                 new_active.append({"k": [k], "f": [f], "a": [a], "dir": [sgn], "thr": [thr], "miss": 0})
             active = new_active
         tracks += active
+        tracks = self._merge(tracks)
         tracks = [t for t in tracks if len(t["k"]) >= min_segments]
         tracks.sort(key=lambda t: (t["k"][0], t["f"][0]))
         out = []
@@ -154,6 +163,26 @@ class SpectrogramResult:
             out.append(self._component("1X", sync))
         for i, t in enumerate(tracks):
             out.append(self._component(f"sub{i + 1}", t))
+        return out
+
+    def _merge(self, tracks, max_gap=4, ratio_tol=0.2):
+        """Join fragments of one component: same direction, the later starting at most ``max_gap`` segments
+        after the earlier ends, with f/f_rot within ``ratio_tol``."""
+        tracks = sorted(tracks, key=lambda t: t["k"][0])
+        out = []
+        for t in tracks:
+            r0 = t["f"][0] / (self.speeds_rpm[t["k"][0]] / 60.0)
+            host = None
+            for o in out:
+                gap = t["k"][0] - o["k"][-1]
+                r1 = o["f"][-1] / (self.speeds_rpm[o["k"][-1]] / 60.0)
+                if o["dir"][-1] == t["dir"][0] and 0 < gap <= max_gap and abs(r0 - r1) <= ratio_tol * r1:
+                    host = o
+            if host is None:
+                out.append(t)
+            else:
+                for key in ("k", "f", "a", "dir", "thr"):
+                    host[key] += t[key]
         return out
 
     def _component(self, label, t):
@@ -179,7 +208,14 @@ class SpectrogramResult:
             amps.append(spec[sel, k].max())
         amps = np.log(np.maximum(np.array(amps[::-1]), 1e-300))
         ks = np.arange(k0 - amps.size + 1, k0 + 1)
-        j = int(np.argmin(amps))
+        # walk back from the first detection while the (3-point median smoothed) amplitude keeps falling:
+        # the first local minimum is where decay turned into growth
+        sm = amps.copy()
+        if amps.size >= 3:
+            sm[1:-1] = np.median(np.stack([amps[:-2], amps[1:-1], amps[2:]]), axis=0)
+        j = amps.size - 1
+        while j > 0 and sm[j - 1] < sm[j]:
+            j -= 1
         if j == 0 or j == amps.size - 1:
             return float(self.speeds_rpm[ks[j]])
         a, b, c = amps[j - 1], amps[j], amps[j + 1]
@@ -230,19 +266,20 @@ class SpectrogramResult:
 
         rows = [{"component": c.label, "direction": c.direction, "onset [rpm]": c.onset_rpm,
                  "first detection [rpm]": c.onset_threshold_rpm, "end [rpm]": c.end_rpm,
-                 "f at onset [Hz]": c.onset_hz, "f/f_rot at onset [-]": float(c.ratio[0]),
+                 "f at onset [Hz]": c.onset_hz, "f at first detection [Hz]": c.first_detection_hz,
+                 "f/f_rot at onset [-]": float(c.ratio[0]),
                  "max amplitude [m]": float(c.amplitude_m.max())} for c in self.components()]
         return pd.DataFrame(rows)
 
     # ---------------------------------------------------------------- figures
-    def plot(self, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None):
+    def plot(self, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None, xscale="linear"):
         """Spectrogram vs speed; with ``campbell`` (a method-J :class:`CampbellResult`) its unstable-mode
         frequencies as solid lines and the film whirl curves dashed, and — with ``rsr`` — the run-up RSR vs the
         linear methods beside it (the paper's Figs. 12–14). Returns the matplotlib Figure."""
         from .plots import composite_figure
 
         return composite_figure(self, campbell=campbell, whirl=whirl, rsr=rsr, fmax_hz=fmax_hz,
-                                components=components, title=title)
+                                components=components, title=title, xscale=xscale)
 
     def plot_html(self, path=None, campbell=None, fmax_hz=None):
         from .plots import composite_plotly
@@ -262,7 +299,7 @@ def spectrogram(run, node="turbine_wheel", segment_s=None, overlap=0.75, db_rang
     node : str
         "turbine_wheel", "compressor_wheel" (or any key of ``run.displacement``).
     segment_s : float, optional
-        FFT segment length [s] (default: duration / 40, at most 0.05 s).
+        FFT segment length [s] (default: duration / 40, within 0.01 ... 0.05 s and at most duration / 4).
     overlap : float
         Segment overlap fraction (0.75).
     db_range : float
@@ -278,7 +315,7 @@ def spectrogram(run, node="turbine_wheel", segment_s=None, overlap=0.75, db_rang
     dt = t[1] - t[0]
     fs = 1.0 / dt
     dur = t[-1] - t[0]
-    seg = segment_s or min(dur / 40.0, 0.05)
+    seg = segment_s or min(max(dur / 40.0, 0.01), 0.05, dur / 4.0)
     nper = max(32, int(round(seg * fs)))
     if not 0.0 <= overlap < 1.0:
         raise ParameterError(f"overlap = {overlap!r} is invalid: valid range 0 <= overlap < 1")
@@ -307,5 +344,5 @@ def spectrogram(run, node="turbine_wheel", segment_s=None, overlap=0.75, db_rang
     meta = {"segment_s": nper * dt, "overlap": overlap, "nfft": nfft, "fs_hz": fs}
     sys_d = (run.meta or {}).get("system")
     if sys_d:
-        meta["min_amplitude_m"] = 0.03 * min(f["clearance"] for b in sys_d["bearings"] for f in (b["inner"], b["outer"]))
+        meta["min_amplitude_m"] = 0.05 * min(f["clearance"] for b in sys_d["bearings"] for f in (b["inner"], b["outer"]))
     return SpectrogramResult(centres, speeds, fpos[order], fwd, bwd, node, db_range, meta, run)

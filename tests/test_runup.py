@@ -168,3 +168,21 @@ def test_synthetic_spectrogram_components():
     np.testing.assert_allclose(fwd_sub[0].ratio, 0.4, atol=0.01)
     # the forward component switches on at t = 0.3 s (39 krpm); segments of 0.04 s smear it by ~1.2 krpm
     assert fwd_sub[0].onset_threshold_rpm == pytest.approx(39e3, abs=1.5e3)
+
+
+def test_cli_runup_and_compare_pipeline(tmp_path, capsys):
+    from frbmodel.cli import main
+    from frbmodel.compare import compare
+
+    assert main(["runup", "--speeds", "20000:30000", "--duration", "0.05", "--rate", "10000",
+                 "--out", str(tmp_path / "r")]) == 0
+    for name in ("runup.csv", "runup.json", "composite_turbine_wheel.png", "composite_turbine_wheel.html",
+                 "components_compressor_wheel.csv"):
+        assert (tmp_path / "r" / name).exists()
+    assert "results in" in capsys.readouterr().out
+    table, paths = compare(frb.turbocharger(), clearances=(40e-6,), speed_rpm=(20e3, 40e3), duration=0.08,
+                           profile="ramp", out_dir=tmp_path / "c", n_speeds=20, progress=lambda m: None,
+                           runup_kw={"progress": False, "output_rate_hz": 10000})
+    assert (tmp_path / "c" / "linear_vs_nonlinear.md").exists() and (tmp_path / "c" / "co40um" / "composite.png").exists()
+    if len(table):
+        assert set(table["c_o [um]"]) == {40.0}
