@@ -186,3 +186,14 @@ def test_cli_runup_and_compare_pipeline(tmp_path, capsys):
     assert (tmp_path / "c" / "linear_vs_nonlinear.md").exists() and (tmp_path / "c" / "co40um" / "composite.png").exists()
     if len(table):
         assert set(table["c_o [um]"]) == {40.0}
+
+
+def test_corrected_films_and_user_profile_start_from_their_equilibrium():
+    tc = frb.turbocharger(36e-6, film_model="short_corrected")
+    r = runup(tc, profile=lambda t: 30e3 + 1e5 * t * t, duration=0.01, perturbation=0.0, progress=False)
+    eq = frb.equilibrium(tc, "J", 30e3)
+    for b in eq.bearings:
+        # sample 0 is the initial state: the corrected-film method-J equilibrium (no perturbation)
+        np.testing.assert_allclose(r.journal[b.name][0], b.journal, atol=1e-12)
+        np.testing.assert_allclose(r.ring[b.name][0], b.ring, atol=1e-12)
+    np.testing.assert_allclose(r.speed_rpm[[0, -1]], [30e3, 30e3 + 1e5 * 1e-4], rtol=1e-6)
