@@ -8,7 +8,7 @@ from __future__ import annotations
 from .errors import ParameterError
 from numba import njit
 
-from .film import film_torques, film_torques_kernel, offset_torque_coefficient, petroff_coefficient
+from .film import film_force_kernel, film_torques, film_torques_kernel, offset_torque_coefficient, petroff_coefficient
 
 @njit(cache=True)
 def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_y, fo_x, fo_y, omega_rotor,
@@ -19,6 +19,36 @@ def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_
     t_o, _ = film_torques_kernel(outer_geom[0], outer_geom[1], outer_geom[2], outer_geom[3], ro_x, ro_y, fo_x, fo_y,
                                  omega_ring, 0.0)
     return t_i + t_o
+
+
+@njit(cache=True)
+def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, omega_rotor, eps_cap, dring):
+    """Ring equations of physics.md §7.2 for one bearing (the one implementation; the monolithic run-up and
+    the bearing FMU both call it).
+
+    ``geom`` (2, 4): [R, L, c, μ] of inner and outer film; ``polys`` (2, 2, 5) correction polynomials;
+    journal state (jx, jy, jvx, jvy) [m, m/s]; ``ring`` = (x, y, vx, vy, ω_FR). Writes d(ring)/dt into ``dring``
+    and returns ``(F_I,x, F_I,y, eps_inner, eps_outer)`` — the inner-film force on the journal [N].
+    """
+    wfr = ring[4]
+    rix = jx - ring[0]
+    riy = jy - ring[1]
+    g = geom[0]
+    fix, fiy, ei = film_force_kernel(g[0], g[1], g[2], g[3], polys[0, 0], polys[0, 1], rix, riy, jvx - ring[2],
+                                     jvy - ring[3], omega_rotor + wfr, eps_cap)
+    g = geom[1]
+    fox, foy, eo = film_force_kernel(g[0], g[1], g[2], g[3], polys[1, 0], polys[1, 1], ring[0], ring[1], ring[2],
+                                     ring[3], wfr, eps_cap)
+    dring[0] = ring[2]
+    dring[1] = ring[3]
+    dring[2] = (-fix + fox) / ring_m
+    dring[3] = (-fiy + foy - ring_m * grav) / ring_m
+    # torques with positions capped like the forces (trial states of implicit integrators may pass the wall)
+    si = min(1.0, eps_cap / ei) if ei > 0 else 1.0
+    so = min(1.0, eps_cap / eo) if eo > 0 else 1.0
+    dring[4] = ring_torque_kernel(geom[0], geom[1], rix * si, riy * si, fix, fiy, ring[0] * so, ring[1] * so, fox, foy,
+                                  omega_rotor, wfr) / ring_i
+    return fix, fiy, ei, eo
 
 
 def ring_torque(bearing, r_inner, force_inner, r_outer, force_outer, omega_rotor, omega_ring):

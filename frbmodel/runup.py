@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from .bearing import ring_torque_kernel
+from .bearing import ring_rhs_kernel
 from .equilibrium import RPM, bearing_equilibrium
 from .errors import FRBError, ParameterError, check_positive
-from .film import check_model, correction_polys, film_force_kernel
+from .film import check_model, correction_polys
 
 #: numerical guard: film forces of trial states beyond this ε are evaluated at this ε (physics.md §2.7)
 EPS_CAP = 0.999
@@ -74,6 +74,8 @@ def _rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ri
         f[j] += unb_me[d] * (w * w * c + wd * s)
         f[j + 1] += unb_me[d] * (w * w * s - wd * c)
     base = 2 * n_r
+    ring = np.empty(5)
+    dring = np.empty(5)
     for b in range(2):
         j = 4 * jn[b]
         r0 = base + 4 * b
@@ -86,29 +88,18 @@ def _rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ri
             out[r0 + 3] = 0.0
             out[base + 8 + b] = 0.0
             continue
-        wfr = y[base + 8 + b]
-        rix = y[j] - y[r0]
-        riy = y[j + 1] - y[r0 + 1]
-        vix = y[n_r + j] - y[r0 + 2]
-        viy = y[n_r + j + 1] - y[r0 + 3]
-        g = geom[b, 0]
-        fix, fiy, ei = film_force_kernel(g[0], g[1], g[2], g[3], polys[b, 0, 0], polys[b, 0, 1], rix, riy, vix, viy,
-                                         w + wfr, eps_cap)
-        g = geom[b, 1]
-        fox, foy, eo = film_force_kernel(g[0], g[1], g[2], g[3], polys[b, 1, 0], polys[b, 1, 1], y[r0], y[r0 + 1],
-                                         y[r0 + 2], y[r0 + 3], wfr, eps_cap)
+        for k in range(4):
+            ring[k] = y[r0 + k]
+        ring[4] = y[base + 8 + b]
+        fix, fiy, ei, eo = ring_rhs_kernel(geom[b], polys[b], ring_m[b], ring_i[b], grav, y[j], y[j + 1], y[n_r + j],
+                                           y[n_r + j + 1], ring, w, eps_cap, dring)
         diag[2 * b] = ei
         diag[2 * b + 1] = eo
         f[j] += fix
         f[j + 1] += fiy
-        out[r0] = y[r0 + 2]
-        out[r0 + 1] = y[r0 + 3]
-        out[r0 + 2] = (-fix + fox) / ring_m[b]
-        out[r0 + 3] = (-fiy + foy - ring_m[b] * grav) / ring_m[b]
-        # ring spin: inner film on the ring (its outer wall) + outer film on the ring (its inner wall);
-        # the torques use the capped eccentricity through the same forces
-        out[base + 8 + b] = ring_torque_kernel(geom[b, 0], geom[b, 1], rix, riy, fix, fiy, y[r0], y[r0 + 1], fox, foy,
-                                               w, wfr) / ring_i[b]
+        for k in range(4):
+            out[r0 + k] = dring[k]
+        out[base + 8 + b] = dring[4]
     q = y[:n_r]
     qd = y[n_r:2 * n_r]
     for i in range(n_r):

@@ -1,0 +1,365 @@
+"""Co-simulation components: one floating-ring bearing and the FE rotor as separately steppable models.
+
+These are the physics behind the FMUs (``fmu_src/``), kept here free of any FMI import. Coupling scheme
+(DESIGN.md): at a communication point the rotor's journal state goes to each bearing, whose force F0 and
+interface Jacobian K = −∂F/∂x_J, C = −∂F/∂v_J are evaluated at that state; the rotor then integrates its
+macro step with F(t) = F0 − K (x − x0) − C (v − v0) linear-implicitly (trapezoidal rule), while each bearing
+integrates its ring (lateral and spin) over the step with the journal extrapolated linearly (backward Euler
+substeps with Newton iterations). Both sides use :func:`frbmodel.bearing.ring_rhs_kernel` and
+:func:`frbmodel.film.film_force_kernel`, the same code as the monolithic run-up.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .bearing import ring_rhs_kernel
+from .equilibrium import RPM
+from .errors import FilmContactError, ParameterError
+from .film import check_model, correction_polys
+
+
+# --------------------------------------------------------------------------------------------------
+# bearing
+# --------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _bearing_force(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, eps_cap):
+    d = np.empty(5)
+    fx, fy, ei, eo = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, j[0], j[1], j[2], j[3], ring, omega_r,
+                                     eps_cap, d)
+    return fx, fy, ei, eo
+
+
+@njit(cache=True)
+def _interface_jacobian(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, eps_cap, K, C):
+    """K = −∂F/∂(jx, jy), C = −∂F/∂(jvx, jvy) by central differences of the film force (ring held)."""
+    jp = j.copy()
+    for k in range(4):
+        h = 1e-7 * geom[0, 2] if k < 2 else 1e-7 * geom[0, 2] * max(abs(omega_r), 1.0)
+        jp[k] = j[k] + h
+        fxp, fyp, _, _ = _bearing_force(geom, polys, ring_m, ring_i, grav, jp, ring, omega_r, eps_cap)
+        jp[k] = j[k] - h
+        fxm, fym, _, _ = _bearing_force(geom, polys, ring_m, ring_i, grav, jp, ring, omega_r, eps_cap)
+        jp[k] = j[k]
+        if k < 2:
+            K[0, k] = -(fxp - fxm) / (2 * h)
+            K[1, k] = -(fyp - fym) / (2 * h)
+        else:
+            C[0, k - 2] = -(fxp - fxm) / (2 * h)
+            C[1, k - 2] = -(fyp - fym) / (2 * h)
+
+
+@njit(cache=True)
+def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot, H, n_sub, eps_cap, free_spin,
+               rsr_fixed):
+    """Integrate the ring over [0, H] with the journal at j0[:2] + j0[2:] t; backward Euler, Newton with an FD
+    Jacobian. ``free_spin``: ring speed is a state; else ω_FR = rsr_fixed·ω_R. Returns max ε seen."""
+    h = H / n_sub
+    y = ring.copy()
+    f = np.empty(5)
+    fp = np.empty(5)
+    J = np.empty((5, 5))
+    jj = np.empty(4)
+    eps_max = 0.0
+    for s in range(n_sub):
+        t1 = (s + 1) * h
+        jj[0] = j0[0] + j0[2] * t1
+        jj[1] = j0[1] + j0[3] * t1
+        jj[2] = j0[2]
+        jj[3] = j0[3]
+        w = omega_r + omega_r_dot * t1
+        yn = y.copy()
+        for it in range(8):
+            if not free_spin:
+                yn[4] = rsr_fixed * w
+            _, _, ei, eo = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yn, w,
+                                           eps_cap, f)
+            if not free_spin:
+                f[4] = 0.0
+            r = yn - y - h * f
+            for k in range(5):
+                typ = geom[1, 2] if k < 2 else (geom[1, 2] * 1e3 if k < 4 else 10.0)
+                d = 1e-7 * max(abs(yn[k]), typ)
+                yp = yn.copy()
+                yp[k] += d
+                ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yp, w, eps_cap, fp)
+                if not free_spin:
+                    fp[4] = 0.0
+                for i in range(5):
+                    J[i, k] = (1.0 if i == k else 0.0) - h * (fp[i] - f[i]) / d
+            dy = np.linalg.solve(J, -r)
+            yn += dy
+            if abs(dy[0]) + abs(dy[1]) < 1e-13 * geom[1, 2] and abs(dy[4]) < 1e-10 * max(abs(yn[4]), 1.0):
+                break
+        y = yn
+        eps_max = max(eps_max, ei, eo)
+    ring[:] = y
+    return eps_max
+
+
+class BearingComponent:
+    """One floating-ring bearing for co-simulation: ring lateral + spin state, nonlinear films.
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    film_model : {"short", "short_corrected"}
+    ring_speed_model : {"free", "rsr_eq6", "rsr_eq7"}
+        "free": ring speed is a state driven by the film torques (method J in the linear analysis);
+        "rsr_eq6": ω_FR = RSR(6)·ω_R; "rsr_eq7": eq. (7) at the current ε's (evaluated per step).
+    gravity : float [m/s²]
+    substep : float
+        Ring integration substep [s] (default 1e-6; the ring's film time constant is ~7 µs).
+    """
+
+    def __init__(self, bearing, film_model="short", ring_speed_model="free", gravity=9.81, substep=1e-6,
+                 contact_eps=0.98):
+        from .bearing import ring_speed_ratio
+
+        self.bearing = bearing
+        self.film_model = check_model(film_model)
+        if ring_speed_model not in ("free", "rsr_eq6", "rsr_eq7"):
+            raise ParameterError(f"ring_speed_model = {ring_speed_model!r} is unknown; valid: 'free', 'rsr_eq6', "
+                                 "'rsr_eq7'")
+        self.ring_speed_model = ring_speed_model
+        self.gravity = float(gravity)
+        self.substep = float(substep)
+        self.contact_eps = float(contact_eps)
+        self.geom = np.array([[f.radius, f.length, f.clearance, f.viscosity] for f in (bearing.inner, bearing.outer)])
+        self.polys = np.zeros((2, 2, 5))
+        for k, film in enumerate((bearing.inner, bearing.outer)):
+            for m_, p in enumerate(correction_polys(film, self.film_model)):
+                self.polys[k, m_, 5 - p.size:] = p
+        self.ring = np.zeros(5)  # x, y [m], vx, vy [m/s], ω_FR [rad/s]
+        self.rsr6 = ring_speed_ratio(bearing)
+        self.eps = (0.0, 0.0)
+
+    def initialize_equilibrium(self, load, omega_rotor):
+        """Ring at the method-J equilibrium for vertical journal ``load`` [N] at ``omega_rotor`` [rad/s].
+        Returns the journal position [m] of that equilibrium."""
+        from .equilibrium import bearing_equilibrium
+
+        eq = bearing_equilibrium(self.bearing, load, omega_rotor, "J", self.film_model, self.gravity)
+        self.ring[:] = [eq.ring[0], eq.ring[1], 0.0, 0.0, eq.ring_speed]
+        return eq.journal
+
+    def _args(self):
+        return self.geom, self.polys, self.bearing.ring_mass, self.bearing.ring_inertia, self.gravity
+
+    def _check(self, journal, omega_rotor):
+        j = np.asarray(journal, dtype=float)
+        if j.shape != (4,) or not np.all(np.isfinite(j)) or not math.isfinite(omega_rotor):
+            raise ParameterError(f"{self.bearing.name} bearing inputs must be finite: journal = {journal!r} "
+                                 f"[m, m, m/s, m/s], rotor speed = {omega_rotor!r} rad/s")
+        return j
+
+    def _ring_for_force(self, omega_rotor):
+        ring = self.ring.copy()
+        if self.ring_speed_model == "rsr_eq6":
+            ring[4] = self.rsr6 * omega_rotor
+        elif self.ring_speed_model == "rsr_eq7":
+            from .bearing import ring_speed_ratio
+
+            ring[4] = ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99)) * omega_rotor
+        return ring
+
+    def outputs(self, journal, omega_rotor):
+        """Force on the journal [N] (2,), K [N/m] (2,2), C [N s/m] (2,2), ε (inner, outer) at the current inputs.
+
+        Raises FilmContactError when an ε reaches 1."""
+        j = self._check(journal, omega_rotor)
+        ring = self._ring_for_force(omega_rotor)
+        fx, fy, ei, eo = _bearing_force(*self._args(), j, ring, float(omega_rotor), math.inf)
+        if not (ei < 1.0 and eo < 1.0) or not (math.isfinite(fx) and math.isfinite(fy)):
+            raise FilmContactError(f"{self.bearing.name} bearing, {'inner' if not ei < 1 else 'outer'} film: "
+                                   f"eccentricity ratio {max(ei, eo):.4g} >= 1 (the member touches its wall)")
+        K, C = np.zeros((2, 2)), np.zeros((2, 2))
+        _interface_jacobian(*self._args(), j, ring, float(omega_rotor), 0.999, K, C)
+        self.eps = (ei, eo)
+        return np.array([fx, fy]), K, C, (ei, eo)
+
+    def step(self, journal, omega_rotor, omega_rotor_dot, H):
+        """Advance the ring by ``H`` [s] with the journal extrapolated linearly from ``journal``."""
+        j = self._check(journal, omega_rotor)
+        n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
+        free = self.ring_speed_model == "free"
+        rsr = self.rsr6
+        if self.ring_speed_model == "rsr_eq7":
+            from .bearing import ring_speed_ratio
+
+            rsr = ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99))
+        eps_max = _ring_step(*self._args(), j, self.ring, float(omega_rotor), float(omega_rotor_dot), float(H), n_sub,
+                             0.999, free, rsr)
+        if not np.all(np.isfinite(self.ring)):
+            raise FilmContactError(f"{self.bearing.name} bearing: ring state became non-finite")
+        if eps_max > self.contact_eps:
+            raise FilmContactError(f"{self.bearing.name} bearing: eccentricity ratio {eps_max:.4f} exceeds "
+                                   f"contact_eps = {self.contact_eps} (a member reaches its wall)")
+        return eps_max
+
+    def linearization(self, journal, omega_rotor):
+        """Local state space of the bearing at the current state (ring speed held, as the linear methods do):
+        states x = (ring x, y, vx, vy), inputs u = (journal x, y, vx, vy), outputs y = force on the journal.
+        Returns (A, B, C, D) by central differences of the same kernels."""
+        j = self._check(journal, omega_rotor)
+        ring = self._ring_for_force(omega_rotor)
+        A = np.zeros((4, 4))
+        B = np.zeros((4, 4))
+        Cm = np.zeros((2, 4))
+        D = np.zeros((2, 4))
+        d = np.empty(5)
+
+        def ev(rg, jj):
+            fx, fy, _, _ = ring_rhs_kernel(*self._args(), jj[0], jj[1], jj[2], jj[3], rg, float(omega_rotor), math.inf, d)
+            return d[:4].copy(), np.array([fx, fy])
+
+        c = self.bearing.inner.clearance
+        for k in range(4):
+            h = 1e-6 * c * (1.0 if k < 2 else max(abs(omega_rotor), 1.0))
+            rp, rm = ring.copy(), ring.copy()
+            rp[k] += h
+            rm[k] -= h
+            (dp, fp), (dm, fm) = ev(rp, j), ev(rm, j)
+            A[:, k] = (dp - dm) / (2 * h)
+            Cm[:, k] = (fp - fm) / (2 * h)
+            jp, jm = j.copy(), j.copy()
+            jp[k] += h
+            jm[k] -= h
+            (dp, fp), (dm, fm) = ev(ring, jp), ev(ring, jm)
+            B[:, k] = (dp - dm) / (2 * h)
+            D[:, k] = (fp - fm) / (2 * h)
+        return A, B, Cm, D
+
+
+# --------------------------------------------------------------------------------------------------
+# rotor
+# --------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _rotor_state_matrix(A, minv, ktot, cb_full, g_mat, w, wd):
+    n = ktot.shape[0]
+    A[:, :] = 0.0
+    for i in range(n):
+        A[i, n + i] = 1.0
+    A[n:, :n] = -minv @ (ktot + wd * g_mat)
+    A[n:, n:] = -minv @ (cb_full + w * g_mat)
+
+
+@njit(cache=True)
+def _rotor_forcing(f_grav, jdofs, fb, unb_node, unb_me, unb_phase, ph, w, wd):
+    f = f_grav.copy()
+    for b in range(jdofs.shape[0]):
+        f[jdofs[b, 0]] += fb[b, 0]
+        f[jdofs[b, 1]] += fb[b, 1]
+    for d in range(unb_node.size):
+        th = ph + unb_phase[d]
+        c, s = math.cos(th), math.sin(th)
+        j = 4 * unb_node[d]
+        f[j] += unb_me[d] * (w * w * c + wd * s)
+        f[j + 1] += unb_me[d] * (w * w * s - wd * c)
+    return f
+
+
+@njit(cache=True)
+def _rotor_step(y, phi, t0, H, n_sub, minv, k_mat, g_mat, f_grav, jdofs, kb, cb, fb, w0, wd, unb_node, unb_me,
+                unb_phase):
+    """Trapezoidal rule for M q̈ + (ΩG + C_b) q̇ + (K + Ω̇G + K_b) q = f_g + f_unb + f_b over [t0, t0 + H].
+
+    ``jdofs`` (nb, 2) journal DoFs; ``kb``, ``cb`` (nb, 2, 2) interface Jacobians; ``fb`` (nb, 2) the constant part
+    F0 + K x0 + C v0 of the linearized bearing forces. Ω(t) = w0 + wd (t − t0). Returns (y, rotation angle).
+    """
+    n = k_mat.shape[0]
+    h = H / n_sub
+    A = np.zeros((2 * n, 2 * n))
+    A1 = np.zeros((2 * n, 2 * n))
+    eye = np.eye(2 * n)
+    ktot = k_mat.copy()
+    cb_full = np.zeros((n, n))
+    for b in range(jdofs.shape[0]):
+        for i in range(2):
+            for k in range(2):
+                ktot[jdofs[b, i], jdofs[b, k]] += kb[b, i, k]
+                cb_full[jdofs[b, i], jdofs[b, k]] += cb[b, i, k]
+    ph = phi
+    for s in range(n_sub):
+        wa = w0 + wd * s * h
+        wb = w0 + wd * (s + 1) * h
+        _rotor_state_matrix(A, minv, ktot, cb_full, g_mat, wa, wd)
+        _rotor_state_matrix(A1, minv, ktot, cb_full, g_mat, wb, wd)
+        fa = minv @ _rotor_forcing(f_grav, jdofs, fb, unb_node, unb_me, unb_phase, ph, wa, wd)
+        phb = ph + 0.5 * h * (wa + wb)
+        fbv = minv @ _rotor_forcing(f_grav, jdofs, fb, unb_node, unb_me, unb_phase, phb, wb, wd)
+        rhs = (eye + 0.5 * h * A) @ y
+        rhs[n:] += 0.5 * h * (fa + fbv)
+        y = np.linalg.solve(eye - 0.5 * h * A1, rhs)
+        ph = phb
+    return y, ph
+
+
+class RotorComponent:
+    """The FE rotor for co-simulation; journals receive the linearized bearing forces of the coupling scheme.
+
+    Parameters
+    ----------
+    system : Turbocharger
+        Rotor, bearing nodes and gravity are taken from it.
+    speed : callable t -> (Ω [rad/s], Ω̇ [rad/s²])
+    unbalance : sequence of Unbalance
+    substep : float
+        Trapezoidal substep [s] (default: the macro step itself, at most 5e-6 s).
+    """
+
+    def __init__(self, system, speed, unbalance=(), substep=5e-6):
+        rotor = system.rotor
+        self.system = system
+        self.speed = speed
+        self.n = rotor.n_dof
+        self.minv = np.linalg.inv(rotor.M)
+        self.k_mat = np.ascontiguousarray(rotor.K)
+        self.g_mat = np.ascontiguousarray(rotor.G)
+        self.f_grav = rotor.gravity_load(system.gravity)
+        self.jdofs = np.array([[4 * b.node, 4 * b.node + 1] for b in system.bearings], dtype=np.int64)
+        self.unb_node = np.array([rotor.disc(u.disc).node for u in unbalance], dtype=np.int64)
+        self.unb_me = np.array([float(u.amount) for u in unbalance])
+        self.unb_phase = np.array([float(u.phase) for u in unbalance])
+        self.substep = float(substep)
+        self.y = np.zeros(2 * self.n)
+        self.phi = 0.0
+        self.t = 0.0
+
+    def journal(self, b):
+        """(x, y, vx, vy) of bearing ``b``'s journal [m, m/s]."""
+        i, k = self.jdofs[b]
+        return np.array([self.y[i], self.y[k], self.y[self.n + i], self.y[self.n + k]])
+
+    def node_xy(self, node):
+        return self.y[4 * node:4 * node + 2].copy()
+
+    def step(self, H, forces, Ks, Cs):
+        """Advance by ``H`` [s] with per-bearing F0 [N], K [N/m], C [N s/m] at the current journal states."""
+        w0, wd = self.speed(self.t)
+        fb = np.zeros((len(forces), 2))
+        for b, (F0, K, C) in enumerate(zip(forces, Ks, Cs)):
+            j = self.journal(b)
+            fb[b] = F0 + K @ j[:2] + C @ j[2:]
+        n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
+        self.y, self.phi = _rotor_step(self.y, self.phi, self.t, H, n_sub, self.minv, self.k_mat, self.g_mat,
+                                       self.f_grav, self.jdofs, np.array(Ks), np.array(Cs), fb, w0, wd, self.unb_node,
+                                       self.unb_me, self.unb_phase)
+        self.t += H
+        if not np.all(np.isfinite(self.y)):
+            raise ParameterError("rotor state became non-finite: the macro step is too large for the coupling")
+
+
+def ramp_speed(start_rpm, end_rpm, ramp_time):
+    """Speed function t -> (Ω, Ω̇) of a linear ramp (constant after ``ramp_time``) [rad/s, rad/s²]."""
+    w0, w1 = start_rpm * RPM, end_rpm * RPM
+    a = (w1 - w0) / ramp_time if ramp_time > 0 else 0.0
+
+    def speed(t):
+        if t < ramp_time:
+            return w0 + a * t, a
+        return w1, 0.0
+
+    return speed
