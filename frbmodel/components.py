@@ -363,3 +363,24 @@ def ramp_speed(start_rpm, end_rpm, ramp_time):
         return w1, 0.0
 
     return speed
+
+
+def rotor_state_space(rotor_comp):
+    """Local state space of the rotor at its current time: x = (q, q̇), u = bearing forces (Fx, Fy per bearing),
+    y = journal (x, y, vx, vy per bearing). Bearing coupling terms are *not* included (they come from the
+    bearings' own matrices when the system is assembled)."""
+    n = rotor_comp.n
+    w, wd = rotor_comp.speed(rotor_comp.t)
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, n:] = np.eye(n)
+    A[n:, :n] = -rotor_comp.minv @ (rotor_comp.k_mat + wd * rotor_comp.g_mat)
+    A[n:, n:] = -rotor_comp.minv @ (w * rotor_comp.g_mat)
+    nb = rotor_comp.jdofs.shape[0]
+    B = np.zeros((2 * n, 2 * nb))
+    C = np.zeros((4 * nb, 2 * n))
+    for b in range(nb):
+        for k in range(2):
+            B[n:, 2 * b + k] = rotor_comp.minv[:, rotor_comp.jdofs[b, k]]
+            C[4 * b + k, rotor_comp.jdofs[b, k]] = 1.0
+            C[4 * b + 2 + k, n + rotor_comp.jdofs[b, k]] = 1.0
+    return {"A": A, "B": B, "C": C, "D": np.zeros((4 * nb, 2 * nb))}

@@ -1,0 +1,145 @@
+"""FMI 2.0 co-simulation slave: one floating-ring bearing (nonlinear films + ring lateral and spin DoFs).
+
+Thin adapter over :class:`frbmodel.components.BearingComponent`; all physics is in frbmodel.
+"""
+import math
+
+import numpy as np
+from pythonfmu import Fmi2Slave
+
+from _fmu_common import FrbSlaveMixin, finite
+
+
+class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
+    author = "frbmodel"
+    description = ("Floating-ring bearing: inner film, free-spinning ring, outer film (short-bearing pi-film, "
+                   "half-Sommerfeld). Outputs the force on the journal and its interface Jacobian.")
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._values = {}
+        self._ready = False
+        self._failed = None
+        self._dirty = True
+        self._comp = None
+        self._cache = None
+        self._lin = None
+        for film, (r, l, c, mu) in (("inner", (5.5e-3, 6.5e-3, 34e-6, 4.9e-3)), ("outer", (8e-3, 9e-3, 36e-6, 4.9e-3))):
+            self._param(f"{film}.radius", r, f"{film} film radius [m]")
+            self._param(f"{film}.length", l, f"{film} film length [m]")
+            self._param(f"{film}.clearance", c, f"{film} film radial clearance [m]")
+            self._param(f"{film}.viscosity", mu, f"{film} film dynamic viscosity [Pa s]")
+        self._param("ring.mass", 7.2e-3, "ring mass [kg]")
+        self._param("ring.inertia", 33.641e-8, "ring polar moment of inertia [kg m2]")
+        self._param("ring.x0", 0.0, "initial ring centre x [m]")
+        self._param("ring.y0", 0.0, "initial ring centre y [m]")
+        self._param("ring.speed0", 0.0, "initial ring speed [rad/s]")
+        self._param("gravity", 9.81, "gravitational acceleration along -y [m/s2]")
+        self._param("substep", 1e-6, "ring integration substep [s]")
+        self._param("contact_eps", 0.98, "eccentricity ratio treated as wall contact (Discard above) [-]")
+        self._param("film_model", "short", "film model: short | short_corrected", "str")
+        self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str")
+        self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
+        for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
+                        ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
+            self._input(f"journal.{q}", f"{d} [{u}]")
+        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0)
+        self._output("force.x", "film force on the journal, x [N]", lambda: self._out()[0][0])
+        self._output("force.y", "film force on the journal, y [N]", lambda: self._out()[0][1])
+        for i in range(2):
+            for k in range(2):
+                self._output(f"stiffness[{i + 1},{k + 1}]", "interface Jacobian -dF/dx_journal [N/m]",
+                             lambda i=i, k=k: self._out()[1][i, k])
+                self._output(f"damping[{i + 1},{k + 1}]", "interface Jacobian -dF/dv_journal [N s/m]",
+                             lambda i=i, k=k: self._out()[2][i, k])
+        self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0])
+        self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1])
+        self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed())
+        self._output("eps_inner", "inner film eccentricity ratio [-]", lambda: self._out()[3][0])
+        self._output("eps_outer", "outer film eccentricity ratio [-]", lambda: self._out()[3][1])
+        self._output("ring_speed_ratio", "ring speed / rotor speed [-]",
+                     lambda: self._ring_speed() / self._values["rotor_speed"] if self._values["rotor_speed"] else 0.0)
+        # linearization mode: states (ring x, y, vx, vy), inputs (journal x, y, vx, vy), outputs (force x, y)
+        self._output("nx", "number of states of the local linearization", lambda: 4, "int")
+        self._output("nu", "number of inputs of the local linearization", lambda: 4, "int")
+        self._output("ny", "number of outputs of the local linearization", lambda: 2, "int")
+        for name, (nr, nc) in (("A", (4, 4)), ("B", (4, 4)), ("C", (2, 4)), ("D", (2, 4))):
+            for i in range(nr):
+                for k in range(nc):
+                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
+                                 lambda name=name, i=i, k=k: self._linear()[name][i, k])
+
+    # ------------------------------------------------------------------ helpers
+    def _journal(self):
+        v = self._values
+        return np.array([v["journal.x"], v["journal.y"], v["journal.vx"], v["journal.vy"]])
+
+    def _ring_speed(self):
+        return self._comp._ring_for_force(self._values["rotor_speed"])[4]
+
+    def _out(self):
+        if self._dirty or self._cache is None:
+            self._cache = self._comp.outputs(self._journal(), self._values["rotor_speed"])
+            self._lin = None
+            self._dirty = False
+        return self._cache
+
+    def _linear(self):
+        if not self._values["linearization"]:
+            return {k: np.zeros((4, 4)) for k in "ABCD"}
+        if self._lin is None or self._dirty:
+            A, B, C, D = self._comp.linearization(self._journal(), self._values["rotor_speed"])
+            self._lin = {"A": A, "B": B, "C": C, "D": D}
+        return self._lin
+
+    # ------------------------------------------------------------------ FMI
+    def exit_initialization_mode(self):
+        msg = self._check_version()
+        if msg:
+            self._error(msg)
+            raise RuntimeError(msg)
+        from frbmodel.components import BearingComponent
+        from frbmodel.film import Film
+        from frbmodel.parameters import FloatingRingBearing as FRB
+
+        v = self._values
+        try:
+            films = [Film(v[f"{f}.radius"], v[f"{f}.length"], v[f"{f}.clearance"], v[f"{f}.viscosity"])
+                     for f in ("inner", "outer")]
+            b = FRB(0, films[0], films[1], v["ring.mass"], v["ring.inertia"], self.instance_name)
+            self._comp = BearingComponent(b, v["film_model"], v["ring_speed_model"], finite("gravity", v["gravity"], 0),
+                                          finite("substep", v["substep"], 1e-9, 1e-3, "s"),
+                                          finite("contact_eps", v["contact_eps"], 0.01, 0.9999))
+            self._comp.ring[:] = [finite("ring.x0", v["ring.x0"], unit="m"), finite("ring.y0", v["ring.y0"], unit="m"),
+                                  0.0, 0.0, finite("ring.speed0", v["ring.speed0"], unit="rad/s")]
+        except Exception as exc:  # noqa: BLE001  (report any parameter problem as an FMI error)
+            self._error(f"{self.instance_name}: invalid parameters: {exc}")
+            raise
+        self._ready = True
+        self._dirty = True
+
+    def do_step(self, current_time, step_size):
+        if not self._ready:
+            return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
+        try:
+            j = self._journal()
+            self._comp.outputs(j, self._values["rotor_speed"])  # validates the inputs, updates the eps used by rsr_eq7
+            self._comp.step(j, self._values["rotor_speed"], 0.0, step_size)
+        except Exception as exc:  # noqa: BLE001
+            self._ready = False
+            return self._error(f"{self.instance_name} at t = {current_time:.6g} s, rotor speed "
+                               f"{self._values['rotor_speed'] * 30 / math.pi:.0f} rpm: {exc}")
+        self._dirty = True
+        return True
+
+    def _get_fmu_state(self):
+        state = super()._get_fmu_state()
+        state["_ring_state"] = [float(x) for x in self._comp.ring] if self._comp is not None else None
+        return state
+
+    def _set_fmu_state(self, state):
+        ring = state.pop("_ring_state", None)
+        super()._set_fmu_state(state)
+        if ring is not None and self._comp is not None:
+            self._comp.ring[:] = ring
+        self._dirty = True

@@ -1,0 +1,135 @@
+"""FMI 2.0 co-simulation slave: the turbocharger FE rotor (Euler-Bernoulli, gyroscopics, rigid wheels).
+
+Thin adapter over :class:`frbmodel.components.RotorComponent`; the bearing forces arrive linearized at the
+communication point (force, stiffness, damping per bearing) and are applied linear-implicitly over the step.
+"""
+import math
+
+import numpy as np
+from pythonfmu import Fmi2Slave
+
+from _fmu_common import FrbSlaveMixin, finite
+
+BEARINGS = ("turbine_bearing", "compressor_bearing")
+WHEELS = ("turbine_wheel", "compressor_wheel")
+
+
+class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
+    author = "frbmodel"
+    description = "Turbocharger rotor, FE model (paper Table 2 by default), prescribed speed ramp."
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._values = {}
+        self._ready = False
+        self._failed = None
+        self._dirty = True
+        self._comp = None
+        self._param("system_file", "", "frbmodel system description (.toml/.json); empty = paper Table 2", "str")
+        self._param("speed_start", 20e3 * math.pi / 30, "rotor speed at t = 0 [rad/s]")
+        self._param("speed_end", 250e3 * math.pi / 30, "rotor speed after the ramp [rad/s]")
+        self._param("ramp_time", 1.0, "duration of the linear speed ramp [s]")
+        for w in WHEELS:
+            self._param(f"{w}.unbalance", 0.0, f"{w} unbalance (mass x eccentricity) [kg m]")
+            self._param(f"{w}.unbalance_phase", 0.0, f"{w} unbalance phase from +x [rad]")
+        for b in BEARINGS:
+            self._param(f"{b}.journal_x0", 0.0, f"initial journal centre x at the {b} [m]")
+            self._param(f"{b}.journal_y0", 0.0, f"initial journal centre y at the {b} [m]")
+        self._param("gravity", 9.81, "gravitational acceleration along -y [m/s2]")
+        self._param("substep", 5e-6, "trapezoidal substep [s]")
+        self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
+        for b in BEARINGS:
+            self._input(f"{b}.force.x", f"bearing force on the journal, x [N]")
+            self._input(f"{b}.force.y", f"bearing force on the journal, y [N]")
+            for i in range(2):
+                for k in range(2):
+                    self._input(f"{b}.stiffness[{i + 1},{k + 1}]", "bearing interface stiffness [N/m]")
+                    self._input(f"{b}.damping[{i + 1},{k + 1}]", "bearing interface damping [N s/m]")
+        self._output("rotor_speed", "rotor spin speed [rad/s]", lambda: self._comp.speed(self._comp.t)[0])
+        for bi, b in enumerate(BEARINGS):
+            for qi, (q, u) in enumerate((("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))):
+                self._output(f"{b}.journal.{q}", f"journal {q} [{u}]", lambda bi=bi, qi=qi: self._comp.journal(bi)[qi])
+        for w in WHEELS:
+            for qi, q in enumerate("xy"):
+                self._output(f"{w}.{q}", f"{w} centre {q} [m]", lambda w=w, qi=qi: self._comp.node_xy(self._node[w])[qi])
+        self._output("nx", "number of states of the local linearization (q, dq/dt)", lambda: 32, "int")
+        self._output("nu", "number of inputs: forces (x, y) per bearing", lambda: 4, "int")
+        self._output("ny", "number of outputs: journal (x, y, vx, vy) per bearing", lambda: 8, "int")
+        for name, (nr, nc) in (("A", (32, 32)), ("B", (32, 4)), ("C", (8, 32)), ("D", (8, 4))):
+            for i in range(nr):
+                for k in range(nc):
+                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
+                                 lambda name=name, i=i, k=k: self._linear()[name][i, k])
+
+    def _bearing_inputs(self):
+        v = self._values
+        F, K, C = [], [], []
+        for b in BEARINGS:
+            F.append(np.array([v[f"{b}.force.x"], v[f"{b}.force.y"]]))
+            K.append(np.array([[v[f"{b}.stiffness[{i},{k}]"] for k in (1, 2)] for i in (1, 2)]))
+            C.append(np.array([[v[f"{b}.damping[{i},{k}]"] for k in (1, 2)] for i in (1, 2)]))
+        return F, K, C
+
+    def _linear(self):
+        if not self._values["linearization"]:
+            return {"A": np.zeros((32, 32)), "B": np.zeros((32, 4)), "C": np.zeros((8, 32)), "D": np.zeros((8, 4))}
+        from frbmodel.components import rotor_state_space
+
+        return rotor_state_space(self._comp)
+
+    def exit_initialization_mode(self):
+        msg = self._check_version()
+        if msg:
+            self._error(msg)
+            raise RuntimeError(msg)
+        import frbmodel as frb
+        from frbmodel.components import RotorComponent, ramp_speed
+        from frbmodel.runup import Unbalance, static_rotor_state
+
+        v = self._values
+        try:
+            tc = frb.load_system(v["system_file"]) if v["system_file"] else frb.turbocharger()
+            tc = tc.with_(gravity=finite("gravity", v["gravity"], 0.0, unit="m/s2"))
+            w0 = finite("speed_start", v["speed_start"], 0.0, unit="rad/s")
+            w1 = finite("speed_end", v["speed_end"], 0.0, unit="rad/s")
+            ramp = finite("ramp_time", v["ramp_time"], 0.0, unit="s")
+            unb = [Unbalance(w, finite(f"{w}.unbalance", v[f"{w}.unbalance"], 0.0, unit="kg m"),
+                             finite(f"{w}.unbalance_phase", v[f"{w}.unbalance_phase"])) for w in WHEELS
+                   if v[f"{w}.unbalance"] > 0]
+            self._comp = RotorComponent(tc, ramp_speed(w0 * 30 / math.pi, w1 * 30 / math.pi, ramp), unb,
+                                        finite("substep", v["substep"], 1e-9, 1e-3, "s"))
+            journals = [(finite(f"{b}.journal_x0", v[f"{b}.journal_x0"]), finite(f"{b}.journal_y0", v[f"{b}.journal_y0"]))
+                        for b in BEARINGS]
+            self._comp.y[:self._comp.n] = static_rotor_state(tc, journals)
+            self._node = {d.name: d.node for d in tc.rotor.discs}
+        except Exception as exc:  # noqa: BLE001
+            self._error(f"{self.instance_name}: invalid parameters: {exc}")
+            raise
+        self._ready = True
+
+    def do_step(self, current_time, step_size):
+        if not self._ready:
+            return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
+        try:
+            F, K, C = self._bearing_inputs()
+            for name, arr in (("force", F), ("stiffness", K), ("damping", C)):
+                if not all(np.all(np.isfinite(a)) for a in arr):
+                    raise ValueError(f"bearing {name} input is not finite: {arr!r}")
+            self._comp.step(step_size, F, K, C)
+        except Exception as exc:  # noqa: BLE001
+            self._ready = False
+            return self._error(f"{self.instance_name} at t = {current_time:.6g} s: {exc}")
+        return True
+
+    def _get_fmu_state(self):
+        state = super()._get_fmu_state()
+        if self._comp is not None:
+            state["_rotor_state"] = [float(x) for x in self._comp.y] + [self._comp.phi, self._comp.t]
+        return state
+
+    def _set_fmu_state(self, state):
+        y = state.pop("_rotor_state", None)
+        super()._set_fmu_state(state)
+        if y is not None and self._comp is not None:
+            self._comp.y[:] = y[:-2]
+            self._comp.phi, self._comp.t = y[-2], y[-1]

@@ -1,0 +1,76 @@
+"""Helpers shared by the frbmodel FMU slaves (bundled into each FMU next to the slave script)."""
+import math
+import re
+from pathlib import Path
+
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Initial, Fmi2Variability, Integer, Real, String
+from pythonfmu.enums import Fmi2Status
+
+
+class FrbSlaveMixin:
+    """Variable registration with explicit getters/setters, version check and error logging."""
+
+    def _param(self, name, value, desc, kind="real"):
+        self._values[name] = value
+        cls = {"real": Real, "int": Integer, "bool": Boolean, "str": String}[kind]
+        var = cls(name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed, description=desc,
+                  getter=lambda n=name: self._values[n], setter=lambda v, n=name: self._set_param(n, v))
+        self.register_variable(var, nested=False)
+
+    def _set_param(self, name, v):
+        self._values[name] = v
+        self._dirty = True
+
+    def _input(self, name, desc, start=0.0):
+        self._values[name] = start
+        var = Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous, description=desc,
+                   getter=lambda n=name: self._values[n], setter=lambda v, n=name: self._set_input(n, v))
+        self.register_variable(var, nested=False)
+
+    def _set_input(self, name, v):
+        self._values[name] = float(v)
+        self._dirty = True
+
+    def _output(self, name, desc, fn, kind="real"):
+        if kind == "int":
+            var = Integer(name, causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
+                          initial=Fmi2Initial.exact, description=desc, getter=lambda f=fn: int(self._safe(f)))
+        else:
+            var = Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
+                       initial=Fmi2Initial.exact, description=desc, getter=lambda f=fn: float(self._safe(f)))
+        self.register_variable(var, nested=False)
+
+    def _safe(self, fn):
+        """Evaluate an output; before initialization (or after a failure) outputs read as NaN-free zeros."""
+        if not getattr(self, "_ready", False):
+            return 0
+        return fn()
+
+    def _error(self, msg):
+        self.log(msg, Fmi2Status.error)
+        self._failed = msg
+        return False
+
+    def _check_version(self):
+        """Refuse to start if the imported frbmodel is not the bundled version (pythonfmu slaves share the
+        host's sys.modules, so a host with another frbmodel would silently replace ours)."""
+        import frbmodel
+
+        bundled = None
+        if self.resources:
+            init = Path(self.resources) / "frbmodel" / "__init__.py"
+            if init.exists():
+                m = re.search(r'__version__\s*=\s*"([^"]+)"', init.read_text())
+                bundled = m.group(1) if m else None
+        if bundled is not None and bundled != frbmodel.__version__:
+            return (f"frbmodel version mismatch: this FMU bundles frbmodel {bundled} but the process imported "
+                    f"frbmodel {frbmodel.__version__} from {Path(frbmodel.__file__).parent}; use the same version "
+                    "(rebuild the FMUs or run them in a process without another frbmodel)")
+        return None
+
+
+def finite(name, v, lo=-math.inf, hi=math.inf, unit=""):
+    v = float(v)
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise ValueError(f"{name} = {v!r} {unit} is invalid: valid range [{lo:g}, {hi:g}] {unit}".replace("  ", " "))
+    return v
