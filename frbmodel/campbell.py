@@ -272,6 +272,18 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
         G[:rotor.n_dof, :rotor.n_dof] = rotor.G
         mode_sets = speed_modes(ls0.M, ls0.K, ls0.C, G, speeds * RPM, ls0.planes())
         mass, ring_dofs = ls0.M, ls0.ring_dofs
+    meta = {"system": system.name, "film_model": system.film_model, "method_title": m.title,
+            "method_options": m.options(**kw), "cpu_time_s": None, "equilibrium_time_s": t_eq,
+            "outer_clearance_m": [b.outer.clearance for b in system.bearings]}
+    res = campbell_from_modes(m.letter, speeds, mode_sets, rotor, mass, ring_dofs, rsr, ecc, whirl_hz, margin, meta)
+    res.meta["cpu_time_s"] = time.perf_counter() - t0
+    return res
+
+
+def campbell_from_modes(letter, speeds, mode_sets, rotor, mass, ring_dofs, rsr, ecc, whirl_hz, margin, meta):
+    """Campbell post-processing (precession, mode kind, tracking) of per-speed :class:`Modes` whose displacement
+    DoFs are the rotor's followed by the rings' (x, y). Used by :func:`campbell` and by the FMU linearization."""
+    nn = rotor.n_nodes
     lam_list = [md.eigenvalues for md in mode_sets]
     shape_list = [md.shapes for md in mode_sets]
     v_idx, w_idx = np.arange(nn) * 4, np.arange(nn) * 4 + 1
@@ -309,8 +321,4 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
     lam, prec, kind, ringf = lam[:, order], prec[:, order], kind[:, order], ringf[:, order]
     freq = lam.imag / (2 * math.pi)
     damp = -lam.real / np.abs(lam)
-    meta = {"system": system.name, "film_model": system.film_model, "method_title": m.title,
-            "method_options": m.options(**kw), "cpu_time_s": time.perf_counter() - t0,
-            "equilibrium_time_s": t_eq,
-            "outer_clearance_m": [b.outer.clearance for b in system.bearings]}
-    return CampbellResult(m.letter, speeds, freq, damp, prec, kind, ringf, lam, rsr, ecc, whirl_hz, margin, meta)
+    return CampbellResult(letter, speeds, freq, damp, prec, kind, ringf, lam, rsr, ecc, whirl_hz, margin, meta)

@@ -71,13 +71,20 @@ def _system_args(p):
 def cmd_campbell(args):
     from .campbell import campbell
 
-    tc = load_from_args(args)
     speeds = parse_speeds(args.speeds)
-    kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
-    cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=Progress(f"campbell {args.method}"), **kw)
+    if args.from_fmu:
+        from .cosim.linearize import campbell_from_fmu
+
+        cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set,
+                               progress=Progress(f"campbell {args.method} from FMUs"))
+    else:
+        tc = load_from_args(args)
+        kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
+        cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=Progress(f"campbell {args.method}"),
+                      **kw)
     out = Path(args.out)
     paths = cd.save(out, fmax_hz=args.fmax)
-    print(f"method {cd.method}: {cd.meta['method_title']}; {speeds.size} speeds in {cd.meta['cpu_time_s']:.3f} s")
+    print(f"method {cd.method}: {cd.meta.get('method_title', cd.meta.get('source', ''))}; {speeds.size} speeds")
     if not args.no_whirl:
         from .whirl import FILM_NAMES
 
@@ -205,6 +212,69 @@ def cmd_compare(args):
     print(f"results in {Path(args.out).resolve()}")
 
 
+def cmd_build_fmus(args):
+    from .cosim.build import build_fmus
+
+    build_fmus(args.out, args.src)
+    print(f"results in {Path(args.out).resolve()}")
+
+
+def cmd_cosim(args):
+    import matplotlib.pyplot as plt
+
+    from .campbell import campbell
+    from .cosim.linearize import system_from_parameters
+    from .cosim.master import CosimStopped, cosimulate
+    from .cosim.ssp import read_ssp
+    from .spectral import spectrogram
+
+    out = Path(args.out)
+    code = 0
+    try:
+        run = cosimulate(args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True,
+                         rollback=args.rollback)
+    except CosimStopped as exc:
+        print(f"frb cosim: stopped: {exc}", file=sys.stderr)
+        run, code = exc.result, 3
+    print(f"wall time {run.meta['wall_time_s']:.1f} s ({run.meta['fmi_time_s'] / max(run.meta['wall_time_s'], 1e-9):.0%} "
+          f"in FMI calls), macro step {run.meta['step_size_s']:g} s, {run.time.size} samples")
+    if not args.no_figure and run.time.size >= 64:
+        tc = system_from_parameters(read_ssp(args.ssp).parameters(args.parameter_set))
+        run.meta["system"] = tc.to_dict()
+        lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
+        cd = campbell(tc, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
+        for node in ("turbine_wheel", "compressor_wheel"):
+            sp = spectrogram(run, node)
+            fig = sp.plot(campbell=cd, title=f"co-simulated run-up ({args.parameter_set}), {node}")
+            fig.savefig(out / f"composite_{node}.png", dpi=110, bbox_inches="tight")
+            plt.close(fig)
+            sp.plot_html(out / f"composite_{node}.html", campbell=cd)
+            tab = sp.components_table()
+            tab.to_csv(out / f"components_{node}.csv", index=False)
+            print(f"components at the {node}:")
+            print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
+    print(f"results in {out.resolve()}")
+    return code
+
+
+def cmd_linearize(args):
+    from .cosim.linearize import linearize
+    from .modal import modes_from_state
+
+    A, tc = linearize(args.ssp, args.speed_rpm, args.method, args.parameter_set)
+    md = modes_from_state(A, A.shape[0] // 2)
+    print(f"global A from the FMUs: {A.shape[0]} states, method {args.method.upper()} operating point at "
+          f"{args.speed_rpm:.0f} rpm ({args.parameter_set})")
+    print(f"{'f [Hz]':>10} {'damping [-]':>12} {'Re(lambda) [1/s]':>17}")
+    for lam in md.eigenvalues:
+        print(f"{lam.imag / (2 * np.pi):10.2f} {-lam.real / abs(lam):12.4f} {lam.real:17.2f}")
+    if args.out:
+        p = Path(args.out)
+        p.mkdir(parents=True, exist_ok=True)
+        np.savetxt(p / f"A_{args.method.upper()}_{args.speed_rpm:.0f}rpm.csv", A, delimiter=",")
+        print(f"wrote {(p / f'A_{args.method.upper()}_{args.speed_rpm:.0f}rpm.csv').resolve()}")
+
+
 def build_parser():
     from . import __version__
     from .methods import METHODS
@@ -223,6 +293,9 @@ def build_parser():
     c.add_argument("--k", type=float, default=None, help="spring stiffness of methods A, E [N/m] (1e6)")
     c.add_argument("--kx", type=float, default=None, help="horizontal spring of method B [N/m] (1e6)")
     c.add_argument("--ky", type=float, default=None, help="vertical spring of method B [N/m] (2e6)")
+    c.add_argument("--from-fmu", metavar="SSP", default=None,
+                   help="assemble the linear system from the FMUs of this SSP (methods F, G, I, J)")
+    c.add_argument("--parameter-set", default="co36", help="SSP parameter set for --from-fmu")
     _system_args(c)
     c.set_defaults(func=cmd_campbell)
 
@@ -260,6 +333,29 @@ def build_parser():
     m.add_argument("--out", default="results/compare")
     _system_args(m)
     m.set_defaults(func=cmd_compare)
+
+    bf = sub.add_parser("build-fmus", help="build the bearing and rotor FMUs and pack build/turbocharger.ssp")
+    bf.add_argument("--out", default="build")
+    bf.add_argument("--src", default=None, help="checkout holding fmu_src/ and ssp/ (default: auto)")
+    bf.set_defaults(func=cmd_build_fmus)
+
+    cs = sub.add_parser("cosim", help="co-simulated run-up of an SSP system (fmpy master)")
+    cs.add_argument("ssp", help=".ssp archive or folder (see frb build-fmus)")
+    cs.add_argument("--parameter-set", default="co36", help="co36, co40, co42 or co46")
+    cs.add_argument("--stop-time", type=float, default=None, help="simulated time [s] (default: from the SSP)")
+    cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 2e-5)")
+    cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
+    cs.add_argument("--no-figure", action="store_true")
+    cs.add_argument("--out", default="results/cosim")
+    cs.set_defaults(func=cmd_cosim)
+
+    li = sub.add_parser("linearize", help="global A matrix and modes from the FMUs' linearization mode")
+    li.add_argument("ssp")
+    li.add_argument("--speed-rpm", type=float, default=150e3)
+    li.add_argument("--method", default="J", type=str.upper, choices=list("FGIJ"))
+    li.add_argument("--parameter-set", default="co36")
+    li.add_argument("--out", default=None, help="write A as CSV into this folder")
+    li.set_defaults(func=cmd_linearize)
 
     f = sub.add_parser("paper-figures", help="regenerate the paper's linear figures 4-11")
     f.add_argument("--out", default="results/paper-figures")

@@ -1,0 +1,168 @@
+"""Linearization mode: collect the FMUs' local state-space matrices at an operating point and interconnect them
+along the SSP connections into the global A matrix; modal analysis as in :func:`frbmodel.campbell`.
+
+Bearing FMU b: ẋ_b = A_b x_b + B_b u_b, F_b = C_b x_b + D_b u_b with x_b = ring (x, y, vx, vy), u_b = journal
+(x, y, vx, vy). Rotor FMU: ẋ_r = A_r x_r + B_r F, y_r = C_r x_r with F the bearing forces and y_r the journals.
+With u_b = C_r,b x_r:  ẋ_r = (A_r + Σ B_r,b D_b C_r,b) x_r + Σ B_r,b C_b x_b,  ẋ_b = A_b x_b + B_b C_r,b x_r.
+"""
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+
+import numpy as np
+
+from ..errors import ParameterError
+from .master import BEARING_NAMES, CosimStopped, _call, _Fmu, operating_point_overrides
+from .ssp import read_ssp
+
+
+def system_from_parameters(params):
+    """The frbmodel Turbocharger described by an SSP parameter set (rotor system file + bearing parameters)."""
+    from dataclasses import replace
+
+    import frbmodel as frb
+    from frbmodel.film import Film
+
+    rp = params.get("rotor", {})
+    sys_file = rp.get("system_file", ("String", ""))[1]
+    tc = frb.load_system(sys_file) if sys_file else frb.turbocharger()
+    bs = []
+    for name, b in zip(BEARING_NAMES, tc.bearings):
+        p = {k: v[1] for k, v in params.get(name, {}).items()}
+        films = []
+        for fname, film in (("inner", b.inner), ("outer", b.outer)):
+            films.append(Film(p.get(f"{fname}.radius", film.radius), p.get(f"{fname}.length", film.length),
+                              p.get(f"{fname}.clearance", film.clearance), p.get(f"{fname}.viscosity", film.viscosity)))
+        bs.append(replace(b, inner=films[0], outer=films[1], ring_mass=p.get("ring.mass", b.ring_mass),
+                          ring_inertia=p.get("ring.inertia", b.ring_inertia)))
+    model = params.get(BEARING_NAMES[0], {}).get("film_model", ("String", tc.film_model))[1]
+    return tc.with_(bearings=tuple(bs), film_model=model)
+
+
+def _matrix(fmu, name, nr, nc):
+    names = [f"{name}[{i + 1},{k + 1}]" for i in range(nr) for k in range(nc)]
+    return np.array(_call(fmu, f"getReal({name})", fmu.slave.getReal, fmu.vr(names))).reshape(nr, nc)
+
+
+def _dims(fmu):
+    return _call(fmu, "getInteger(nx, nu, ny)", fmu.slave.getInteger, fmu.vr(["nx", "nu", "ny"]))
+
+
+def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
+    """Global state matrix of the SSP system at the ``method`` equilibrium at ``speed_rpm``, from the FMUs.
+
+    Returns ``(A, system)``: A in the state order [rotor q, ring_t (x, y), ring_c (x, y), rotor q̇,
+    ring_t (vx, vy), ring_c (vx, vy)] — the DoF order of :func:`frbmodel.linear_system` — and the frbmodel
+    system of the parameter set.
+    """
+    from ..methods import get_method
+
+    m = get_method(method)
+    if m.letter not in "FGIJ":
+        raise ParameterError(f"method = {method!r}: the FMU linearization covers the film methods with ring DoFs "
+                             "(F, G, I, J)")
+    sys_ = read_ssp(ssp)
+    params = sys_.parameters(parameter_set)
+    system = system_from_parameters(params)
+    ov = operating_point_overrides(system, speed_rpm, method=m.letter)
+    for comp, d in ov.items():
+        params.setdefault(comp, {}).update(d)
+        params[comp]["linearization"] = ("Boolean", True)
+    tmp = tempfile.mkdtemp(prefix="frb_lin_")
+    fmus = {}
+    try:
+        fmus = {name: _Fmu(name, path, tmp) for name, path in sys_.components.items()}
+        for fmu in fmus.values():
+            _call(fmu, "setupExperiment", fmu.slave.setupExperiment, None, 0.0, None)
+            _call(fmu, "enterInitializationMode", fmu.slave.enterInitializationMode)
+            fmu.set_parameters(params.get(fmu.name, {}))
+            _call(fmu, "exitInitializationMode", fmu.slave.exitInitializationMode)
+        rotor = fmus["rotor"]
+        # journal / speed connections: set the bearings' inputs from the rotor's outputs
+        prefix_of = {}
+        for s_el, s_c, e_el, e_c in sys_.connections:
+            if s_el == "rotor":
+                v = _call(rotor, "getReal", rotor.slave.getReal, rotor.vr([s_c]))
+                _call(fmus[e_el], "setReal", fmus[e_el].slave.setReal, fmus[e_el].vr([e_c]), v)
+                if e_c == "journal.x":
+                    prefix_of[e_el] = s_c.split(".")[0]
+        nx_r, nu_r, ny_r = _dims(rotor)
+        Ar, Br, Cr = _matrix(rotor, "A", nx_r, nx_r), _matrix(rotor, "B", nx_r, nu_r), _matrix(rotor, "C", ny_r, nx_r)
+        n_r = nx_r // 2
+        order = ("turbine_bearing", "compressor_bearing")
+        blocks = []
+        for name in BEARING_NAMES:
+            f = fmus[name]
+            nx, nu, ny = _dims(f)
+            k = order.index(prefix_of[name])
+            blocks.append((k, _matrix(f, "A", nx, nx), _matrix(f, "B", nx, nu), _matrix(f, "C", ny, nx),
+                           _matrix(f, "D", ny, nu)))
+    finally:
+        for fmu in fmus.values():
+            try:
+                fmu.slave.terminate()
+                fmu.slave.freeInstance()
+            except Exception:  # noqa: BLE001
+                pass
+        shutil.rmtree(tmp, ignore_errors=True)
+    nb = 4 * len(blocks)
+    N = nx_r + nb
+    A = np.zeros((N, N))
+    A[:nx_r, :nx_r] = Ar
+    for i, (k, Ab, Bb, Cb, Db) in enumerate(blocks):
+        sl = slice(nx_r + 4 * i, nx_r + 4 * i + 4)
+        Crb = Cr[4 * k:4 * k + 4]
+        Brb = Br[:, 2 * k:2 * k + 2]
+        A[:nx_r, :nx_r] += Brb @ Db @ Crb
+        A[:nx_r, sl] += Brb @ Cb
+        A[sl, :nx_r] += Bb @ Crb
+        A[sl, sl] += Ab
+    # reorder to [q_r, ring positions, q̇_r, ring velocities]
+    ring_pos = [nx_r + 4 * i + j for i in range(len(blocks)) for j in (0, 1)]
+    ring_vel = [nx_r + 4 * i + j for i in range(len(blocks)) for j in (2, 3)]
+    perm = list(range(n_r)) + ring_pos + list(range(n_r, nx_r)) + ring_vel
+    return A[np.ix_(perm, perm)], system
+
+
+def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progress=None):
+    """Holistic Campbell diagram from the FMUs alone (same result type as :func:`frbmodel.campbell`)."""
+    from ..campbell import campbell_from_modes
+    from ..equilibrium import RPM, bearing_equilibrium
+    from ..modal import modes_from_state
+    from ..whirl import bearing_whirl
+
+    speeds = np.atleast_1d(np.asarray(speeds_rpm, dtype=float))
+    mode_sets = []
+    system = None
+    rsr = np.full((speeds.size, 2), np.nan)
+    ecc = np.full((speeds.size, 4), np.nan)
+    whirl_hz = np.full((speeds.size, 4), np.nan)
+    margin = np.full((speeds.size, 4), np.nan)
+    for i, s in enumerate(speeds):
+        A, system = linearize(ssp, s, method, parameter_set)
+        mode_sets.append(modes_from_state(A, A.shape[0] // 2))
+        loads = system.bearing_loads
+        for k, b in enumerate(system.bearings):
+            e = bearing_equilibrium(b, loads[k], s * RPM, method, system.film_model, system.gravity)
+            rsr[i, k] = e.ring_speed_ratio
+            wi, wo, mi, mo = bearing_whirl(b, e, system.film_model, system.gravity)
+            whirl_hz[i, 2 * k:2 * k + 2] = np.array([wi, wo]) / (2 * math.pi)
+            margin[i, 2 * k:2 * k + 2] = [mi, mo]
+            ecc[i, 2 * k:2 * k + 2] = [e.eps_inner, e.eps_outer]
+        if progress:
+            progress(i + 1, speeds.size)
+    n_r = system.rotor.n_dof
+    M = np.zeros((n_r + 4, n_r + 4))
+    M[:n_r, :n_r] = system.rotor.M
+    for k, b in enumerate(system.bearings):
+        M[n_r + 2 * k, n_r + 2 * k] = M[n_r + 2 * k + 1, n_r + 2 * k + 1] = b.ring_mass
+    ring_dofs = [(n_r, n_r + 1), (n_r + 2, n_r + 3)]
+    meta = {"system": f"{system.name} (from FMUs: {ssp}, set {parameter_set})", "film_model": system.film_model,
+            "source": "FMU linearization"}
+    return campbell_from_modes(method.upper(), speeds, mode_sets, system.rotor, M, ring_dofs, rsr, ecc, whirl_hz,
+                               margin, meta)
+
+
+__all__ = ["linearize", "campbell_from_fmu", "system_from_parameters", "CosimStopped"]
