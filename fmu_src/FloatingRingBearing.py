@@ -52,6 +52,9 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                              lambda i=i, k=k: self._out()[1][i, k])
                 self._output(f"damping[{i + 1},{k + 1}]", "interface Jacobian -dF/dv_journal [N s/m]",
                              lambda i=i, k=k: self._out()[2][i, k])
+        for qi, (q, u) in enumerate((("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))):
+            self._output(f"journal_ref.{q}", f"journal {q} at which force and Jacobian were evaluated [{u}]",
+                         lambda qi=qi: self._ref()[qi])
         self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0])
         self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1])
         self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed())
@@ -79,10 +82,15 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     def _out(self):
         if self._dirty or self._cache is None:
-            self._cache = self._comp.outputs(self._journal(), self._values["rotor_speed"])
+            self._ref_state = self._journal()
+            self._cache = self._comp.outputs(self._ref_state, self._values["rotor_speed"])
             self._lin = None
             self._dirty = False
         return self._cache
+
+    def _ref(self):
+        self._out()
+        return self._ref_state
 
     def _linear(self):
         if not self._values["linearization"]:

@@ -41,6 +41,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         for b in BEARINGS:
             self._input(f"{b}.force.x", f"bearing force on the journal, x [N]")
             self._input(f"{b}.force.y", f"bearing force on the journal, y [N]")
+            for q, u in (("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s")):
+                self._input(f"{b}.journal_ref.{q}", f"journal {q} at which the bearing force was evaluated [{u}]")
             for i in range(2):
                 for k in range(2):
                     self._input(f"{b}.stiffness[{i + 1},{k + 1}]", "bearing interface stiffness [N/m]")
@@ -64,6 +66,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def _bearing_inputs(self):
         v = self._values
         F, K, C = [], [], []
+        self._refs = [np.array([v[f"{b}.journal_ref.{q}"] for q in ("x", "y", "vx", "vy")]) for b in BEARINGS]
         for b in BEARINGS:
             F.append(np.array([v[f"{b}.force.x"], v[f"{b}.force.y"]]))
             K.append(np.array([[v[f"{b}.stiffness[{i},{k}]"] for k in (1, 2)] for i in (1, 2)]))
@@ -112,10 +115,10 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
         try:
             F, K, C = self._bearing_inputs()
-            for name, arr in (("force", F), ("stiffness", K), ("damping", C)):
+            for name, arr in (("force", F), ("stiffness", K), ("damping", C), ("journal_ref", self._refs)):
                 if not all(np.all(np.isfinite(a)) for a in arr):
                     raise ValueError(f"bearing {name} input is not finite: {arr!r}")
-            self._comp.step(step_size, F, K, C)
+            self._comp.step(step_size, F, K, C, self._refs)
         except Exception as exc:  # noqa: BLE001
             self._ready = False
             return self._error(f"{self.instance_name} at t = {current_time:.6g} s: {exc}")

@@ -41,10 +41,18 @@ class FrbSlaveMixin:
         self.register_variable(var, nested=False)
 
     def _safe(self, fn):
-        """Evaluate an output; before initialization (or after a failure) outputs read as NaN-free zeros."""
+        """Evaluate an output. Before initialization outputs read 0; if the evaluation fails (e.g. a film at
+        its wall) the error is logged and the output reads NaN — an exception here would make pythonfmu report
+        fmi2Fatal — and the next doStep returns Discard."""
         if not getattr(self, "_ready", False):
             return 0
-        return fn()
+        try:
+            return fn()
+        except Exception as exc:  # noqa: BLE001
+            if self._failed is None:
+                self._error(f"{self.instance_name}: output evaluation failed: {exc}")
+            self._ready = False
+            return math.nan
 
     def _error(self, msg):
         self.log(msg, Fmi2Status.error)

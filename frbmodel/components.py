@@ -336,12 +336,13 @@ class RotorComponent:
     def node_xy(self, node):
         return self.y[4 * node:4 * node + 2].copy()
 
-    def step(self, H, forces, Ks, Cs):
-        """Advance by ``H`` [s] with per-bearing F0 [N], K [N/m], C [N s/m] at the current journal states."""
+    def step(self, H, forces, Ks, Cs, refs=None):
+        """Advance by ``H`` [s] with per-bearing F0 [N], K [N/m], C [N s/m], linearized about the journal states
+        ``refs`` [(x, y, vx, vy)] at which F0 was evaluated (default: the current journal states)."""
         w0, wd = self.speed(self.t)
         fb = np.zeros((len(forces), 2))
         for b, (F0, K, C) in enumerate(zip(forces, Ks, Cs)):
-            j = self.journal(b)
+            j = self.journal(b) if refs is None else np.asarray(refs[b], dtype=float)
             fb[b] = F0 + K @ j[:2] + C @ j[2:]
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
         self.y, self.phi = _rotor_step(self.y, self.phi, self.t, H, n_sub, self.minv, self.k_mat, self.g_mat,

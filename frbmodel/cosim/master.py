@@ -70,7 +70,7 @@ def _call(fmu, what, fn, *args):
 
 
 def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_dir=None, progress=True,
-               rollback=False, output_every=1, overrides=None, max_halvings=6):
+               rollback=False, output_every=1, overrides=None, max_halvings=6, coupling="jacobian"):
     """Run the SSP system with frbmodel's master.
 
     Parameters
@@ -89,6 +89,8 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
         Record every n-th communication point.
     overrides : dict, optional
         {component: {parameter: (type, value)}} applied after the parameter set.
+    coupling : {"jacobian", "force"}
+        "force" drops the stiffness/damping connections (plain force exchange, for comparison).
 
     Returns
     -------
@@ -112,8 +114,12 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     rotor = fmus["rotor"]
     bearings = [fmus[n] for n in BEARING_NAMES]
     # connections grouped: rotor -> bearings (pass 1), bearings -> rotor (pass 2, after the bearings' inputs)
+    if coupling not in ("jacobian", "force"):
+        raise ParameterError(f"coupling = {coupling!r} is unknown; valid: 'jacobian', 'force'")
     groups = {}
     for s_el, s_c, e_el, e_c in sys_.connections:
+        if coupling == "force" and (s_c.startswith("stiffness") or s_c.startswith("damping")):
+            continue
         groups.setdefault((s_el, e_el), []).append((s_c, e_c))
     order = sorted(groups, key=lambda k: 0 if k[0] == "rotor" else 1)
     links = [(fmus[s], fmus[e], fmus[s].vr([c[0] for c in groups[(s, e)]]), fmus[e].vr([c[1] for c in groups[(s, e)]]))
@@ -124,6 +130,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     rec_bear = [b.vr(["ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer"]) for b in bearings]
     columns = _columns(["turbine_wheel", "compressor_wheel"])
     meta = {"ssp": str(ssp), "parameter_set": parameter_set, "step_size_s": H, "stop_time_s": stop_time,
+            "coupling": coupling,
             "master": "frbmodel.cosim (fmpy FMU2Slave, interface-Jacobian coupling)", "rollback": rollback,
             "units": "SI; speed in rpm"}
     writer = _Writer(out_dir, columns, meta) if out_dir is not None else None
@@ -136,6 +143,9 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
         t0 = time.perf_counter()
         for src, dst, svr, dvr in links:
             vals = _call(src, "getReal", src.slave.getReal, svr)
+            if not all(math.isfinite(v) for v in vals):
+                names = [n for n, v in src.vars.items() if v.valueReference in svr]
+                raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
             _call(dst, "setReal", dst.slave.setReal, dvr, vals)
         t_fmi += time.perf_counter() - t0
 

@@ -26,6 +26,7 @@ def _bearing_connections(inst, prefix):
     con = [("rotor", f"{prefix}.journal.{q}", inst, f"journal.{q}") for q in ("x", "y", "vx", "vy")]
     con.append(("rotor", "rotor_speed", inst, "rotor_speed"))
     con += [(inst, f"force.{q}", "rotor", f"{prefix}.force.{q}") for q in "xy"]
+    con += [(inst, f"journal_ref.{q}", "rotor", f"{prefix}.journal_ref.{q}") for q in ("x", "y", "vx", "vy")]
     for m in ("stiffness", "damping"):
         con += [(inst, f"{m}[{i},{k}]", "rotor", f"{prefix}.{m}[{i},{k}]") for i in (1, 2) for k in (1, 2)]
     return con
@@ -40,9 +41,9 @@ def connections():
 
 
 def _unit(conn):
-    if "journal.v" in conn:
+    if "journal.v" in conn or "journal_ref.v" in conn:
         return "m/s"
-    if "journal." in conn:
+    if "journal." in conn or "journal_ref." in conn:
         return "m"
     if "rotor_speed" in conn:
         return "rad/s"
@@ -57,9 +58,11 @@ UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "rad/s": dict(rad=1, s=-1), "N"
          "N/m": dict(kg=1, s=-2), "N.s/m": dict(kg=1, s=-1)}
 
 
-def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_rpm=250e3, ramp_time=1.0):
+def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_rpm=250e3, ramp_time=1.0,
+                   perturbation=0.0):
     """{set name: {component: {parameter: (type, value, unit)}}} with initial states from the method-J
-    equilibrium at the start speed."""
+    equilibrium at the start speed (journals and rings offset in +x by ``perturbation`` × clearance, as in
+    :func:`frbmodel.runup.runup`)."""
     import frbmodel as frb
 
     sets = {}
@@ -70,10 +73,29 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
         comp = {"rotor": {"speed_start": ("Real", start_rpm * math.pi / 30, "rad/s"),
                           "speed_end": ("Real", end_rpm * math.pi / 30, "rad/s"),
                           "ramp_time": ("Real", ramp_time, "s"), "gravity": ("Real", tc.gravity, "m/s2")}}
+        from ..components import BearingComponent
+
+        w0 = start_rpm * math.pi / 30
         for (inst, prefix), b, e in zip(BEARINGS, tc.bearings, eq.bearings):
-            comp["rotor"][f"{prefix}.journal_x0"] = ("Real", float(e.journal[0]), "m")
+            jx = float(e.journal[0] + perturbation * (b.inner.clearance + b.outer.clearance))
+            rx = float(e.ring[0] + perturbation * b.outer.clearance)
+            comp["rotor"][f"{prefix}.journal_x0"] = ("Real", jx, "m")
             comp["rotor"][f"{prefix}.journal_y0"] = ("Real", float(e.journal[1]), "m")
-            p = {}
+            # start values of the coupling inputs consistent with the initial state, so that a master that
+            # steps before its first exchange (e.g. libcosim) starts from the same point
+            bc = BearingComponent(b, tc.film_model)
+            bc.ring[:] = [rx, e.ring[1], 0.0, 0.0, e.ring_speed]
+            F, K, C, _ = bc.outputs([jx, e.journal[1], 0.0, 0.0], w0)
+            for q, val in zip(("x", "y", "vx", "vy"), (jx, float(e.journal[1]), 0.0, 0.0)):
+                comp["rotor"][f"{prefix}.journal_ref.{q}"] = ("Real", val, "m" if len(q) == 1 else "m/s")
+            comp["rotor"][f"{prefix}.force.x"] = ("Real", float(F[0]), "N")
+            comp["rotor"][f"{prefix}.force.y"] = ("Real", float(F[1]), "N")
+            for i in range(2):
+                for k in range(2):
+                    comp["rotor"][f"{prefix}.stiffness[{i + 1},{k + 1}]"] = ("Real", float(K[i, k]), "N/m")
+                    comp["rotor"][f"{prefix}.damping[{i + 1},{k + 1}]"] = ("Real", float(C[i, k]), "N.s/m")
+            p = {"journal.x": ("Real", jx, "m"), "journal.y": ("Real", float(e.journal[1]), "m"),
+                 "rotor_speed": ("Real", w0, "rad/s")}
             for fname, film in (("inner", b.inner), ("outer", b.outer)):
                 p[f"{fname}.radius"] = ("Real", film.radius, "m")
                 p[f"{fname}.length"] = ("Real", film.length, "m")
@@ -81,7 +103,7 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
                 p[f"{fname}.viscosity"] = ("Real", film.viscosity, "Pa.s")
             p["ring.mass"] = ("Real", b.ring_mass, "kg")
             p["ring.inertia"] = ("Real", b.ring_inertia, "kg.m2")
-            p["ring.x0"] = ("Real", float(e.ring[0]), "m")
+            p["ring.x0"] = ("Real", rx, "m")
             p["ring.y0"] = ("Real", float(e.ring[1]), "m")
             p["ring.speed0"] = ("Real", float(e.ring_speed), "rad/s")
             p["gravity"] = ("Real", tc.gravity, "m/s2")
@@ -127,8 +149,8 @@ def write_ssp(out_dir="ssp", step_size=2e-5, stop_time=1.0, **kw):
     de = ET.SubElement(root, q("ssd", "DefaultExperiment"), {"startTime": "0", "stopTime": repr(float(stop_time))})
     ann = ET.SubElement(ET.SubElement(de, q("ssd", "Annotations")), q("ssc", "Annotation"),
                         {"type": "com.opensimulationplatform"})
-    si = ET.SubElement(ann, q("osp", "SimulationInformation"))
-    ET.SubElement(si, q("osp", "FixedStepMaster"), {"description": "FixedStepAlgorithm", "stepSize": repr(float(step_size))})
+    alg = ET.SubElement(ann, q("osp", "Algorithm"))
+    ET.SubElement(alg, q("osp", "FixedStepAlgorithm"), {"baseStepSize": repr(float(step_size))})
     ET.indent(root)
     paths = [out / "SystemStructure.ssd"]
     ET.ElementTree(root).write(paths[0], xml_declaration=True, encoding="UTF-8")
@@ -216,9 +238,9 @@ def read_ssp(path) -> SSPSystem:
         set_name, comp = f.stem.split("_", 1)
         sets.setdefault(set_name, {})[comp] = f
     step = stop = None
-    fsm = root.find(".//osp:FixedStepMaster", NS)
-    if fsm is not None:
-        step = float(fsm.get("stepSize"))
+    fsa = root.find(".//osp:FixedStepAlgorithm", NS)
+    if fsa is not None:
+        step = float(fsa.get("baseStepSize"))
     de = root.find("ssd:DefaultExperiment", NS)
     if de is not None and de.get("stopTime"):
         stop = float(de.get("stopTime"))
