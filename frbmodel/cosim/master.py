@@ -119,6 +119,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     groups = {}
     for s_el, s_c, e_el, e_c in sys_.connections:
         if coupling == "force" and (s_c.startswith("stiffness") or s_c.startswith("damping")):
+            params.setdefault(e_el, {})[e_c] = ("Real", 0.0)  # no interface Jacobian at all
             continue
         groups.setdefault((s_el, e_el), []).append((s_c, e_c))
     order = sorted(groups, key=lambda k: 0 if k[0] == "rotor" else 1)
