@@ -223,8 +223,7 @@ def cmd_cosim(args):
     import matplotlib.pyplot as plt
 
     from .campbell import campbell
-    from .cosim.linearize import system_from_parameters
-    from .cosim.master import CosimStopped, cosimulate
+    from .cosim.master import CosimStopped, cosimulate, system_from_parameters
     from .cosim.ssp import read_ssp
     from .spectral import spectrogram
 
@@ -240,7 +239,6 @@ def cmd_cosim(args):
           f"in FMI calls), macro step {run.meta['step_size_s']:g} s, {run.time.size} samples")
     if not args.no_figure and run.time.size >= 64:
         tc = system_from_parameters(read_ssp(args.ssp).parameters(args.parameter_set))
-        run.meta["system"] = tc.to_dict()
         lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
         cd = campbell(tc, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
         for node in ("turbine_wheel", "compressor_wheel"):

@@ -14,31 +14,8 @@ import tempfile
 import numpy as np
 
 from ..errors import ParameterError
-from .master import BEARING_NAMES, CosimStopped, _call, _Fmu, operating_point_overrides
+from .master import BEARING_NAMES, CosimStopped, _call, _Fmu, operating_point_overrides, system_from_parameters
 from .ssp import read_ssp
-
-
-def system_from_parameters(params):
-    """The frbmodel Turbocharger described by an SSP parameter set (rotor system file + bearing parameters)."""
-    from dataclasses import replace
-
-    import frbmodel as frb
-    from frbmodel.film import Film
-
-    rp = params.get("rotor", {})
-    sys_file = rp.get("system_file", ("String", ""))[1]
-    tc = frb.load_system(sys_file) if sys_file else frb.turbocharger()
-    bs = []
-    for name, b in zip(BEARING_NAMES, tc.bearings):
-        p = {k: v[1] for k, v in params.get(name, {}).items()}
-        films = []
-        for fname, film in (("inner", b.inner), ("outer", b.outer)):
-            films.append(Film(p.get(f"{fname}.radius", film.radius), p.get(f"{fname}.length", film.length),
-                              p.get(f"{fname}.clearance", film.clearance), p.get(f"{fname}.viscosity", film.viscosity)))
-        bs.append(replace(b, inner=films[0], outer=films[1], ring_mass=p.get("ring.mass", b.ring_mass),
-                          ring_inertia=p.get("ring.inertia", b.ring_inertia)))
-    model = params.get(BEARING_NAMES[0], {}).get("film_model", ("String", tc.film_model))[1]
-    return tc.with_(bearings=tuple(bs), film_model=model)
 
 
 def _matrix(fmu, name, nr, nc):

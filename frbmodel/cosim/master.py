@@ -25,6 +25,29 @@ from .ssp import read_ssp
 BEARING_NAMES = ("turbine", "compressor")
 
 
+def system_from_parameters(params):
+    """The frbmodel Turbocharger described by an SSP parameter set (rotor system file + bearing parameters)."""
+    from dataclasses import replace
+
+    import frbmodel as frb
+    from frbmodel.film import Film
+
+    rp = params.get("rotor", {})
+    sys_file = rp.get("system_file", ("String", ""))[1]
+    tc = frb.load_system(sys_file) if sys_file else frb.turbocharger()
+    bs = []
+    for name, b in zip(BEARING_NAMES, tc.bearings):
+        p = {k: v[1] for k, v in params.get(name, {}).items()}
+        films = []
+        for fname, film in (("inner", b.inner), ("outer", b.outer)):
+            films.append(Film(p.get(f"{fname}.radius", film.radius), p.get(f"{fname}.length", film.length),
+                              p.get(f"{fname}.clearance", film.clearance), p.get(f"{fname}.viscosity", film.viscosity)))
+        bs.append(replace(b, inner=films[0], outer=films[1], ring_mass=p.get("ring.mass", b.ring_mass),
+                          ring_inertia=p.get("ring.inertia", b.ring_inertia)))
+    model = params.get(BEARING_NAMES[0], {}).get("film_model", ("String", tc.film_model))[1]
+    return tc.with_(bearings=tuple(bs), film_model=model)
+
+
 class CosimStopped(FRBError):
     """The co-simulation stopped early; ``.result`` holds the samples up to there (also on disk)."""
 
@@ -131,6 +154,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     rec_bear = [b.vr(["ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer"]) for b in bearings]
     columns = _columns(["turbine_wheel", "compressor_wheel"])
     meta = {"ssp": str(ssp), "parameter_set": parameter_set, "step_size_s": H, "stop_time_s": stop_time,
+            "system": system_from_parameters(params).to_dict(),
             "coupling": coupling,
             "master": "frbmodel.cosim (fmpy FMU2Slave, interface-Jacobian coupling)", "rollback": rollback,
             "units": "SI; speed in rpm"}
@@ -176,8 +200,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
             except Exception as exc:  # noqa: BLE001
                 raise CosimStopped(f"{fmu.name}: setting parameters failed: {exc}") from None
             _call(fmu, "exitInitializationMode", fmu.slave.exitInitializationMode)
-        exchange()
-        exchange()  # bearings' forces read after their inputs are set
+        exchange()  # links are ordered rotor -> bearings first: bearing forces are read after their inputs are set
         record(0, 0.0)
         k_rec = 1
         t = 0.0
@@ -209,7 +232,6 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
                                 f.slave.setFMUstate(states[n])
                         h /= 2
                         exchange()
-                        exchange()
                         continue
                     raise CosimStopped(f"{fmu.name}: doStep at t = {t:.6g} s (step {h:.3g} s) returned status "
                                        f"{['OK', 'Warning', 'Discard', 'Error', 'Fatal', 'Pending'][st]}; see the FMU "
@@ -219,7 +241,6 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
                         if n in states:
                             f.slave.freeFMUstate(states[n])
                 t += h
-                exchange()
                 exchange()
             if k % output_every == 0:
                 record(k_rec, t)

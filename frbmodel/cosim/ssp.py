@@ -59,7 +59,7 @@ UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "rad/s": dict(rad=1, s=-1), "N"
 
 
 def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_rpm=250e3, ramp_time=1.0,
-                   perturbation=0.0):
+                   perturbation=0.05):
     """{set name: {component: {parameter: (type, value, unit)}}} with initial states from the method-J
     equilibrium at the start speed (journals and rings offset in +x by ``perturbation`` × clearance, as in
     :func:`frbmodel.runup.runup`)."""
