@@ -55,6 +55,10 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         for qi, (q, u) in enumerate((("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))):
             self._output(f"journal_ref.{q}", f"journal {q} at which force and Jacobian were evaluated [{u}]",
                          lambda qi=qi: self._ref()[qi])
+        self._output("force_end.x", "force on the journal at the end of the last step along the extrapolated journal "
+                     "path, x [N] (staggered coupling)", lambda: self._comp.force_end[0])
+        self._output("force_end.y", "force on the journal at the end of the last step, y [N]",
+                     lambda: self._comp.force_end[1])
         self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0])
         self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1])
         self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed())
@@ -123,6 +127,9 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         except Exception as exc:  # noqa: BLE001  (report any parameter problem as an FMI error)
             self._error(f"{self.instance_name}: invalid parameters: {exc}")
             raise
+        self._comp.force_end[:] = self._comp.outputs(
+            [v["journal.x"], v["journal.y"], v["journal.vx"], v["journal.vy"]], v["rotor_speed"])[0] \
+            if v["rotor_speed"] > 0 and abs(v["journal.x"]) + abs(v["journal.y"]) > 0 else 0.0
         self._ready = True
         self._dirty = True
 

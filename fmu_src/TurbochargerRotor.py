@@ -38,9 +38,13 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._param("gravity", 9.81, "gravitational acceleration along -y [m/s2]")
         self._param("substep", 5e-6, "trapezoidal substep [s]")
         self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
+        self._param("force_interpolation", False, "interpolate the bearing force between force and force_end over the "
+                    "step (staggered masters that step the bearings first); false for Jacobi masters", "bool")
         for b in BEARINGS:
             self._input(f"{b}.force.x", f"bearing force on the journal, x [N]")
             self._input(f"{b}.force.y", f"bearing force on the journal, y [N]")
+            self._input(f"{b}.force_end.x", "bearing force at the end of the step, x [N] (force_interpolation)")
+            self._input(f"{b}.force_end.y", "bearing force at the end of the step, y [N] (force_interpolation)")
             for q, u in (("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s")):
                 self._input(f"{b}.journal_ref.{q}", f"journal {q} at which the bearing force was evaluated [{u}]")
             for i in range(2):
@@ -118,7 +122,14 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             for name, arr in (("force", F), ("stiffness", K), ("damping", C), ("journal_ref", self._refs)):
                 if not all(np.all(np.isfinite(a)) for a in arr):
                     raise ValueError(f"bearing {name} input is not finite: {arr!r}")
-            self._comp.step(step_size, F, K, C, self._refs)
+            rates = None
+            if self._values["force_interpolation"]:
+                v = self._values
+                rates = [(np.array([v[f"{b}.force_end.x"], v[f"{b}.force_end.y"]]) - F[i]) / step_size
+                         + K[i] @ self._refs[i][2:] for i, b in enumerate(BEARINGS)]
+                if not all(np.all(np.isfinite(r)) for r in rates):
+                    raise ValueError(f"bearing force_end input is not finite: {rates!r}")
+            self._comp.step(step_size, F, K, C, self._refs, rates)
         except Exception as exc:  # noqa: BLE001
             self._ready = False
             return self._error(f"{self.instance_name} at t = {current_time:.6g} s: {exc}")

@@ -135,6 +135,7 @@ class BearingComponent:
         self.ring = np.zeros(5)  # x, y [m], vx, vy [m/s], ω_FR [rad/s]
         self.rsr6 = ring_speed_ratio(bearing)
         self.eps = (0.0, 0.0)
+        self.force_end = np.zeros(2)
 
     def initialize_equilibrium(self, load, omega_rotor):
         """Ring at the method-J equilibrium for vertical journal ``load`` [N] at ``omega_rotor`` [rad/s].
@@ -180,6 +181,16 @@ class BearingComponent:
         self.eps = (ei, eo)
         return np.array([fx, fy]), K, C, (ei, eo)
 
+    def force_rate(self, journal, omega_rotor, K, C):
+        """Rate of the journal force from the ring's own motion at the current state [N/s]: the film force
+        depends on journal − ring, so a ring moving with velocity v_R and acceleration a_R changes it by
+        K v_R + C a_R (K, C the interface Jacobian)."""
+        j = self._check(journal, omega_rotor)
+        ring = self._ring_for_force(omega_rotor)
+        d = np.empty(5)
+        ring_rhs_kernel(*self._args(), j[0], j[1], j[2], j[3], ring, float(omega_rotor), 0.999, d)
+        return K @ ring[2:4] + C @ d[2:4]
+
     def step(self, journal, omega_rotor, omega_rotor_dot, H):
         """Advance the ring by ``H`` [s] with the journal extrapolated linearly from ``journal``."""
         j = self._check(journal, omega_rotor)
@@ -197,6 +208,11 @@ class BearingComponent:
         if eps_max > self.contact_eps:
             raise FilmContactError(f"{self.bearing.name} bearing: eccentricity ratio {eps_max:.4f} exceeds "
                                    f"contact_eps = {self.contact_eps} (a member reaches its wall)")
+        # force at the end of the step on the extrapolated journal path (for staggered coupling)
+        j_end = np.array([j[0] + j[2] * H, j[1] + j[3] * H, j[2], j[3]])
+        fx, fy, _, _ = _bearing_force(*self._args(), j_end, self._ring_for_force(omega_rotor + omega_rotor_dot * H),
+                                      float(omega_rotor + omega_rotor_dot * H), 0.999)
+        self.force_end = np.array([fx, fy])
         return eps_max
 
     def linearization(self, journal, omega_rotor):
@@ -247,11 +263,11 @@ def _rotor_state_matrix(A, minv, ktot, cb_full, g_mat, w, wd):
 
 
 @njit(cache=True)
-def _rotor_forcing(f_grav, jdofs, fb, unb_node, unb_me, unb_phase, ph, w, wd):
+def _rotor_forcing(f_grav, jdofs, fb, fbr, tau, unb_node, unb_me, unb_phase, ph, w, wd):
     f = f_grav.copy()
     for b in range(jdofs.shape[0]):
-        f[jdofs[b, 0]] += fb[b, 0]
-        f[jdofs[b, 1]] += fb[b, 1]
+        f[jdofs[b, 0]] += fb[b, 0] + fbr[b, 0] * tau
+        f[jdofs[b, 1]] += fb[b, 1] + fbr[b, 1] * tau
     for d in range(unb_node.size):
         th = ph + unb_phase[d]
         c, s = math.cos(th), math.sin(th)
@@ -262,12 +278,13 @@ def _rotor_forcing(f_grav, jdofs, fb, unb_node, unb_me, unb_phase, ph, w, wd):
 
 
 @njit(cache=True)
-def _rotor_step(y, phi, t0, H, n_sub, minv, k_mat, g_mat, f_grav, jdofs, kb, cb, fb, w0, wd, unb_node, unb_me,
+def _rotor_step(y, phi, t0, H, n_sub, minv, k_mat, g_mat, f_grav, jdofs, kb, cb, fb, fbr, w0, wd, unb_node, unb_me,
                 unb_phase):
     """Trapezoidal rule for M q̈ + (ΩG + C_b) q̇ + (K + Ω̇G + K_b) q = f_g + f_unb + f_b over [t0, t0 + H].
 
     ``jdofs`` (nb, 2) journal DoFs; ``kb``, ``cb`` (nb, 2, 2) interface Jacobians; ``fb`` (nb, 2) the constant part
-    F0 + K x0 + C v0 of the linearized bearing forces. Ω(t) = w0 + wd (t − t0). Returns (y, rotation angle).
+    F0 + K x0 + C v0 of the linearized bearing forces, ``fbr`` (nb, 2) their rate from the rings' motion [N/s].
+    Ω(t) = w0 + wd (t − t0). Returns (y, rotation angle).
     """
     n = k_mat.shape[0]
     h = H / n_sub
@@ -287,9 +304,9 @@ def _rotor_step(y, phi, t0, H, n_sub, minv, k_mat, g_mat, f_grav, jdofs, kb, cb,
         wb = w0 + wd * (s + 1) * h
         _rotor_state_matrix(A, minv, ktot, cb_full, g_mat, wa, wd)
         _rotor_state_matrix(A1, minv, ktot, cb_full, g_mat, wb, wd)
-        fa = minv @ _rotor_forcing(f_grav, jdofs, fb, unb_node, unb_me, unb_phase, ph, wa, wd)
+        fa = minv @ _rotor_forcing(f_grav, jdofs, fb, fbr, s * h, unb_node, unb_me, unb_phase, ph, wa, wd)
         phb = ph + 0.5 * h * (wa + wb)
-        fbv = minv @ _rotor_forcing(f_grav, jdofs, fb, unb_node, unb_me, unb_phase, phb, wb, wd)
+        fbv = minv @ _rotor_forcing(f_grav, jdofs, fb, fbr, (s + 1) * h, unb_node, unb_me, unb_phase, phb, wb, wd)
         rhs = (eye + 0.5 * h * A) @ y
         rhs[n:] += 0.5 * h * (fa + fbv)
         y = np.linalg.solve(eye - 0.5 * h * A1, rhs)
@@ -336,17 +353,19 @@ class RotorComponent:
     def node_xy(self, node):
         return self.y[4 * node:4 * node + 2].copy()
 
-    def step(self, H, forces, Ks, Cs, refs=None):
+    def step(self, H, forces, Ks, Cs, refs=None, rates=None):
         """Advance by ``H`` [s] with per-bearing F0 [N], K [N/m], C [N s/m], linearized about the journal states
-        ``refs`` [(x, y, vx, vy)] at which F0 was evaluated (default: the current journal states)."""
+        ``refs`` [(x, y, vx, vy)] at which F0 was evaluated (default: the current journal states), plus the force
+        rates [N/s] from the rings' own motion (default 0)."""
         w0, wd = self.speed(self.t)
         fb = np.zeros((len(forces), 2))
+        fbr = np.zeros((len(forces), 2)) if rates is None else np.array(rates, dtype=float).reshape(len(forces), 2)
         for b, (F0, K, C) in enumerate(zip(forces, Ks, Cs)):
             j = self.journal(b) if refs is None else np.asarray(refs[b], dtype=float)
             fb[b] = F0 + K @ j[:2] + C @ j[2:]
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
         self.y, self.phi = _rotor_step(self.y, self.phi, self.t, H, n_sub, self.minv, self.k_mat, self.g_mat,
-                                       self.f_grav, self.jdofs, np.array(Ks), np.array(Cs), fb, w0, wd, self.unb_node,
+                                       self.f_grav, self.jdofs, np.array(Ks), np.array(Cs), fb, fbr, w0, wd, self.unb_node,
                                        self.unb_me, self.unb_phase)
         self.t += H
         if not np.all(np.isfinite(self.y)):

@@ -139,15 +139,23 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     # connections grouped: rotor -> bearings (pass 1), bearings -> rotor (pass 2, after the bearings' inputs)
     if coupling not in ("jacobian", "force"):
         raise ParameterError(f"coupling = {coupling!r} is unknown; valid: 'jacobian', 'force'")
-    groups = {}
+    groups, end_groups = {}, {}
     for s_el, s_c, e_el, e_c in sys_.connections:
         if coupling == "force" and (s_c.startswith("stiffness") or s_c.startswith("damping")):
             params.setdefault(e_el, {})[e_c] = ("Real", 0.0)  # no interface Jacobian at all
             continue
+        if s_c.startswith("force_end"):  # staggered: passed after the bearings have stepped
+            if coupling == "jacobian":
+                end_groups.setdefault((s_el, e_el), []).append((s_c, e_c))
+            continue
         groups.setdefault((s_el, e_el), []).append((s_c, e_c))
+    if end_groups:
+        params.setdefault("rotor", {})["force_interpolation"] = ("Boolean", True)
     order = sorted(groups, key=lambda k: 0 if k[0] == "rotor" else 1)
     links = [(fmus[s], fmus[e], fmus[s].vr([c[0] for c in groups[(s, e)]]), fmus[e].vr([c[1] for c in groups[(s, e)]]))
              for s, e in order]
+    end_links = [(fmus[s], fmus[e], fmus[s].vr([c[0] for c in g]), fmus[e].vr([c[1] for c in g]))
+                 for (s, e), g in end_groups.items()]
     # recorded variables
     rec_rotor = rotor.vr(["rotor_speed"] + [f"{b}_bearing.journal.{q}" for b in BEARING_NAMES for q in "xy"] +
                          [f"{w}.{q}" for w in ("turbine_wheel", "compressor_wheel") for q in "xy"])
@@ -156,7 +164,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     meta = {"ssp": str(ssp), "parameter_set": parameter_set, "step_size_s": H, "stop_time_s": stop_time,
             "system": system_from_parameters(params).to_dict(),
             "coupling": coupling,
-            "master": "frbmodel.cosim (fmpy FMU2Slave, interface-Jacobian coupling)", "rollback": rollback,
+            "master": "frbmodel.cosim (fmpy FMU2Slave, staggered interface-Jacobian coupling)", "rollback": rollback,
             "units": "SI; speed in rpm"}
     writer = _Writer(out_dir, columns, meta) if out_dir is not None else None
     n_steps = int(round(stop_time / H))
@@ -217,7 +225,18 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
                     t_fmi += time.perf_counter() - t0
                 ok, failed = True, None
                 t0 = time.perf_counter()
-                for fmu in (rotor, *bearings):
+                # staggered: bearings first (journal extrapolated), their end-of-step force to the rotor, then the
+                # rotor with the force interpolated over the step
+                for fmu in (*bearings, rotor):
+                    if fmu is rotor and end_links:
+                        for src, dst, svr, dvr in end_links:
+                            vals = _call(src, "getReal", src.slave.getReal, svr)
+                            if not all(math.isfinite(v) for v in vals):
+                                ok, failed = False, (src, 2)
+                                break
+                            _call(dst, "setReal", dst.slave.setReal, dvr, vals)
+                        if not ok:
+                            break
                     try:
                         fmu.slave.doStep(t, h)
                     except FMICallException as exc:

@@ -27,6 +27,7 @@ def _bearing_connections(inst, prefix):
     con.append(("rotor", "rotor_speed", inst, "rotor_speed"))
     con += [(inst, f"force.{q}", "rotor", f"{prefix}.force.{q}") for q in "xy"]
     con += [(inst, f"journal_ref.{q}", "rotor", f"{prefix}.journal_ref.{q}") for q in ("x", "y", "vx", "vy")]
+    con += [(inst, f"force_end.{q}", "rotor", f"{prefix}.force_end.{q}") for q in "xy"]
     for m in ("stiffness", "damping"):
         con += [(inst, f"{m}[{i},{k}]", "rotor", f"{prefix}.{m}[{i},{k}]") for i in (1, 2) for k in (1, 2)]
     return con
@@ -88,6 +89,8 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
             F, K, C, _ = bc.outputs([jx, e.journal[1], 0.0, 0.0], w0)
             for q, val in zip(("x", "y", "vx", "vy"), (jx, float(e.journal[1]), 0.0, 0.0)):
                 comp["rotor"][f"{prefix}.journal_ref.{q}"] = ("Real", val, "m" if len(q) == 1 else "m/s")
+            comp["rotor"][f"{prefix}.force_end.x"] = ("Real", float(F[0]), "N")
+            comp["rotor"][f"{prefix}.force_end.y"] = ("Real", float(F[1]), "N")
             comp["rotor"][f"{prefix}.force.x"] = ("Real", float(F[0]), "N")
             comp["rotor"][f"{prefix}.force.y"] = ("Real", float(F[1]), "N")
             for i in range(2):
