@@ -41,7 +41,7 @@ def main(argv=None):
     except CosimStopped as exc:
         co, status = exc.result, f"stopped: {exc}"
     t_co = time.perf_counter() - t0
-    n = co.time.size - 1
+    n = int(round(co.time[-1] / co.meta["step_size_s"]))
     print(f"run-up 20k -> 250k rpm, {args.duration:g} s simulated, c_o = 36 um")
     print(f"{'monolithic (LSODA, numba) wall [s]':<46}{t_mono:10.2f}")
     print(f"{'co-simulation (3 FMUs, fmpy) wall [s]':<46}{t_co:10.2f}   ({status})")

@@ -35,7 +35,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._param("ring.y0", 0.0, "initial ring centre y [m]")
         self._param("ring.speed0", 0.0, "initial ring speed [rad/s]")
         self._param("gravity", 9.81, "gravitational acceleration along -y [m/s2]")
-        self._param("substep", 1e-6, "ring integration substep [s]")
+        self._param("substep", 2e-6, "ring integration substep [s]")
         self._param("contact_eps", 0.98, "eccentricity ratio treated as wall contact (Discard above) [-]")
         self._param("film_model", "short", "film model: short | short_corrected", "str")
         self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str")
@@ -137,9 +137,8 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         if not self._ready:
             return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
         try:
-            j = self._journal()
-            self._comp.outputs(j, self._values["rotor_speed"])  # validates the inputs, updates the eps used by rsr_eq7
-            self._comp.step(j, self._values["rotor_speed"], 0.0, step_size)
+            self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
+            self._comp.step(self._ref_state, self._values["rotor_speed"], 0.0, step_size)
         except Exception as exc:  # noqa: BLE001
             self._ready = False
             return self._error(f"{self.instance_name} at t = {current_time:.6g} s, rotor speed "

@@ -67,14 +67,22 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                     self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
                                  lambda name=name, i=i, k=k: self._linear()[name][i, k])
 
+    _KEYS = {b: ([f"{b}.force.x", f"{b}.force.y"],
+                 [f"{b}.stiffness[{i},{k}]" for i in (1, 2) for k in (1, 2)],
+                 [f"{b}.damping[{i},{k}]" for i in (1, 2) for k in (1, 2)],
+                 [f"{b}.journal_ref.{q}" for q in ("x", "y", "vx", "vy")],
+                 [f"{b}.force_end.x", f"{b}.force_end.y"]) for b in BEARINGS}
+
     def _bearing_inputs(self):
         v = self._values
-        F, K, C = [], [], []
-        self._refs = [np.array([v[f"{b}.journal_ref.{q}"] for q in ("x", "y", "vx", "vy")]) for b in BEARINGS]
+        F, K, C, self._refs, self._fend = [], [], [], [], []
         for b in BEARINGS:
-            F.append(np.array([v[f"{b}.force.x"], v[f"{b}.force.y"]]))
-            K.append(np.array([[v[f"{b}.stiffness[{i},{k}]"] for k in (1, 2)] for i in (1, 2)]))
-            C.append(np.array([[v[f"{b}.damping[{i},{k}]"] for k in (1, 2)] for i in (1, 2)]))
+            kf, kk, kc, kr, ke = self._KEYS[b]
+            F.append(np.array([v[k] for k in kf]))
+            K.append(np.array([v[k] for k in kk]).reshape(2, 2))
+            C.append(np.array([v[k] for k in kc]).reshape(2, 2))
+            self._refs.append(np.array([v[k] for k in kr]))
+            self._fend.append(np.array([v[k] for k in ke]))
         return F, K, C
 
     def _linear(self):
@@ -119,16 +127,14 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
         try:
             F, K, C = self._bearing_inputs()
-            for name, arr in (("force", F), ("stiffness", K), ("damping", C), ("journal_ref", self._refs)):
-                if not all(np.all(np.isfinite(a)) for a in arr):
-                    raise ValueError(f"bearing {name} input is not finite: {arr!r}")
+            if not np.isfinite(np.concatenate(F + [k.ravel() for k in K] + [c.ravel() for c in C] + self._refs)).all():
+                raise ValueError(f"bearing inputs are not finite: force {F}, stiffness {K}, damping {C}, "
+                                 f"journal_ref {self._refs}")
             rates = None
             if self._values["force_interpolation"]:
-                v = self._values
-                rates = [(np.array([v[f"{b}.force_end.x"], v[f"{b}.force_end.y"]]) - F[i]) / step_size
-                         + K[i] @ self._refs[i][2:] for i, b in enumerate(BEARINGS)]
-                if not all(np.all(np.isfinite(r)) for r in rates):
-                    raise ValueError(f"bearing force_end input is not finite: {rates!r}")
+                rates = [(self._fend[i] - F[i]) / step_size + K[i] @ self._refs[i][2:] for i in range(len(BEARINGS))]
+                if not np.isfinite(np.concatenate(rates)).all():
+                    raise ValueError(f"bearing force_end input is not finite: {self._fend!r}")
             self._comp.step(step_size, F, K, C, self._refs, rates)
         except Exception as exc:  # noqa: BLE001
             self._ready = False

@@ -63,6 +63,7 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
     J = np.empty((5, 5))
     jj = np.empty(4)
     eps_max = 0.0
+    have_jac = False
     for s in range(n_sub):
         t1 = (s + 1) * h
         jj[0] = j0[0] + j0[2] * t1
@@ -71,7 +72,7 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
         jj[3] = j0[3]
         w = omega_r + omega_r_dot * t1
         yn = y.copy()
-        for it in range(8):
+        for it in range(12):
             if not free_spin:
                 yn[4] = rsr_fixed * w
             _, _, ei, eo = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yn, w,
@@ -79,16 +80,19 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
             if not free_spin:
                 f[4] = 0.0
             r = yn - y - h * f
-            for k in range(5):
-                typ = geom[1, 2] if k < 2 else (geom[1, 2] * 1e3 if k < 4 else 10.0)
-                d = 1e-7 * max(abs(yn[k]), typ)
-                yp = yn.copy()
-                yp[k] += d
-                ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yp, w, eps_cap, fp)
-                if not free_spin:
-                    fp[4] = 0.0
-                for i in range(5):
-                    J[i, k] = (1.0 if i == k else 0.0) - h * (fp[i] - f[i]) / d
+            # modified Newton: one finite-difference Jacobian per macro step, refreshed if convergence stalls
+            if not have_jac or it >= 4:
+                for k in range(5):
+                    typ = geom[1, 2] if k < 2 else (geom[1, 2] * 1e3 if k < 4 else 10.0)
+                    d = 1e-7 * max(abs(yn[k]), typ)
+                    yp = yn.copy()
+                    yp[k] += d
+                    ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yp, w, eps_cap, fp)
+                    if not free_spin:
+                        fp[4] = 0.0
+                    for i in range(5):
+                        J[i, k] = (1.0 if i == k else 0.0) - h * (fp[i] - f[i]) / d
+                have_jac = True
             dy = np.linalg.solve(J, -r)
             yn += dy
             if abs(dy[0]) + abs(dy[1]) < 1e-13 * geom[1, 2] and abs(dy[4]) < 1e-10 * max(abs(yn[4]), 1.0):
@@ -253,13 +257,13 @@ class BearingComponent:
 # rotor
 # --------------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _rotor_state_matrix(A, minv, ktot, cb_full, g_mat, w, wd):
-    n = ktot.shape[0]
+def _rotor_state_matrix(A, mk, mc, mg, w, wd):
+    n = mk.shape[0]
     A[:, :] = 0.0
     for i in range(n):
         A[i, n + i] = 1.0
-    A[n:, :n] = -minv @ (ktot + wd * g_mat)
-    A[n:, n:] = -minv @ (cb_full + w * g_mat)
+    A[n:, :n] = -(mk + wd * mg)
+    A[n:, n:] = -(mc + w * mg)
 
 
 @njit(cache=True)
@@ -298,12 +302,15 @@ def _rotor_step(y, phi, t0, H, n_sub, minv, k_mat, g_mat, f_grav, jdofs, kb, cb,
             for k in range(2):
                 ktot[jdofs[b, i], jdofs[b, k]] += kb[b, i, k]
                 cb_full[jdofs[b, i], jdofs[b, k]] += cb[b, i, k]
+    mk = minv @ ktot
+    mc = minv @ cb_full
+    mg = minv @ g_mat
     ph = phi
     for s in range(n_sub):
         wa = w0 + wd * s * h
         wb = w0 + wd * (s + 1) * h
-        _rotor_state_matrix(A, minv, ktot, cb_full, g_mat, wa, wd)
-        _rotor_state_matrix(A1, minv, ktot, cb_full, g_mat, wb, wd)
+        _rotor_state_matrix(A, mk, mc, mg, wa, wd)
+        _rotor_state_matrix(A1, mk, mc, mg, wb, wd)
         fa = minv @ _rotor_forcing(f_grav, jdofs, fb, fbr, s * h, unb_node, unb_me, unb_phase, ph, wa, wd)
         phb = ph + 0.5 * h * (wa + wb)
         fbv = minv @ _rotor_forcing(f_grav, jdofs, fb, fbr, (s + 1) * h, unb_node, unb_me, unb_phase, phb, wb, wd)

@@ -93,7 +93,8 @@ def test_cosim_follows_monolithic_at_stable_speed(built):
     tc = frb.turbocharger(36e-6)
     rpm, T, H = 1500.0, 0.05, 2e-5
     ov = operating_point_overrides(tc, rpm, perturbation=0.05)
-    r = cosimulate(built / "turbocharger.ssp", "co36", stop_time=T, step_size=H, progress=False, overrides=ov)
+    r = cosimulate(built / "turbocharger.ssp", "co36", stop_time=T, step_size=H, progress=False, overrides=ov,
+                   output_rate_hz=1 / H)
     m = frb.runup(tc, profile=frb.SpeedProfile.constant(rpm, T), duration=T, output_rate_hz=1 / H,
                   perturbation=0.05, progress=False)
     for b in ("turbine", "compressor"):
@@ -159,7 +160,7 @@ def test_libcosim_runs_the_ssp_unchanged_and_agrees(built, tmp_path):
     vrs = [names[f"{b}_bearing.journal.{q}"] for b in ("turbine", "compressor") for q in "xy"]
     ex.step(2500)
     lc = np.array(obs.last_real_values(i, vrs))
-    r = cosimulate(d, "co36", progress=False)
+    r = cosimulate(d, "co36", progress=False, output_rate_hz=50e3)
     ours = np.array([r.journal["turbine"][-1, 0], r.journal["turbine"][-1, 1], r.journal["compressor"][-1, 0],
                      r.journal["compressor"][-1, 1]])
     # libcosim is a Jacobi master (all FMUs step, then exchange): the bearings see the journal one macro step

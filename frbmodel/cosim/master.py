@@ -93,7 +93,7 @@ def _call(fmu, what, fn, *args):
 
 
 def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_dir=None, progress=True,
-               rollback=False, output_every=1, overrides=None, max_halvings=6, coupling="jacobian"):
+               rollback=False, output_rate_hz=20e3, overrides=None, max_halvings=6, coupling="jacobian"):
     """Run the SSP system with frbmodel's master.
 
     Parameters
@@ -108,8 +108,9 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
         Stream ``runup.csv`` / ``runup.json`` there.
     rollback : bool
         Retry a Discarded interval with half steps after restoring all FMU states.
-    output_every : int
-        Record every n-th communication point.
+    output_rate_hz : float
+        Sampling rate of the recorded results [Hz]: every n-th communication point with n = round(1 / (H rate)),
+        at least 1 (default 20 kHz, as the monolithic run-up).
     overrides : dict, optional
         {component: {parameter: (type, value)}} applied after the parameter set.
     coupling : {"jacobian", "force"}
@@ -132,6 +133,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     H = float(step_size if step_size is not None else (sys_.step_size or 2e-5))
     if not (H > 0 and stop_time > 0 and math.isfinite(H) and math.isfinite(stop_time)):
         raise ParameterError(f"step size = {H!r} s and stop time = {stop_time!r} s must be finite and > 0")
+    output_every = max(1, int(round(1.0 / (H * output_rate_hz))))
     tmp = tempfile.mkdtemp(prefix="frb_cosim_")
     fmus = {name: _Fmu(name, path, tmp) for name, path in sys_.components.items()}
     rotor = fmus["rotor"]
@@ -156,12 +158,20 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
              for s, e in order]
     end_links = [(fmus[s], fmus[e], fmus[s].vr([c[0] for c in g]), fmus[e].vr([c[1] for c in g]))
                  for (s, e), g in end_groups.items()]
+    # one getReal per source FMU (its outputs to all destinations), then one setReal per destination
+    batched = []
+    for src in dict.fromkeys(lk[0] for lk in links):
+        mine = [lk for lk in links if lk[0] is src]
+        svr = [v for lk in mine for v in lk[2]]
+        cuts = np.cumsum([0] + [len(lk[2]) for lk in mine])
+        batched.append((src, svr, [(lk[1], lk[3], cuts[i], cuts[i + 1]) for i, lk in enumerate(mine)]))
     # recorded variables
     rec_rotor = rotor.vr(["rotor_speed"] + [f"{b}_bearing.journal.{q}" for b in BEARING_NAMES for q in "xy"] +
                          [f"{w}.{q}" for w in ("turbine_wheel", "compressor_wheel") for q in "xy"])
     rec_bear = [b.vr(["ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer"]) for b in bearings]
     columns = _columns(["turbine_wheel", "compressor_wheel"])
     meta = {"ssp": str(ssp), "parameter_set": parameter_set, "step_size_s": H, "stop_time_s": stop_time,
+            "output_rate_hz": 1.0 / (H * output_every),
             "system": system_from_parameters(params).to_dict(),
             "coupling": coupling,
             "master": "frbmodel.cosim (fmpy FMU2Slave, staggered interface-Jacobian coupling)", "rollback": rollback,
@@ -174,12 +184,13 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     def exchange():
         nonlocal t_fmi
         t0 = time.perf_counter()
-        for src, dst, svr, dvr in links:
+        for src, svr, dests in batched:
             vals = _call(src, "getReal", src.slave.getReal, svr)
             if not all(math.isfinite(v) for v in vals):
                 names = [n for n, v in src.vars.items() if v.valueReference in svr]
                 raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
-            _call(dst, "setReal", dst.slave.setReal, dvr, vals)
+            for dst, dvr, a, b in dests:
+                _call(dst, "setReal", dst.slave.setReal, dvr, vals[a:b])
         t_fmi += time.perf_counter() - t0
 
     def record(k, t):
