@@ -273,6 +273,53 @@ def cmd_linearize(args):
         print(f"wrote {(p / f'A_{args.method.upper()}_{args.speed_rpm:.0f}rpm.csv').resolve()}")
 
 
+def cmd_sweep(args):
+    from .sweep import example_cases, grid, plot_stability_map, run_study, stability_map
+
+    if args.example:
+        cases = example_cases(args.example)
+    else:
+        if not args.param:
+            raise ParameterError("frb sweep needs --param NAME=V1,V2,... (or --example outer-clearance)")
+        params = {}
+        for item in args.param:
+            try:
+                name, vals = item.split("=", 1)
+                params[name.strip()] = [float(v) for v in vals.split(",")]
+            except ValueError:
+                raise ParameterError(f"--param {item!r} is invalid: use NAME=V1,V2,... with SI values") from None
+        opts = {}
+        if args.analysis == "campbell":
+            a, b, n = args.speeds.split(":") if args.speeds.count(":") == 2 else (1e3, 250e3, 200)
+            opts = {"methods": [m.strip().upper() for m in args.methods.split(",")],
+                    "speeds_rpm": (float(a), float(b), int(n))}
+        else:
+            lo, hi = _speed_pair(args.speeds if args.speeds.count(":") == 1 else "1000:250000")
+            opts = {"speed_rpm": (lo, hi), "duration": args.duration}
+            if args.analysis == "cosim":
+                if not args.ssp:
+                    raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
+                opts["ssp"] = str(Path(args.ssp).resolve())
+        cases = grid(params, args.analysis, **opts)
+    scheduler = "serial" if args.serial else args.scheduler
+    idx = run_study(cases, args.out, scheduler=scheduler, n_workers=args.workers, retry_failed=args.retry_failed,
+                    progress=lambda m: print(m, flush=True))
+    paths = plot_stability_map(args.out)
+    sm = stability_map(args.out)
+    n_fail = int((idx["status"] == "failed").sum())
+    print(f"{int((idx['status'] == 'finished').sum())} finished, {n_fail} failed, "
+          f"{int((idx['status'] == 'pending').sum())} pending of {len(idx)} cases")
+    if len(sm):
+        from .sweep import PARAMETERS
+
+        cols = [c for c in sm.columns if c.split(" [")[0] in PARAMETERS]
+        print(sm[cols + ["method", "item", "onset [rpm]", "f at onset [Hz]"]].sort_values(cols + ["method", "item"])
+              .to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print("wrote:\n  " + "\n  ".join(str(p) for p in [Path(args.out) / "index.csv", *paths]))
+    print(f"results in {Path(args.out).resolve()}")
+    return 4 if n_fail else 0
+
+
 def build_parser():
     from . import __version__
     from .methods import METHODS
@@ -354,6 +401,24 @@ def build_parser():
     li.add_argument("--parameter-set", default="co36")
     li.add_argument("--out", default=None, help="write A as CSV into this folder")
     li.set_defaults(func=cmd_linearize)
+
+    sw = sub.add_parser("sweep", help="parameter study on Dask (stability map over clearance, viscosity, ...)")
+    sw.add_argument("--example", choices=["outer-clearance"], help="built-in study: outer clearance 36-46 um")
+    sw.add_argument("--param", action="append", metavar="NAME=V1,V2",
+                    help="swept parameter (repeatable; SI): outer_clearance, inner_clearance, viscosity_turbine, "
+                         "viscosity_compressor, viscosity_scale, ring_mass, unbalance_turbine, unbalance_compressor")
+    sw.add_argument("--analysis", choices=["campbell", "runup", "cosim"], default="campbell")
+    sw.add_argument("--methods", default="J", help="Campbell methods, comma list")
+    sw.add_argument("--speeds", default="1000:250000:200",
+                    help="campbell: START:STOP:COUNT; run-ups: START:END [rpm]")
+    sw.add_argument("--duration", type=float, default=2.0, help="run-up duration [s]")
+    sw.add_argument("--ssp", default=None, help="SSP for --analysis cosim")
+    sw.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler (tcp://host:port)")
+    sw.add_argument("--workers", type=int, default=None, help="LocalCluster worker processes (default: cores)")
+    sw.add_argument("--serial", action="store_true", help="run in this process without Dask")
+    sw.add_argument("--retry-failed", action="store_true", help="rerun cases that failed before")
+    sw.add_argument("--out", default="results/sweep")
+    sw.set_defaults(func=cmd_sweep)
 
     f = sub.add_parser("paper-figures", help="regenerate the paper's linear figures 4-11")
     f.add_argument("--out", default="results/paper-figures")

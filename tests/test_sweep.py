@@ -1,0 +1,85 @@
+"""Parameter studies on Dask: equality with serial runs, resume after a kill, failing cases."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+
+pytest.importorskip("distributed")
+
+from frbmodel.sweep import grid, run_study, stability_map  # noqa: E402
+
+SMALL_RUNUP = ["--analysis", "runup", "--speeds", "20000:30000", "--duration", "0.04"]
+
+
+def _rows(out):
+    sm = stability_map(out)
+    return sm.drop(columns=[]).sort_values(["case_id", "item"]).reset_index(drop=True)
+
+
+def test_local_cluster_equals_serial(tmp_path):
+    cases = grid({"outer_clearance": [36e-6, 40e-6, 42e-6, 46e-6]}, "campbell", methods=["J"],
+                 speeds_rpm=(1e3, 250e3, 40))
+    run_study(cases, tmp_path / "serial", scheduler="serial", progress=lambda m: None)
+    idx = run_study(cases, tmp_path / "dask", n_workers=2, progress=lambda m: None)
+    assert (idx["status"] == "finished").all() and len(idx) == 4
+    a, b = _rows(tmp_path / "serial"), _rows(tmp_path / "dask")
+    assert len(a) > 0
+    pd.testing.assert_frame_equal(a, b)  # same code, same inputs: identical results, wherever they ran
+    # the larger outer clearance destabilises the second forward conical mode earlier (the literature's trend)
+    c = a[a["item"] == "forward conical #2"].sort_values("outer_clearance [m]")
+    assert c["onset [rpm]"].iloc[0] > c["onset [rpm]"].iloc[-1]
+
+
+def test_killed_study_resumes_without_recomputing(tmp_path):
+    out = tmp_path / "study"
+    cmd = [sys.executable, "-m", "frbmodel.cli", "sweep", "--param", "outer_clearance=36e-6,38e-6,40e-6,42e-6,44e-6,46e-6",
+           *SMALL_RUNUP, "--serial", "--out", str(out)]
+    env = dict(os.environ, MPLBACKEND="Agg")
+    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+    deadline = time.time() + 300
+    while time.time() < deadline and len(list((out / "cases").glob("*.json"))) < 2:
+        time.sleep(0.05)
+    os.killpg(p.pid, signal.SIGKILL)  # kill the study mid-way
+    p.wait()
+    first = {f.name: json.loads(f.read_text())["started"] for f in (out / "cases").glob("*.json")}
+    assert 2 <= len(first) < 6, "the kill should land mid-study"
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert f"{len(first)} already finished" in r.stdout
+    after = {f.name: json.loads(f.read_text())["started"] for f in (out / "cases").glob("*.json")}
+    assert len(after) == 6
+    assert all(after[k] == v for k, v in first.items())  # finished cases were not recomputed
+    # complete and equal to an uninterrupted run
+    ref = tmp_path / "ref"
+    cases = grid({"outer_clearance": [36e-6, 38e-6, 40e-6, 42e-6, 44e-6, 46e-6]}, "runup", speed_rpm=(20e3, 30e3),
+                 duration=0.04)
+    run_study(cases, ref, scheduler="serial", progress=lambda m: None)
+    pd.testing.assert_frame_equal(_rows(out), _rows(ref))
+    assert (pd.read_csv(out / "index.csv")["status"] == "finished").all()
+
+
+def test_failing_case_is_recorded_and_others_finish(tmp_path):
+    # a viscosity this low cannot carry the turbine's load: the equilibrium (eps -> 1) fails for that case only
+    cases = grid({"viscosity_turbine": [1e-7, 4.9e-3]}, "runup", speed_rpm=(20e3, 30e3), duration=0.04)
+    idx = run_study(cases, tmp_path, n_workers=2, progress=lambda m: None)
+    st = dict(zip(idx["viscosity_turbine [Pa s]"], idx["status"]))
+    assert st == {1e-7: "failed", 4.9e-3: "finished"}
+    err = idx.loc[idx["status"] == "failed", "error"].iloc[0]
+    assert "turbine bearing" in err and "rpm" in err
+    # a rerun leaves the failed case alone unless asked to retry it
+    idx2 = run_study(cases, tmp_path, scheduler="serial", progress=lambda m: None)
+    assert list(idx2["status"]) == list(idx["status"])
+
+
+def test_bad_study_input(tmp_path):
+    from frbmodel import ParameterError
+
+    with pytest.raises(ParameterError, match="study parameter"):
+        grid({"clearance": [1e-6]})
+    with pytest.raises(ParameterError, match="analysis"):
+        grid({"outer_clearance": [36e-6]}, "fem")
