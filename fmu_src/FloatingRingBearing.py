@@ -106,10 +106,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     # ------------------------------------------------------------------ FMI
     def exit_initialization_mode(self):
-        msg = self._check_version()
-        if msg:
-            self._error(msg)
-            raise RuntimeError(msg)
+        self._require_version()
         from frbmodel.components import BearingComponent
         from frbmodel.film import Film
         from frbmodel.parameters import FloatingRingBearing as FRB

@@ -93,10 +93,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         return rotor_state_space(self._comp)
 
     def exit_initialization_mode(self):
-        msg = self._check_version()
-        if msg:
-            self._error(msg)
-            raise RuntimeError(msg)
+        self._require_version()
         import frbmodel as frb
         from frbmodel.components import RotorComponent, ramp_speed
         from frbmodel.runup import Unbalance, static_rotor_state

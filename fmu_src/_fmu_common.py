@@ -59,6 +59,12 @@ class FrbSlaveMixin:
         self._failed = msg
         return False
 
+    def _require_version(self):
+        msg = self._check_version()
+        if msg:
+            self._error(msg)
+            raise RuntimeError(msg)
+
     def _check_version(self):
         """Refuse to start if the imported frbmodel is not the bundled version (pythonfmu slaves share the
         host's sys.modules, so a host with another frbmodel would silently replace ours)."""

@@ -163,12 +163,29 @@ def _speed_pair(text):
     return a, b
 
 
-def cmd_runup(args):
+def write_composites(run, system, out, xscale="linear", title="run-up"):
+    """Composite figures (PNG + HTML) and component tables of both wheels, with the method-J Campbell diagram."""
     import matplotlib.pyplot as plt
 
     from .campbell import campbell
-    from .runup import RunupStopped, runup
     from .spectral import spectrogram
+
+    lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
+    cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
+    for node in ("turbine_wheel", "compressor_wheel"):
+        sp = spectrogram(run, node)
+        fig = sp.plot(campbell=cd, xscale=xscale, title=f"{title}, {node}")
+        fig.savefig(out / f"composite_{node}.png", dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        sp.plot_html(out / f"composite_{node}.html", campbell=cd)
+        tab = sp.components_table()
+        tab.to_csv(out / f"components_{node}.csv", index=False)
+        print(f"components at the {node}:")
+        print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
+
+
+def cmd_runup(args):
+    from .runup import RunupStopped, runup
 
     tc = load_from_args(args)
     out = Path(args.out)
@@ -184,18 +201,7 @@ def cmd_runup(args):
     print(f"wall time {run.meta.get('wall_time_s', float('nan')):.1f} s, {run.meta.get('rhs_evaluations')} RHS and "
           f"{run.meta.get('jacobian_evaluations')} Jacobian evaluations, {run.time.size} samples")
     if not args.no_figure and run.time.size >= 64:
-        lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
-        cd = campbell(tc, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
-        for node in ("turbine_wheel", "compressor_wheel"):
-            sp = spectrogram(run, node)
-            fig = sp.plot(campbell=cd, xscale="log" if args.profile == "exponential" else "linear")
-            fig.savefig(out / f"composite_{node}.png", dpi=110, bbox_inches="tight")
-            plt.close(fig)
-            sp.plot_html(out / f"composite_{node}.html", campbell=cd)
-            tab = sp.components_table()
-            tab.to_csv(out / f"components_{node}.csv", index=False)
-            print(f"components at the {node}:")
-            print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
+        write_composites(run, tc, out, xscale="log" if args.profile == "exponential" else "linear")
     print(f"results in {out.resolve()}")
     return code
 
@@ -220,12 +226,8 @@ def cmd_build_fmus(args):
 
 
 def cmd_cosim(args):
-    import matplotlib.pyplot as plt
-
-    from .campbell import campbell
     from .cosim.master import CosimStopped, cosimulate, system_from_parameters
     from .cosim.ssp import read_ssp
-    from .spectral import spectrogram
 
     out = Path(args.out)
     code = 0
@@ -239,18 +241,7 @@ def cmd_cosim(args):
           f"in FMI calls), macro step {run.meta['step_size_s']:g} s, {run.time.size} samples")
     if not args.no_figure and run.time.size >= 64:
         tc = system_from_parameters(read_ssp(args.ssp).parameters(args.parameter_set))
-        lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
-        cd = campbell(tc, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
-        for node in ("turbine_wheel", "compressor_wheel"):
-            sp = spectrogram(run, node)
-            fig = sp.plot(campbell=cd, title=f"co-simulated run-up ({args.parameter_set}), {node}")
-            fig.savefig(out / f"composite_{node}.png", dpi=110, bbox_inches="tight")
-            plt.close(fig)
-            sp.plot_html(out / f"composite_{node}.html", campbell=cd)
-            tab = sp.components_table()
-            tab.to_csv(out / f"components_{node}.csv", index=False)
-            print(f"components at the {node}:")
-            print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
+        write_composites(run, tc, out, title=f"co-simulated run-up ({args.parameter_set})")
     print(f"results in {out.resolve()}")
     return code
 

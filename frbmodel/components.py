@@ -19,6 +19,7 @@ from .bearing import ring_rhs_kernel
 from .equilibrium import RPM
 from .errors import FilmContactError, ParameterError
 from .film import check_model, correction_polys
+from .runup import add_unbalance_forces
 
 
 # --------------------------------------------------------------------------------------------------
@@ -272,12 +273,7 @@ def _rotor_forcing(f_grav, jdofs, fb, fbr, tau, unb_node, unb_me, unb_phase, ph,
     for b in range(jdofs.shape[0]):
         f[jdofs[b, 0]] += fb[b, 0] + fbr[b, 0] * tau
         f[jdofs[b, 1]] += fb[b, 1] + fbr[b, 1] * tau
-    for d in range(unb_node.size):
-        th = ph + unb_phase[d]
-        c, s = math.cos(th), math.sin(th)
-        j = 4 * unb_node[d]
-        f[j] += unb_me[d] * (w * w * c + wd * s)
-        f[j + 1] += unb_me[d] * (w * w * s - wd * c)
+    add_unbalance_forces(f, ph, w, wd, unb_node, unb_me, unb_phase)
     return f
 
 

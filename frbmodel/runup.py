@@ -55,6 +55,18 @@ def _interp(t, tg, yg):
 
 
 @njit(cache=True)
+def add_unbalance_forces(f, phi, w, wd, unb_node, unb_me, unb_phase):
+    """Add the rotating unbalance forces m e (Ω² cos θ + Ω̇ sin θ, Ω² sin θ − Ω̇ cos θ), θ = φ + phase, to the
+    nodal load vector ``f`` [N] (the one implementation; run-up and rotor FMU both call it)."""
+    for d in range(unb_node.size):
+        th = phi + unb_phase[d]
+        c, s = math.cos(th), math.sin(th)
+        j = 4 * unb_node[d]
+        f[j] += unb_me[d] * (w * w * c + wd * s)
+        f[j + 1] += unb_me[d] * (w * w * s - wd * c)
+
+
+@njit(cache=True)
 def _rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
          unb_phase, tg, wg, wdg, springs, eps_cap, diag):
     """dy/dt for the state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds, rotation angle].
@@ -66,13 +78,7 @@ def _rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ri
     w = _interp(t, tg, wg)
     wd = _interp(t, tg, wdg)
     f = f_grav.copy()
-    phi = y[2 * n_r + 10]
-    for d in range(unb_node.size):
-        th = phi + unb_phase[d]
-        c, s = math.cos(th), math.sin(th)
-        j = 4 * unb_node[d]
-        f[j] += unb_me[d] * (w * w * c + wd * s)
-        f[j + 1] += unb_me[d] * (w * w * s - wd * c)
+    add_unbalance_forces(f, y[2 * n_r + 10], w, wd, unb_node, unb_me, unb_phase)
     base = 2 * n_r
     ring = np.empty(5)
     dring = np.empty(5)
