@@ -66,15 +66,8 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._output("eps_outer", "outer film eccentricity ratio [-]", lambda: self._out()[3][1])
         self._output("ring_speed_ratio", "ring speed / rotor speed [-]",
                      lambda: self._ring_speed() / self._values["rotor_speed"] if self._values["rotor_speed"] else 0.0)
-        # linearization mode: states (ring x, y, vx, vy), inputs (journal x, y, vx, vy), outputs (force x, y)
-        self._output("nx", "number of states of the local linearization", lambda: 4, "int")
-        self._output("nu", "number of inputs of the local linearization", lambda: 4, "int")
-        self._output("ny", "number of outputs of the local linearization", lambda: 2, "int")
-        for name, (nr, nc) in (("A", (4, 4)), ("B", (4, 4)), ("C", (2, 4)), ("D", (2, 4))):
-            for i in range(nr):
-                for k in range(nc):
-                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
-                                 lambda name=name, i=i, k=k: self._linear()[name][i, k])
+        self._linearization_outputs(4, 4, 2, ("states: ring x, y, vx, vy", "inputs: journal x, y, vx, vy",
+                                              "outputs: force x, y on the journal"))
 
     # ------------------------------------------------------------------ helpers
     def _journal(self):

@@ -58,14 +58,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         for w in WHEELS:
             for qi, q in enumerate("xy"):
                 self._output(f"{w}.{q}", f"{w} centre {q} [m]", lambda w=w, qi=qi: self._comp.node_xy(self._node[w])[qi])
-        self._output("nx", "number of states of the local linearization (q, dq/dt)", lambda: 32, "int")
-        self._output("nu", "number of inputs: forces (x, y) per bearing", lambda: 4, "int")
-        self._output("ny", "number of outputs: journal (x, y, vx, vy) per bearing", lambda: 8, "int")
-        for name, (nr, nc) in (("A", (32, 32)), ("B", (32, 4)), ("C", (8, 32)), ("D", (8, 4))):
-            for i in range(nr):
-                for k in range(nc):
-                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
-                                 lambda name=name, i=i, k=k: self._linear()[name][i, k])
+        self._linearization_outputs(32, 4, 8, ("states: q, dq/dt", "inputs: bearing forces x, y per bearing",
+                                                "outputs: journal x, y, vx, vy per bearing"))
 
     _KEYS = {b: ([f"{b}.force.x", f"{b}.force.y"],
                  [f"{b}.stiffness[{i},{k}]" for i in (1, 2) for k in (1, 2)],

@@ -40,6 +40,17 @@ class FrbSlaveMixin:
                        initial=Fmi2Initial.exact, description=desc, getter=lambda f=fn: float(self._safe(f)))
         self.register_variable(var, nested=False)
 
+    def _linearization_outputs(self, nx, nu, ny, what):
+        """Integer outputs nx, nu, ny and Real outputs A[i,j], B[i,j], C[i,j], D[i,j] (1-based, row-major) read
+        from ``self._linear()``; ``what`` = (states, inputs, outputs) descriptions."""
+        for name, n, desc in (("nx", nx, what[0]), ("nu", nu, what[1]), ("ny", ny, what[2])):
+            self._output(name, f"linearization: number of {desc}", lambda n=n: n, "int")
+        for name, (nr, nc) in (("A", (nx, nx)), ("B", (nx, nu)), ("C", (ny, nx)), ("D", (ny, nu))):
+            for i in range(nr):
+                for k in range(nc):
+                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
+                                 lambda name=name, i=i, k=k: self._linear()[name][i, k])
+
     def _safe(self, fn):
         """Evaluate an output. Before initialization outputs read 0; if the evaluation fails (e.g. a film at
         its wall) the error is logged and the output reads NaN — an exception here would make pythonfmu report
