@@ -220,3 +220,23 @@ def test_version_mismatch_is_refused(built, tmp_path):
     s.enterInitializationMode()
     with pytest.raises(FMICallException):
         s.exitInitializationMode()
+
+
+def test_cosim_runup_onset_equals_monolithic(built):
+    """Run-up through the first loss of stability (forward conical whirl at ~2 krpm): the co-simulated and the
+    monolithic run-up must show the same sub-synchronous onset (acceptance: 2 % in speed, 1 % in frequency)."""
+    from frbmodel.spectral import spectrogram
+
+    tc = frb.turbocharger(36e-6)
+    T, H = 0.8, 2e-5
+    m = frb.runup(tc, speed_rpm=(1.5e3, 5e3), duration=T, output_rate_hz=1 / H, perturbation=0.05, progress=False)
+    ov = operating_point_overrides(tc, 1.5e3, end_rpm=5e3, ramp_time=T, perturbation=0.05)
+    c = cosimulate(built / "turbocharger.ssp", "co36", stop_time=T, step_size=H, progress=False, overrides=ov,
+                   output_rate_hz=1 / H)
+    cm = spectrogram(m, "turbine_wheel", segment_s=0.1).components()
+    cc = spectrogram(c, "turbine_wheel", segment_s=0.1).components()
+    assert [x.label for x in cm] == [x.label for x in cc] and cm
+    for a, b in zip(cm, cc):
+        assert b.onset_rpm == pytest.approx(a.onset_rpm, rel=0.02)
+        assert b.onset_threshold_rpm == pytest.approx(a.onset_threshold_rpm, rel=0.02)
+        assert b.onset_hz == pytest.approx(a.onset_hz, rel=0.01)
