@@ -84,3 +84,21 @@ def test_cli_bad_input_exits_with_message(tmp_path, capsys):
     assert "speed" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["campbell", "--method", "H"])
+
+
+def test_cli_paper_figures(tmp_path, capsys):
+    assert main(["paper-figures", "--out", str(tmp_path), "--n-speeds", "8"]) == 0
+    for n in (4, 5, 6, 7, 8, 9):
+        assert list(tmp_path.glob(f"fig{n:02d}_campbell_*.png"))
+    for name in ("fig09_campbell_F_zoom500Hz.png", "fig10_rsr.png", "fig11_equilibrium_cost.png",
+                 "fig10_11_equilibria.csv", "fig09_campbell_F_unstable.md"):
+        assert (tmp_path / name).exists()
+    import pandas as pd
+
+    eq = pd.read_csv(tmp_path / "fig10_11_equilibria.csv")
+    assert set(eq["method"]) == set("FGIJ")
+    # F and G coincide (physics.md 6.4), I and J lie below eq. (6) in the turbine bearing
+    f = eq[eq["method"] == "F"]["RSR turbine [-]"].to_numpy()
+    g = eq[eq["method"] == "G"]["RSR turbine [-]"].to_numpy()
+    assert abs(f - g).max() < 1e-12
+    assert (eq[eq["method"] == "J"]["RSR turbine [-]"] < f.max()).all()
