@@ -17,11 +17,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self._values = {}
-        self._ready = False
-        self._failed = None
-        self._dirty = True
-        self._comp = None
+        self._init_state()
         self._cache = None
         self._lin = None
         for film, (r, l, c, mu) in (("inner", (5.5e-3, 6.5e-3, 34e-6, 4.9e-3)), ("outer", (8e-3, 9e-3, 36e-6, 4.9e-3))):

@@ -20,11 +20,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self._values = {}
-        self._ready = False
-        self._failed = None
-        self._dirty = True
-        self._comp = None
+        self._init_state()
         self._param("system_file", "", "frbmodel system description (.toml/.json); empty = paper Table 2", "str")
         self._param("speed_start", 20e3 * math.pi / 30, "rotor speed at t = 0 [rad/s]")
         self._param("speed_end", 250e3 * math.pi / 30, "rotor speed after the ramp [rad/s]")

@@ -10,6 +10,14 @@ from pythonfmu.enums import Fmi2Status
 class FrbSlaveMixin:
     """Variable registration with explicit getters/setters, version check and error logging."""
 
+    def _init_state(self):
+        """Common slave state: variable values, readiness, last failure, output cache flag, the component."""
+        self._values = {}
+        self._ready = False
+        self._failed = None
+        self._dirty = True
+        self._comp = None
+
     def _param(self, name, value, desc, kind="real"):
         self._values[name] = value
         cls = {"real": Real, "int": Integer, "bool": Boolean, "str": String}[kind]

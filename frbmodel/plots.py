@@ -11,6 +11,23 @@ D_MIN, D_MAX = -1.0, 0.7
 WHIRL_STYLES = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a")
 
 
+def whirl_curves(cd):
+    """(film index, name, speeds [rpm], whirl frequency [Hz] — NaN below the film's onset) for the films that
+    are past their onset somewhere in the sweep."""
+    out = []
+    for k, name in enumerate(FILM_NAMES):
+        w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
+        if np.isfinite(w).any():
+            out.append((k, name, cd.speeds_rpm, w))
+    return out
+
+
+def _plot_whirl(ax, cd, lw=1.3):
+    for k, name, s, w in whirl_curves(cd):
+        ax.plot(s / 1e3, w, ls="--" if k < 2 else (0, (6, 2, 1, 2)), lw=lw, color=WHIRL_STYLES[k],
+                label=f"whirl {name}")
+
+
 def _default_fmax(cd):
     f1x = cd.speeds_rpm.max() / 60.0
     return float(max(1.15 * f1x, 500.0))
@@ -45,11 +62,7 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
                             s=46 if unstable else 16, edgecolors="k" if unstable else "none",
                             linewidths=0.8 if unstable else 0, zorder=3 if unstable else 2)
     if whirl:
-        for k, name in enumerate(FILM_NAMES):
-            w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
-            if np.isfinite(w).any():
-                ax.plot(cd.speeds_rpm / 1e3, w, ls="--" if k < 2 else (0, (6, 2, 1, 2)), lw=1.3,
-                        color=WHIRL_STYLES[k], label=f"whirl {name}")
+        _plot_whirl(ax, cd)
     if one_x:
         ax.plot(cd.speeds_rpm / 1e3, cd.speeds_rpm / 60.0, color="0.4", lw=1, ls=":", label="1X")
     for prec, (mk, _) in MARKERS.items():
@@ -95,13 +108,11 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
                            " precession<br>mode %{customdata[1]} (%{customdata[2]})<extra></extra>")))
         first = False
     if whirl:
-        for k, name in enumerate(FILM_NAMES):
-            w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
-            if np.isfinite(w).any():
-                fig.add_trace(go.Scatter(x=cd.speeds_rpm, y=w, mode="lines", name=f"whirl {name}",
-                                         line=dict(dash="dash" if k < 2 else "dashdot", color=WHIRL_STYLES[k]),
-                                         hovertemplate="speed %{x:.0f} rpm<br>whirl %{y:.1f} Hz<extra>" + name +
-                                         "</extra>"))
+        for k, name, sp_, w in whirl_curves(cd):
+            fig.add_trace(go.Scatter(x=sp_, y=w, mode="lines", name=f"whirl {name}",
+                                     line=dict(dash="dash" if k < 2 else "dashdot", color=WHIRL_STYLES[k]),
+                                     hovertemplate="speed %{x:.0f} rpm<br>whirl %{y:.1f} Hz<extra>" + name +
+                                     "</extra>"))
     if one_x:
         fig.add_trace(go.Scatter(x=cd.speeds_rpm, y=cd.speeds_rpm / 60, mode="lines", name="1X",
                                  line=dict(dash="dot", color="gray")))
@@ -199,11 +210,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
             ax.plot(sk, f, "-", color="#00e5ff", lw=1.6, label=f"unstable modes, method {campbell.method}" if first else None)
             first = False
         if whirl:
-            for k, name in enumerate(FILM_NAMES):
-                w = np.where(campbell.whirl_margin[:, k] > 0, campbell.whirl_hz[:, k], np.nan)
-                if np.isfinite(w).any():
-                    ax.plot(campbell.speeds_rpm / 1e3, w, ls="--" if k < 2 else (0, (6, 2, 1, 2)), lw=1.2,
-                            color=WHIRL_STYLES[k], label=f"whirl {name}")
+            _plot_whirl(ax, campbell, lw=1.2)
     if components:
         for c in sp.components():
             ax.annotate(c.label, (c.onset_rpm / 1e3, c.onset_hz), color="w", fontsize=9, fontweight="bold",
@@ -256,11 +263,9 @@ def composite_plotly(sp, campbell=None, fmax_hz=None):
         for sk, f, j in _unstable_lines(campbell, fmax):
             fig.add_trace(go.Scatter(x=sk * 1e3, y=f, mode="lines", name=f"unstable mode {j}",
                                      line=dict(color="#00e5ff")))
-        for k, name in enumerate(FILM_NAMES):
-            w = np.where(campbell.whirl_margin[:, k] > 0, campbell.whirl_hz[:, k], np.nan)
-            if np.isfinite(w).any():
-                fig.add_trace(go.Scatter(x=campbell.speeds_rpm, y=w, mode="lines", name=f"whirl {name}",
-                                         line=dict(dash="dash", color=WHIRL_STYLES[k])))
+        for k, name, sp_, w in whirl_curves(campbell):
+            fig.add_trace(go.Scatter(x=sp_, y=w, mode="lines", name=f"whirl {name}",
+                                     line=dict(dash="dash", color=WHIRL_STYLES[k])))
     fig.update_layout(xaxis_title="rotor speed [rpm]", yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
                       title=f"Run-up spectrogram, {sp.node}")
     return fig
