@@ -31,7 +31,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._param("ring.y0", 0.0, "initial ring centre y [m]")
         self._param("ring.speed0", 0.0, "initial ring speed [rad/s]")
         self._param("gravity", 9.81, "gravitational acceleration along -y [m/s2]")
-        self._param("substep", 2e-6, "ring integration substep [s]")
+        self._param("substep", 5e-6, "ring integration substep [s] (2-stage SDIRK, second order)")
         self._param("contact_eps", 0.98, "eccentricity ratio treated as wall contact (Discard above) [-]")
         self._param("film_model", "short", "film model: short | short_corrected", "str")
         self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str")
@@ -55,6 +55,9 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                      "path, x [N] (staggered coupling)", lambda: self._comp.force_end[0])
         self._output("force_end.y", "force on the journal at the end of the last step, y [N]",
                      lambda: self._comp.force_end[1])
+        self._output("journal_accel.x", "journal acceleration of the quadratic path the ring was integrated on in the "
+                     "last step, x [m/s2] (staggered coupling)", lambda: self._comp.path_accel[0])
+        self._output("journal_accel.y", "journal acceleration of that path, y [m/s2]", lambda: self._comp.path_accel[1])
         self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0])
         self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1])
         self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed())
@@ -124,7 +127,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
             return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
         try:
             self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
-            self._comp.step(self._ref_state, self._values["rotor_speed"], 0.0, step_size)
+            self._comp.step(self._ref_state, self._values["rotor_speed"], 0.0, step_size, t=current_time)
         except Exception as exc:  # noqa: BLE001
             self._ready = False
             return self._error(f"{self.instance_name} at t = {current_time:.6g} s, rotor speed "
@@ -134,12 +137,17 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     def _get_fmu_state(self):
         state = super()._get_fmu_state()
-        state["_ring_state"] = [float(x) for x in self._comp.ring] if self._comp is not None else None
+        if self._comp is not None:
+            state["_ring_state"] = [float(x) for x in self._comp.ring]
+            state["_journal_history"] = self._comp.history.state()
         return state
 
     def _set_fmu_state(self, state):
+        state = dict(state)  # the host may restore the same saved state more than once
         ring = state.pop("_ring_state", None)
+        history = state.pop("_journal_history", None)
         super()._set_fmu_state(state)
         if ring is not None and self._comp is not None:
             self._comp.ring[:] = ring
+            self._comp.history.set_state(history)
         self._dirty = True

@@ -41,6 +41,10 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             self._input(f"{b}.force.y", f"bearing force on the journal, y [N]")
             self._input(f"{b}.force_end.x", "bearing force at the end of the step, x [N] (force_interpolation)")
             self._input(f"{b}.force_end.y", "bearing force at the end of the step, y [N] (force_interpolation)")
+            self._input(f"{b}.journal_accel.x", "journal acceleration of the bearing's extrapolated path, x [m/s2] "
+                        "(force_interpolation)")
+            self._input(f"{b}.journal_accel.y", "journal acceleration of the bearing's extrapolated path, y [m/s2] "
+                        "(force_interpolation)")
             for q, u in (("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s")):
                 self._input(f"{b}.journal_ref.{q}", f"journal {q} at which the bearing force was evaluated [{u}]")
             for i in range(2):
@@ -61,18 +65,20 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                  [f"{b}.stiffness[{i},{k}]" for i in (1, 2) for k in (1, 2)],
                  [f"{b}.damping[{i},{k}]" for i in (1, 2) for k in (1, 2)],
                  [f"{b}.journal_ref.{q}" for q in ("x", "y", "vx", "vy")],
-                 [f"{b}.force_end.x", f"{b}.force_end.y"]) for b in BEARINGS}
+                 [f"{b}.force_end.x", f"{b}.force_end.y"],
+                 [f"{b}.journal_accel.x", f"{b}.journal_accel.y"]) for b in BEARINGS}
 
     def _bearing_inputs(self):
         v = self._values
-        F, K, C, self._refs, self._fend = [], [], [], [], []
+        F, K, C, self._refs, self._fend, self._acc = [], [], [], [], [], []
         for b in BEARINGS:
-            kf, kk, kc, kr, ke = self._KEYS[b]
+            kf, kk, kc, kr, ke, ka = self._KEYS[b]
             F.append(np.array([v[k] for k in kf]))
             K.append(np.array([v[k] for k in kk]).reshape(2, 2))
             C.append(np.array([v[k] for k in kc]).reshape(2, 2))
             self._refs.append(np.array([v[k] for k in kr]))
             self._fend.append(np.array([v[k] for k in ke]))
+            self._acc.append(np.array([v[k] for k in ka]))
         return F, K, C
 
     def _linear(self):
@@ -117,12 +123,13 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             if not np.isfinite(np.concatenate(F + [k.ravel() for k in K] + [c.ravel() for c in C] + self._refs)).all():
                 raise ValueError(f"bearing inputs are not finite: force {F}, stiffness {K}, damping {C}, "
                                  f"journal_ref {self._refs}")
-            rates = None
+            path = None
             if self._values["force_interpolation"]:
-                rates = [(self._fend[i] - F[i]) / step_size + K[i] @ self._refs[i][2:] for i in range(len(BEARINGS))]
-                if not np.isfinite(np.concatenate(rates)).all():
-                    raise ValueError(f"bearing force_end input is not finite: {self._fend!r}")
-            self._comp.step(step_size, F, K, C, self._refs, rates)
+                path = (self._fend, self._acc)
+                if not np.isfinite(np.concatenate(self._fend + self._acc)).all():
+                    raise ValueError(f"bearing force_end / journal_accel inputs are not finite: {self._fend!r}, "
+                                     f"{self._acc!r}")
+            self._comp.step(step_size, F, K, C, self._refs, path=path)
         except Exception as exc:  # noqa: BLE001
             self._ready = False
             return self._error(f"{self.instance_name} at t = {current_time:.6g} s: {exc}")
@@ -135,6 +142,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         return state
 
     def _set_fmu_state(self, state):
+        state = dict(state)  # the host may restore the same saved state more than once
         y = state.pop("_rotor_state", None)
         super()._set_fmu_state(state)
         if y is not None and self._comp is not None:

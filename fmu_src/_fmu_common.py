@@ -17,6 +17,8 @@ class FrbSlaveMixin:
         self._failed = None
         self._dirty = True
         self._comp = None
+        self._raw_get = {}  # value reference -> raw getter of a Real variable (fast path of get_real)
+        self._set_name = {}  # value reference -> name in self._values of a Real input or parameter
 
     def _param(self, name, value, desc, kind="real"):
         self._values[name] = value
@@ -24,6 +26,9 @@ class FrbSlaveMixin:
         var = cls(name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed, description=desc,
                   getter=lambda n=name: self._values[n], setter=lambda v, n=name: self._set_param(n, v))
         self.register_variable(var, nested=False)
+        if kind == "real":
+            self._raw_get[var.value_reference] = var.getter
+            self._set_name[var.value_reference] = name
 
     def _set_param(self, name, v):
         self._values[name] = v
@@ -34,6 +39,8 @@ class FrbSlaveMixin:
         var = Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous, description=desc,
                    getter=lambda n=name: self._values[n], setter=lambda v, n=name: self._set_input(n, v))
         self.register_variable(var, nested=False)
+        self._raw_get[var.value_reference] = var.getter
+        self._set_name[var.value_reference] = name
 
     def _set_input(self, name, v):
         self._values[name] = float(v)
@@ -47,6 +54,29 @@ class FrbSlaveMixin:
             var = Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
                        initial=Fmi2Initial.exact, description=desc, getter=lambda f=fn: float(self._safe(f)))
         self.register_variable(var, nested=False)
+        if kind != "int":
+            self._raw_get[var.value_reference] = fn
+
+    # Fast paths for the per-macro-step traffic (pythonfmu's generic loop checks types and goes through the
+    # guarded getters one by one): read all requested values with the raw getters while the slave is healthy, and
+    # fall back to the guarded per-variable path (zeros before initialization, logging + NaN on failure) otherwise.
+    def get_real(self, vrs):
+        if self._ready and self._failed is None:
+            try:
+                raw = self._raw_get
+                return [float(raw[vr]()) for vr in vrs]
+            except Exception:  # noqa: BLE001  (the guarded path below logs it)
+                pass
+        return super().get_real(vrs)
+
+    def set_real(self, vrs, values):
+        try:
+            names = [self._set_name[vr] for vr in vrs]
+        except KeyError:  # an output or unknown reference: pythonfmu reports it
+            return super().set_real(vrs, values)
+        for n, v in zip(names, values):
+            self._values[n] = float(v)
+        self._dirty = True
 
     def _linearization_outputs(self, nx, nu, ny, what):
         """Integer outputs nx, nu, ny and Real outputs A[i,j], B[i,j], C[i,j], D[i,j] (1-based, row-major) read

@@ -379,7 +379,7 @@ def build_parser():
     cs.add_argument("ssp", help=".ssp archive or folder (see frb build-fmus)")
     cs.add_argument("--parameter-set", default="co36", help="co36, co40, co42 or co46")
     cs.add_argument("--stop-time", type=float, default=None, help="simulated time [s] (default: from the SSP)")
-    cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 2e-5)")
+    cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 1e-5)")
     cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
     cs.add_argument("--no-figure", action="store_true")
     cs.add_argument("--out", default="results/cosim")

@@ -43,8 +43,10 @@ class Component:
 
     @property
     def onset_hz(self) -> float:
-        """Frequency at the onset speed [Hz], from the first detected f/f_rot (constant-ratio extrapolation)."""
-        return float(self.freqs_hz[0] / self.speeds_rpm[0] * self.onset_rpm)
+        """Frequency at the onset speed [Hz]: the median f/f_rot of the first three detections (robust to a
+        one-segment shift of the first detection), times the onset speed (constant-ratio extrapolation)."""
+        n = min(3, self.freqs_hz.size)
+        return float(np.median(self.freqs_hz[:n] / self.speeds_rpm[:n]) * self.onset_rpm)
 
     @property
     def first_detection_hz(self) -> float:
@@ -115,7 +117,7 @@ class SpectrogramResult:
                       10 ** (-self.db_range / 20))
             for sign, spec in ((1, self.forward[:, k]), (-1, self.backward[:, k])):
                 idx, _ = find_peaks(spec, height=thr)
-                peaks += [(self.freqs_hz[i], spec[i], sign) for i in idx]
+                peaks += [(self._peak_hz(spec, i), spec[i], sign) for i in idx]
             used = set()
             # harmonics (2x, 3x) of a stronger peak, and the mirror (−f) of a stronger peak (an elliptic orbit
             # whirls at +f and −f at once), are not components of their own
@@ -164,6 +166,17 @@ class SpectrogramResult:
         for i, t in enumerate(tracks):
             out.append(self._component(f"sub{i + 1}", t))
         return out
+
+    def _peak_hz(self, spec, i):
+        """Frequency of the spectral peak at bin ``i`` [Hz], refined between bins by a parabola through the log
+        magnitudes of the bin and its neighbours (Hann window: error well below 1 % of a bin)."""
+        f = self.freqs_hz
+        if 0 < i < f.size - 1 and spec[i - 1] > 0 and spec[i + 1] > 0:
+            a, b, c = np.log(spec[i - 1]), np.log(spec[i]), np.log(spec[i + 1])
+            den = a - 2 * b + c
+            if den < 0:
+                return float(f[i] + 0.5 * (a - c) / den * (f[1] - f[0]))
+        return float(f[i])
 
     def _merge(self, tracks, max_gap=4, ratio_tol=0.2):
         """Join fragments of one component: same direction, the later starting at most ``max_gap`` segments
@@ -218,11 +231,18 @@ class SpectrogramResult:
             j -= 1
         if j == 0 or j == amps.size - 1:
             return float(self.speeds_rpm[ks[j]])
-        a, b, c = amps[j - 1], amps[j], amps[j + 1]
-        den = a - 2 * b + c
-        off = 0.5 * (a - c) / den if den > 0 else 0.0
-        s0, s1 = self.speeds_rpm[ks[j]], self.speeds_rpm[ks[j] + (1 if off >= 0 else -1)]
-        return float(s0 + abs(off) * (s1 - s0))
+        # vertex of a least-squares parabola through log amplitude vs speed over ±4 segments around the minimum:
+        # a flat minimum at the noise floor is located by its surroundings, not by one segment's dip
+        lo, hi = max(j - 4, 0), min(j + 5, amps.size)
+        sp = self.speeds_rpm[ks[lo:hi]]
+        s_ref = self.speeds_rpm[ks[j]]
+        if hi - lo >= 5:
+            c2, c1, _ = np.polyfit(sp - s_ref, amps[lo:hi], 2)
+            if c2 > 0:
+                vertex = s_ref - c1 / (2 * c2)
+                if sp[0] <= vertex <= sp[-1]:
+                    return float(vertex)
+        return float(s_ref)
 
     def _interpolated_onset(self, k0, f0, direction, thr):
         """Speed where the component's amplitude crosses the detection threshold, interpolated in

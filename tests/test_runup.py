@@ -1,6 +1,7 @@
 """Nonlinear run-up: checks against the linear analysis, the static equilibrium, tolerance sensitivity,
 contact handling, file output and bad input."""
 import json
+import math
 
 import numpy as np
 import pandas as pd
@@ -168,6 +169,37 @@ def test_synthetic_spectrogram_components():
     np.testing.assert_allclose(fwd_sub[0].ratio, 0.4, atol=0.01)
     # the forward component switches on at t = 0.3 s (39 krpm); segments of 0.04 s smear it by ~1.2 krpm
     assert fwd_sub[0].onset_threshold_rpm == pytest.approx(39e3, abs=1.5e3)
+
+
+def test_turning_point_finds_the_loss_of_stability_under_a_noise_floor():
+    """A component that decays, passes its amplitude minimum at t0 (growth rate zero: the loss of stability) and
+    then grows, log A = a (t − t0)², on top of a random noise floor: the turning-point onset must find the speed
+    at t0, where the threshold crossing comes much later."""
+    rng = np.random.default_rng(1)
+    fs, T = 20000.0, 1.0
+    t = np.arange(0, T, 1 / fs)
+    rpm = 20e3 + 230e3 * t / T
+    phase = 2 * np.pi * np.cumsum(rpm / 60.0) / fs
+    t0 = 0.3  # 89 krpm
+    # log-amplitude quadratic on both sides (growth rate linear in speed, zero at t0): slow decay from 3e-7 m
+    # (below detection) to 1e-8 m at t0, then faster growth (x5000 in 0.17 s, as in the co36 run-up)
+    a = np.where(t < t0, math.log(30.0) / t0 ** 2, 300.0)
+    amp = np.minimum(1e-8 * np.exp(a * (t - t0) ** 2), 2e-5)
+    z = 1e-5 * np.exp(1j * 0.5 * phase) + amp * np.exp(1j * 0.12 * phase)
+    z += 1e-11 * (rng.standard_normal(t.size) + 1j * rng.standard_normal(t.size))
+    disp = {"turbine_wheel": np.column_stack([z.real, z.imag])}
+    zeros2 = np.zeros((t.size, 2))
+    run = RunupResult(t, rpm, np.zeros((t.size, 2)), {"turbine": zeros2, "compressor": zeros2},
+                      {"turbine": zeros2, "compressor": zeros2}, np.zeros((t.size, 4)), disp)
+    comps = spectrogram(run, "turbine_wheel", segment_s=0.025).components(min_amplitude=1e-7)
+    grown = [c for c in comps if abs(np.median(c.ratio) - 0.12) < 0.02]
+    assert len(grown) == 1
+    c = grown[0]
+    true = 20e3 + 230e3 * t0
+    # an FFT segment spans 25 ms = 5.75 krpm; with slow decay and fast growth the windowed amplitude has its
+    # minimum slightly before t0 (measured 1.9 krpm early); the vertex must lie within half a segment of t0
+    assert c.onset_rpm == pytest.approx(true, abs=2.9e3)
+    assert c.onset_threshold_rpm > true + 5e3  # the threshold crossing lags the loss of stability
 
 
 def test_cli_runup_and_compare_pipeline(tmp_path, capsys):

@@ -146,7 +146,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
         if coupling == "force" and (s_c.startswith("stiffness") or s_c.startswith("damping")):
             params.setdefault(e_el, {})[e_c] = ("Real", 0.0)  # no interface Jacobian at all
             continue
-        if s_c.startswith("force_end"):  # staggered: passed after the bearings have stepped
+        if s_c.startswith(("force_end", "journal_accel")):  # staggered: passed after the bearings have stepped
             if coupling == "jacobian":
                 end_groups.setdefault((s_el, e_el), []).append((s_c, e_c))
             continue
@@ -158,13 +158,28 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
              for s, e in order]
     end_links = [(fmus[s], fmus[e], fmus[s].vr([c[0] for c in g]), fmus[e].vr([c[1] for c in g]))
                  for (s, e), g in end_groups.items()]
-    # one getReal per source FMU (its outputs to all destinations), then one setReal per destination
-    batched = []
-    for src in dict.fromkeys(lk[0] for lk in links):
-        mine = [lk for lk in links if lk[0] is src]
-        svr = [v for lk in mine for v in lk[2]]
-        cuts = np.cumsum([0] + [len(lk[2]) for lk in mine])
-        batched.append((src, svr, [(lk[1], lk[3], cuts[i], cuts[i + 1]) for i, lk in enumerate(mine)]))
+    if any(e != "rotor" for _, e in end_groups):
+        raise ParameterError("the staggered connections (force_end, journal_accel) must end at the rotor")
+    end_src = [(src, svr) for src, _, svr, _ in end_links]  # one getReal per bearing, one setReal on the rotor
+    end_dvr = [v for *_, dvr in end_links for v in dvr]
+    # two phases (rotor -> bearings, then bearings -> rotor, so that the bearings' outputs are read after their
+    # inputs are set); per phase one getReal per source and one setReal per destination
+    phases = []
+    for from_rotor in (True, False):
+        mine = [lk for lk in links if (lk[0] is rotor) == from_rotor]
+        srcs = {}
+        for src, dst, svr, dvr in mine:
+            srcs.setdefault(src, []).append((dst, svr, dvr))
+        gets = [(src, [v for _, svr, _ in ls for v in svr]) for src, ls in srcs.items()]
+        dests = {}
+        pos = 0
+        for src, ls in srcs.items():
+            for dst, svr, dvr in ls:
+                d = dests.setdefault(dst, ([], []))
+                d[0].extend(dvr)
+                d[1].extend(range(pos, pos + len(svr)))
+                pos += len(svr)
+        phases.append((gets, [(dst, dvr, idx) for dst, (dvr, idx) in dests.items()]))
     # recorded variables
     rec_rotor = rotor.vr(["rotor_speed"] + [f"{b}_bearing.journal.{q}" for b in BEARING_NAMES for q in "xy"] +
                          [f"{w}.{q}" for w in ("turbine_wheel", "compressor_wheel") for q in "xy"])
@@ -184,13 +199,16 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     def exchange():
         nonlocal t_fmi
         t0 = time.perf_counter()
-        for src, svr, dests in batched:
-            vals = _call(src, "getReal", src.slave.getReal, svr)
-            if not all(math.isfinite(v) for v in vals):
-                names = [n for n, v in src.vars.items() if v.valueReference in svr]
-                raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
-            for dst, dvr, a, b in dests:
-                _call(dst, "setReal", dst.slave.setReal, dvr, vals[a:b])
+        for gets, sets in phases:
+            vals = []
+            for src, svr in gets:
+                v = _call(src, "getReal", src.slave.getReal, svr)
+                if not math.isfinite(sum(v)):
+                    names = [n for n, var in src.vars.items() if var.valueReference in svr]
+                    raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
+                vals += v
+            for dst, dvr, idx in sets:
+                _call(dst, "setReal", dst.slave.setReal, dvr, [vals[i] for i in idx])
         t_fmi += time.perf_counter() - t0
 
     def record(k, t):
@@ -240,14 +258,16 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
                 # rotor with the force interpolated over the step
                 for fmu in (*bearings, rotor):
                     if fmu is rotor and end_links:
-                        for src, dst, svr, dvr in end_links:
-                            vals = _call(src, "getReal", src.slave.getReal, svr)
-                            if not all(math.isfinite(v) for v in vals):
+                        vals = []
+                        for src, svr in end_src:
+                            v = _call(src, "getReal", src.slave.getReal, svr)
+                            if not math.isfinite(sum(v)):
                                 ok, failed = False, (src, 2)
                                 break
-                            _call(dst, "setReal", dst.slave.setReal, dvr, vals)
+                            vals += v
                         if not ok:
                             break
+                        _call(rotor, "setReal", rotor.slave.setReal, end_dvr, vals)
                     try:
                         fmu.slave.doStep(t, h)
                     except FMICallException as exc:

@@ -28,6 +28,7 @@ def _bearing_connections(inst, prefix):
     con += [(inst, f"force.{q}", "rotor", f"{prefix}.force.{q}") for q in "xy"]
     con += [(inst, f"journal_ref.{q}", "rotor", f"{prefix}.journal_ref.{q}") for q in ("x", "y", "vx", "vy")]
     con += [(inst, f"force_end.{q}", "rotor", f"{prefix}.force_end.{q}") for q in "xy"]
+    con += [(inst, f"journal_accel.{q}", "rotor", f"{prefix}.journal_accel.{q}") for q in "xy"]
     for m in ("stiffness", "damping"):
         con += [(inst, f"{m}[{i},{k}]", "rotor", f"{prefix}.{m}[{i},{k}]") for i in (1, 2) for k in (1, 2)]
     return con
@@ -42,20 +43,25 @@ def connections():
 
 
 def _unit(conn):
+    """Unit of a connector, from its name."""
+    if "journal_accel." in conn:
+        return "m/s2"
     if "journal.v" in conn or "journal_ref.v" in conn:
         return "m/s"
     if "journal." in conn or "journal_ref." in conn:
         return "m"
     if "rotor_speed" in conn:
         return "rad/s"
-    if "force." in conn:
+    if "force." in conn or "force_end." in conn:
         return "N"
     if "stiffness" in conn:
         return "N/m"
-    return "N.s/m"
+    if "damping" in conn:
+        return "N.s/m"
+    raise ValueError(f"no unit known for connector {conn!r}")
 
 
-UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "rad/s": dict(rad=1, s=-1), "N": dict(kg=1, m=1, s=-2),
+UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "m/s2": dict(m=1, s=-2), "rad/s": dict(rad=1, s=-1), "N": dict(kg=1, m=1, s=-2),
          "N/m": dict(kg=1, s=-2), "N.s/m": dict(kg=1, s=-1)}
 
 
@@ -117,7 +123,7 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
     return sets
 
 
-def write_ssp(out_dir="ssp", step_size=2e-5, stop_time=1.0, **kw):
+def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, **kw):
     """Write ``SystemStructure.ssd`` and ``resources/<set>_<component>.ssv`` into ``out_dir``."""
     out = Path(out_dir)
     (out / "resources").mkdir(parents=True, exist_ok=True)
