@@ -135,19 +135,15 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._dirty = True
         return True
 
-    def _get_fmu_state(self):
-        state = super()._get_fmu_state()
-        if self._comp is not None:
-            state["_ring_state"] = [float(x) for x in self._comp.ring]
-            state["_journal_history"] = self._comp.history.state()
-        return state
+    def _component_state(self):
+        c = self._comp
+        return {"ring": [float(x) for x in c.ring], "history": c.history.state(), "eps": [float(e) for e in c.eps],
+                "force_end": [float(x) for x in c.force_end], "path_accel": [float(x) for x in c.path_accel]}
 
-    def _set_fmu_state(self, state):
-        state = dict(state)  # the host may restore the same saved state more than once
-        ring = state.pop("_ring_state", None)
-        history = state.pop("_journal_history", None)
-        super()._set_fmu_state(state)
-        if ring is not None and self._comp is not None:
-            self._comp.ring[:] = ring
-            self._comp.history.set_state(history)
-        self._dirty = True
+    def _set_component_state(self, st):
+        c = self._comp
+        c.ring[:] = st["ring"]
+        c.history.set_state(st["history"])
+        c.eps = tuple(st["eps"])
+        c.force_end[:] = st["force_end"]
+        c.path_accel = np.array(st["path_accel"])

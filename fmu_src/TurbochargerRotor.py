@@ -135,16 +135,9 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             return self._error(f"{self.instance_name} at t = {current_time:.6g} s: {exc}")
         return True
 
-    def _get_fmu_state(self):
-        state = super()._get_fmu_state()
-        if self._comp is not None:
-            state["_rotor_state"] = [float(x) for x in self._comp.y] + [self._comp.phi, self._comp.t]
-        return state
+    def _component_state(self):
+        return {"y": [float(x) for x in self._comp.y], "phi": self._comp.phi, "t": self._comp.t}
 
-    def _set_fmu_state(self, state):
-        state = dict(state)  # the host may restore the same saved state more than once
-        y = state.pop("_rotor_state", None)
-        super()._set_fmu_state(state)
-        if y is not None and self._comp is not None:
-            self._comp.y[:] = y[:-2]
-            self._comp.phi, self._comp.t = y[-2], y[-1]
+    def _set_component_state(self, st):
+        self._comp.y[:] = st["y"]
+        self._comp.phi, self._comp.t = st["phi"], st["t"]

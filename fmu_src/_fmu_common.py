@@ -103,6 +103,22 @@ class FrbSlaveMixin:
             self._ready = False
             return math.nan
 
+    # FMU state (fmi2GetFMUstate / SetFMUstate, used for rollback): the variable values, the health flags and the
+    # component's own state — not pythonfmu's default, which calls every getter (all outputs, all linearization
+    # matrices) and cannot bring a slave back after a failed step.
+    def _get_fmu_state(self):
+        state = {"_values": dict(self._values), "_ready": self._ready, "_failed": self._failed}
+        if self._comp is not None:
+            state["_component"] = self._component_state()
+        return state
+
+    def _set_fmu_state(self, state):
+        self._values = dict(state["_values"])
+        self._ready, self._failed = state["_ready"], state["_failed"]
+        if self._comp is not None and state.get("_component") is not None:
+            self._set_component_state(state["_component"])
+        self._dirty = True
+
     def _error(self, msg):
         self.log(msg, Fmi2Status.error)
         self._failed = msg

@@ -223,6 +223,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     from fmpy.fmi1 import FMICallException
 
     status, message = "finished", ""
+    n_rejected = 0
     k_rec = 0
     last_flush = 0
     t_wall = time.perf_counter()
@@ -252,7 +253,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
                     t0 = time.perf_counter()
                     states = {n: f.slave.getFMUstate() for n, f in fmus.items() if f.can_state}
                     t_fmi += time.perf_counter() - t0
-                ok, failed = True, None
+                failure = None  # (FMU, what happened) of a rejected interval
                 t0 = time.perf_counter()
                 # staggered: bearings first (journal extrapolated), their end-of-step force to the rotor, then the
                 # rotor with the force interpolated over the step
@@ -262,36 +263,46 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
                         for src, svr in end_src:
                             v = _call(src, "getReal", src.slave.getReal, svr)
                             if not math.isfinite(sum(v)):
-                                ok, failed = False, (src, 2)
+                                failure = (src, "published a non-finite end-of-step force")
                                 break
                             vals += v
-                        if not ok:
+                        if failure:
                             break
                         _call(rotor, "setReal", rotor.slave.setReal, end_dvr, vals)
                     try:
                         fmu.slave.doStep(t, h)
                     except FMICallException as exc:
-                        ok, failed = False, (fmu, int(exc.status))
+                        st = int(exc.status)
+                        failure = (fmu, "doStep returned status " +
+                                   ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"][st], st)
                         break
                 t_fmi += time.perf_counter() - t0
-                if not ok:
-                    fmu, st = failed
-                    if rollback and st == 2 and states and h > H / 2 ** max_halvings:
-                        for n, f in fmus.items():
-                            if n in states:
-                                f.slave.setFMUstate(states[n])
-                        h /= 2
+                if failure is None:
+                    try:  # the new journal states may already put a film at its wall: non-finite outputs
                         exchange()
-                        continue
-                    raise CosimStopped(f"{fmu.name}: doStep at t = {t:.6g} s (step {h:.3g} s) returned status "
-                                       f"{['OK', 'Warning', 'Discard', 'Error', 'Fatal', 'Pending'][st]}; see the FMU "
-                                       "log above")
+                    except CosimStopped as exc:
+                        failure = (None, str(exc))
+                retryable = failure is not None and (len(failure) < 3 or failure[2] == 2)  # Discard, non-finite
+                retry = retryable and rollback and states and h > H / 2 ** max_halvings
+                if retry:
+                    for n, f in fmus.items():
+                        if n in states:
+                            f.slave.setFMUstate(states[n])
                 if states:
                     for n, f in fmus.items():
                         if n in states:
                             f.slave.freeFMUstate(states[n])
+                if retry:
+                    h /= 2
+                    n_rejected += 1
+                    exchange()
+                    continue
+                if failure is not None:
+                    who = f"{failure[0].name}: " if failure[0] is not None else ""
+                    tried = f" (after {max_halvings} step halvings with rollback)" if retryable and rollback else ""
+                    raise CosimStopped(f"{who}{failure[1]} in the interval t = {t:.6g} s + {h:.3g} s{tried}" +
+                                       ("; see the FMU log above" if failure[0] is not None else ""))
                 t += h
-                exchange()
             if k % output_every == 0:
                 record(k_rec, t)
                 k_rec += 1
@@ -321,7 +332,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
         sys.stderr.write(f"\rcosim: {status} after {wall:.1f} s wall ({t_fmi / max(wall, 1e-9):.0%} in FMI calls)"
                          f"{' ' * 30}\n")
     rows = rows[:k_rec]
-    meta.update({"wall_time_s": wall, "fmi_time_s": t_fmi, "samples": int(k_rec)})
+    meta.update({"wall_time_s": wall, "fmi_time_s": t_fmi, "samples": int(k_rec), "rejected_steps": n_rejected})
     if writer is not None:
         writer.append(rows[last_flush if k_rec else 0:] if k_rec else rows[:0])
         writer.write_meta(status, message)
