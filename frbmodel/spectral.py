@@ -107,6 +107,9 @@ class SpectrogramResult:
         if min_amplitude is None:
             min_amplitude = self.meta.get("min_amplitude_m", 1e-7)
         df = self.freqs_hz[1] - self.freqs_hz[0]
+        # below one period per segment a "peak" cannot be told from the static deflection's drift and the
+        # window's main lobe about 0 Hz (detrending leaves a residue there): not a component
+        f_min = max(2 * df, 1.0 / self.meta.get("segment_s", 1.0 / (4 * df)))
         tracks = []  # each: dict(k=[], f=[], a=[], dir=[])
         active = []
         sync = {"k": [], "f": [], "a": [], "dir": [], "thr": []}
@@ -136,7 +139,7 @@ class SpectrogramResult:
                     sync["thr"].append(thr)
                     used.add(p)
             subs = [(f, a, sgn) for p, (f, a, sgn) in enumerate(peaks)
-                    if p not in used and f < (1.0 - SYNC_TOL) * frot and f > 2 * df]
+                    if p not in used and f < (1.0 - SYNC_TOL) * frot and f > f_min]
             new_active = []
             for tr in active:
                 best, bd = None, np.inf
