@@ -21,7 +21,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._init_state()
-        self._param("system_file", "", "frbmodel system description (.toml/.json); empty = paper Table 2", "str")
+        self._param("rotor_file", "", "frbmodel system description (.toml/.json, see frb system) whose rotor, bearing "
+                    "nodes and gravity are used; empty = the bundled paper Table 2 rotor", "str")
         self._param("speed_start", 20e3 * math.pi / 30, "rotor speed at t = 0 [rad/s]")
         self._param("speed_end", 250e3 * math.pi / 30, "rotor speed after the ramp [rad/s]")
         self._param("ramp_time", 1.0, "duration of the linear speed ramp [s]")
@@ -96,7 +97,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
 
         v = self._values
         try:
-            tc = frb.load_system(v["system_file"]) if v["system_file"] else frb.turbocharger()
+            tc = frb.load_system(v["rotor_file"]) if v["rotor_file"] else frb.turbocharger()
             tc = tc.with_(gravity=finite("gravity", v["gravity"], 0.0, unit="m/s2"))
             w0 = finite("speed_start", v["speed_start"], 0.0, unit="rad/s")
             w1 = finite("speed_end", v["speed_end"], 0.0, unit="rad/s")

@@ -237,6 +237,33 @@ def test_fmu_state_round_trip_and_recovery_after_a_failed_step(built, tmp_path):
     s.freeFMUstate(saved)
 
 
+def test_rotor_fmu_takes_its_rotor_from_rotor_file(built, tmp_path):
+    """A system written like `frb system` does, with a 50 % heavier turbine wheel: the rotor FMU's state matrix
+    (linearization mode) is that system's, not the bundled Table 2 rotor's."""
+    from dataclasses import replace
+
+    from frbmodel.components import RotorComponent, ramp_speed, rotor_state_space
+
+    tc = frb.turbocharger()
+    discs = tuple(replace(d, mass=1.5 * d.mass) if d.name == "turbine_wheel" else d for d in tc.rotor.discs)
+    heavy = tc.with_(rotor=replace(tc.rotor, discs=discs))
+    path = heavy.save(tmp_path / "heavy.toml")
+    s, vr, _ = _slave(built / "fmus" / "TurbochargerRotor.fmu", "heavy", tmp_path)
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.setString([vr["rotor_file"]], [str(path)])
+    s.setBoolean([vr["linearization"]], [True])
+    s.setReal([vr["speed_start"], vr["speed_end"]], [1000.0, 1000.0])
+    s.exitInitializationMode()
+    A = np.array(s.getReal([vr[f"A[{i + 1},{k + 1}]"] for i in range(32) for k in range(32)])).reshape(32, 32)
+
+    def expected(system):
+        return rotor_state_space(RotorComponent(system, ramp_speed(1000 * 30 / math.pi, 1000 * 30 / math.pi, 1.0)))["A"]
+
+    np.testing.assert_allclose(A, expected(heavy), rtol=1e-12, atol=1e-9)
+    assert np.abs(A - expected(tc)).max() > 1e-3 * np.abs(A).max()  # and differs from the bundled rotor
+
+
 def test_master_rollback_is_transparent_and_retries_rejected_steps(built):
     tc = frb.turbocharger(36e-6)
     kw = dict(stop_time=0.01, progress=False, overrides=operating_point_overrides(tc, 50e3, perturbation=0.05))

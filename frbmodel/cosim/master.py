@@ -33,7 +33,7 @@ def system_from_parameters(params):
     from frbmodel.film import Film
 
     rp = params.get("rotor", {})
-    sys_file = rp.get("system_file", ("String", ""))[1]
+    sys_file = rp.get("rotor_file", ("String", ""))[1]
     tc = frb.load_system(sys_file) if sys_file else frb.turbocharger()
     bs = []
     for name, b in zip(BEARING_NAMES, tc.bearings):
