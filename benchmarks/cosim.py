@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 import frbmodel as frb
-from frbmodel.cosim.build import build_fmus
+from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.master import CosimStopped, cosimulate
 
 
@@ -25,9 +25,7 @@ def main(argv=None):
     ap.add_argument("--duration", type=float, default=1.0)
     ap.add_argument("--build", default="build")
     args = ap.parse_args(argv)
-    ssp = Path(args.build) / "turbocharger.ssp"
-    if not ssp.exists():
-        build_fmus(args.build)
+    ssp = built_ssp(args.build)
     tc = frb.turbocharger(36e-6)
     frb.runup(tc, speed_rpm=(20e3, 21e3), duration=0.002, progress=False)
     cosimulate(ssp, "co36", stop_time=0.002, progress=False)

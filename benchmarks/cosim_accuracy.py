@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import frbmodel as frb
-from frbmodel.cosim.build import build_fmus
+from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.master import cosimulate, operating_point_overrides
 from frbmodel.runup import Unbalance
 from frbmodel.spectral import spectrogram
@@ -80,9 +80,7 @@ def main(argv=None):
     ap.add_argument("--build", default="build")
     ap.add_argument("--out", default="docs/img/cosim_vs_monolithic.png")
     args = ap.parse_args(argv)
-    ssp = Path(args.build) / "turbocharger.ssp"
-    if not ssp.exists():
-        build_fmus(args.build)
+    ssp = built_ssp(args.build)
     tc = frb.turbocharger(36e-6)
     runs = {}
     for key, fn in (("monolithic, rtol 1e-6", lambda: _mono(tc, rtol=1e-6)),

@@ -191,19 +191,31 @@ def cmd_runup(args):
     out = Path(args.out)
     prof = _profile(args)
     print(f"run-up: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
-    code = 0
-    try:
-        run = runup(tc, profile=prof, duration=args.duration, unbalance=_parse_unbalance(args.unbalance),
-                    output_rate_hz=args.rate, rtol=args.rtol, out_dir=out, progress=True)
-    except RunupStopped as exc:
-        print(f"frb runup: stopped: {exc}", file=sys.stderr)
-        run, code = exc.result, 3
+    run, code = _stoppable("runup", RunupStopped, lambda: runup(
+        tc, profile=prof, duration=args.duration, unbalance=_parse_unbalance(args.unbalance),
+        output_rate_hz=args.rate, rtol=args.rtol, out_dir=out, progress=True))
     print(f"wall time {run.meta.get('wall_time_s', float('nan')):.1f} s, {run.meta.get('rhs_evaluations')} RHS and "
           f"{run.meta.get('jacobian_evaluations')} Jacobian evaluations, {run.time.size} samples")
-    if not args.no_figure and run.time.size >= 64:
-        write_composites(run, tc, out, xscale="log" if args.profile == "exponential" else "linear")
-    print(f"results in {out.resolve()}")
+    _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear")
     return code
+
+
+def _stoppable(command, stopped, fn):
+    """(result, exit code) of a long run; a ``stopped`` exception (the run ended early, its samples kept) is
+    reported and gives exit code 3 with the partial result."""
+    try:
+        return fn(), 0
+    except stopped as exc:
+        print(f"frb {command}: stopped: {exc}", file=sys.stderr)
+        return exc.result, 3
+
+
+def _finish_run(args, run, system, out, **figure_kw):
+    """Composite figures (unless --no-figure or too few samples; ``system()`` gives the Turbocharger) and the
+    closing line naming the output folder."""
+    if not args.no_figure and run.time.size >= 64:
+        write_composites(run, system(), out, **figure_kw)
+    print(f"results in {out.resolve()}")
 
 
 def cmd_compare(args):
@@ -230,19 +242,12 @@ def cmd_cosim(args):
     from .cosim.ssp import read_ssp
 
     out = Path(args.out)
-    code = 0
-    try:
-        run = cosimulate(args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True,
-                         rollback=args.rollback)
-    except CosimStopped as exc:
-        print(f"frb cosim: stopped: {exc}", file=sys.stderr)
-        run, code = exc.result, 3
+    run, code = _stoppable("cosim", CosimStopped, lambda: cosimulate(
+        args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True, rollback=args.rollback))
     print(f"wall time {run.meta['wall_time_s']:.1f} s ({run.meta['fmi_time_s'] / max(run.meta['wall_time_s'], 1e-9):.0%} "
           f"in FMI calls), macro step {run.meta['step_size_s']:g} s, {run.time.size} samples")
-    if not args.no_figure and run.time.size >= 64:
-        tc = system_from_parameters(read_ssp(args.ssp).parameters(args.parameter_set))
-        write_composites(run, tc, out, title=f"co-simulated run-up ({args.parameter_set})")
-    print(f"results in {out.resolve()}")
+    _finish_run(args, run, lambda: system_from_parameters(read_ssp(args.ssp).parameters(args.parameter_set)), out,
+                title=f"co-simulated run-up ({args.parameter_set})")
     return code
 
 

@@ -70,17 +70,17 @@ def _journal_on_path(j0, t, jj):
 @njit(cache=True)
 def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, J, refresh, eps_cap, free_spin, rsr_fixed):
     """Solve Y = base + gh·f(Y) for the ring state (in place in ``yn``, start value on entry) by modified Newton;
-    ``J`` holds I − gh ∂f/∂y and is recomputed when ``refresh`` or when convergence stalls. Returns the force on
-    the journal and both ε at the solution, and whether J was (re)computed."""
+    ``J`` holds I − gh ∂f/∂y and is recomputed when ``refresh`` or when convergence stalls. Returns both ε at the
+    solution and whether J was (re)computed."""
     f = np.empty(5)
     fp = np.empty(5)
-    fx, fy, ei, eo = 0.0, 0.0, 0.0, 0.0
+    ei, eo = 0.0, 0.0
     fresh = False
     for it in range(12):
         if not free_spin:
             yn[4] = rsr_fixed * w
-        fx, fy, ei, eo = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yn, w,
-                                         eps_cap, f)
+        _, _, ei, eo = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yn, w,
+                                       eps_cap, f)
         if not free_spin:
             f[4] = 0.0
         r = yn - base - gh * f
@@ -101,7 +101,7 @@ def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, J, refre
         yn += dy
         if abs(dy[0]) + abs(dy[1]) < 1e-10 * geom[1, 2] and abs(dy[4]) < 1e-9 * max(abs(yn[4]), 1.0):
             break
-    return fx, fy, ei, eo, fresh
+    return ei, eo, fresh
 
 
 @njit(cache=True)
@@ -125,7 +125,7 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
         ta = (s + g) * h
         _journal_on_path(j0, ta, jj)
         y1 = y.copy()
-        _, _, ei, eo, fresh = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * ta, y, y1,
+        ei, eo, fresh = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * ta, y, y1,
                                           g * h, J, not have_jac, eps_cap, free_spin, rsr_fixed)
         have_jac = have_jac or fresh
         eps_max = max(eps_max, ei, eo)
@@ -134,7 +134,7 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
         tb = (s + 1) * h
         _journal_on_path(j0, tb, jj)
         y2 = y1.copy()
-        _, _, ei, eo, _ = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * tb, base, y2,
+        ei, eo, _ = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * tb, base, y2,
                                         g * h, J, False, eps_cap, free_spin, rsr_fixed)
         y = y2
         eps_max = max(eps_max, ei, eo)
@@ -320,18 +320,13 @@ class BearingComponent:
         c = self.bearing.inner.clearance
         for k in range(4):
             h = 1e-6 * c * (1.0 if k < 2 else max(abs(omega_rotor), 1.0))
-            rp, rm = ring.copy(), ring.copy()
-            rp[k] += h
-            rm[k] -= h
-            (dp, fp), (dm, fm) = ev(rp, j), ev(rm, j)
-            A[:, k] = (dp - dm) / (2 * h)
-            Cm[:, k] = (fp - fm) / (2 * h)
-            jp, jm = j.copy(), j.copy()
-            jp[k] += h
-            jm[k] -= h
-            (dp, fp), (dm, fm) = ev(ring, jp), ev(ring, jm)
-            B[:, k] = (dp - dm) / (2 * h)
-            D[:, k] = (fp - fm) / (2 * h)
+            for perturb_ring, dxdt, force in ((True, A, Cm), (False, B, D)):
+                xp, xm = (ring if perturb_ring else j).copy(), (ring if perturb_ring else j).copy()
+                xp[k] += h
+                xm[k] -= h
+                (dp, fp), (dm, fm) = (ev(xp, j), ev(xm, j)) if perturb_ring else (ev(ring, xp), ev(ring, xm))
+                dxdt[:, k] = (dp - dm) / (2 * h)
+                force[:, k] = (fp - fm) / (2 * h)
         return A, B, Cm, D
 
 
@@ -428,10 +423,8 @@ class RotorComponent:
         self.speed = speed
         self.n = rotor.n_dof
         self.minv = np.linalg.inv(rotor.M)
-        self.k_mat = np.ascontiguousarray(rotor.K)
-        self.g_mat = np.ascontiguousarray(rotor.G)
-        self.mg = self.minv @ self.g_mat
-        self.mk0 = self.minv @ self.k_mat
+        self.mk0 = self.minv @ rotor.K  # M⁻¹K
+        self.mg = self.minv @ rotor.G  # M⁻¹G (per rad/s)
         self.f_grav = rotor.gravity_load(system.gravity)
         self.jdofs = np.array([[4 * b.node, 4 * b.node + 1] for b in system.bearings], dtype=np.int64)
         self._jidx = [np.array([i, k, self.n + i, self.n + k]) for i, k in self.jdofs]
@@ -503,8 +496,8 @@ def rotor_state_space(rotor_comp):
     w, wd = rotor_comp.speed(rotor_comp.t)
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
-    A[n:, :n] = -rotor_comp.minv @ (rotor_comp.k_mat + wd * rotor_comp.g_mat)
-    A[n:, n:] = -rotor_comp.minv @ (w * rotor_comp.g_mat)
+    A[n:, :n] = -(rotor_comp.mk0 + wd * rotor_comp.mg)
+    A[n:, n:] = -w * rotor_comp.mg
     nb = rotor_comp.jdofs.shape[0]
     B = np.zeros((2 * n, 2 * nb))
     C = np.zeros((4 * nb, 2 * n))

@@ -51,3 +51,11 @@ def build_fmus(out_dir="build", src=None, progress=print):
     paths.append(ssp)
     progress(f"packed {ssp} (SystemStructure.ssd, parameter sets, both FMUs)")
     return paths
+
+
+def built_ssp(out_dir="build", src=None, progress=print) -> Path:
+    """``<out>/turbocharger.ssp``, building the FMUs first if it is not there yet."""
+    ssp = Path(out_dir) / "turbocharger.ssp"
+    if not ssp.exists():
+        build_fmus(out_dir, src, progress)
+    return ssp
