@@ -20,7 +20,8 @@ from numba import njit
 
 import frbmodel as frb
 from frbmodel.film import NO_CORRECTION, film_force_kernel
-from frbmodel.runup import _rhs, runup
+from frbmodel.dynamics import rhs as _rhs
+from frbmodel.runup import runup
 
 
 @njit(cache=True)

@@ -22,7 +22,7 @@ from .bearing import ring_rhs_kernel
 from .equilibrium import RPM
 from .errors import FilmContactError, ParameterError
 from .film import check_model, correction_polys
-from .runup import add_unbalance_forces
+from .dynamics import add_unbalance_forces
 
 
 # --------------------------------------------------------------------------------------------------

@@ -19,7 +19,7 @@ from .errors import ConvergenceError, ParameterError
 from .film import film_coefficients, film_force, static_position
 from .methods import get_method
 
-RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
+from .units import RPM  # noqa: E402  (rad/s per rpm; re-exported for old imports)
 
 
 def rpm_to_rad(speed_rpm):
