@@ -172,7 +172,7 @@ def write_composites(run, system, out, xscale="linear", title="run-up"):
 
     lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
     cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
-    for node in ("turbine_wheel", "compressor_wheel"):
+    for node in run.displacement:  # the system's discs
         sp = spectrogram(run, node)
         fig = sp.plot(campbell=cd, xscale=xscale, title=f"{title}, {node}")
         fig.savefig(out / f"composite_{node}.png", dpi=110, bbox_inches="tight")
@@ -242,8 +242,10 @@ def cmd_cosim(args):
     from .cosim.ssp import read_ssp
 
     out = Path(args.out)
+    trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
     run, code = _stoppable("cosim", CosimStopped, lambda: cosimulate(
-        args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True, rollback=args.rollback))
+        args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True, rollback=args.rollback,
+        trace=trace))
     print(f"wall time {run.meta['wall_time_s']:.1f} s ({run.meta['fmi_time_s'] / max(run.meta['wall_time_s'], 1e-9):.0%} "
           f"in FMI calls), macro step {run.meta['step_size_s']:g} s, {run.time.size} samples")
     _finish_run(args, run, lambda: system_from_parameters(read_ssp(args.ssp).parameters(args.parameter_set)), out,
@@ -386,6 +388,7 @@ def build_parser():
     cs.add_argument("--stop-time", type=float, default=None, help="simulated time [s] (default: from the SSP)")
     cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 1e-5)")
     cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
+    cs.add_argument("--trace-fmi", action="store_true", help="print every FMI call with its arguments and status")
     cs.add_argument("--no-figure", action="store_true")
     cs.add_argument("--out", default="results/cosim")
     cs.set_defaults(func=cmd_cosim)
@@ -425,6 +428,9 @@ def build_parser():
 
 
 def main(argv=None):
+    import os
+
+    os.environ.setdefault("MPLBACKEND", "Agg")  # figures are written to files; the library never sets a backend
     args = build_parser().parse_args(argv)
     try:
         return args.func(args) or 0

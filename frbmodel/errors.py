@@ -18,7 +18,25 @@ class FilmContactError(FRBError, ValueError):
 
 
 class ConvergenceError(FRBError, RuntimeError):
-    """An iterative solve (equilibrium, ring speed) did not converge."""
+    """An iterative solve (equilibrium, ring speed, ring integrator Newton loop) did not converge."""
+
+
+class RunStopped(FRBError):
+    """A long run (run-up, co-simulation) ended before its end time: wall contact, integrator failure, an FMU
+    failure or an interruption. ``.result`` holds what was computed up to there; the files written so far stay on
+    disk with their status in ``runup.json``."""
+
+    def __init__(self, message, result=None):
+        super().__init__(message)
+        self.result = result
+
+
+class RunupStopped(RunStopped):
+    """The monolithic run-up stopped early (wall contact, integrator failure)."""
+
+
+class CosimStopped(RunStopped):
+    """The co-simulation stopped early (an FMU failed or rejected a step); the message names the FMU."""
 
 
 def check_positive(name, value, unit="", allow_zero=False):

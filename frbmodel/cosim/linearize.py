@@ -8,23 +8,20 @@ With u_b = C_r,b x_r:  ẋ_r = (A_r + Σ B_r,b D_b C_r,b) x_r + Σ B_r,b C_b x_b
 from __future__ import annotations
 
 import math
-import shutil
-import tempfile
 
 import numpy as np
 
 from ..errors import ParameterError
-from .master import BEARING_NAMES, CosimStopped, _call, _Fmu, operating_point_overrides, system_from_parameters
-from .ssp import read_ssp
+from .master import CosimStopped, Master, operating_point_overrides, system_from_parameters
 
 
 def _matrix(fmu, name, nr, nc):
     names = [f"{name}[{i + 1},{k + 1}]" for i in range(nr) for k in range(nc)]
-    return np.array(_call(fmu, f"getReal({name})", fmu.slave.getReal, fmu.vr(names))).reshape(nr, nc)
+    return np.array(fmu.call("getReal", fmu.vr(names))).reshape(nr, nc)
 
 
 def _dims(fmu):
-    return _call(fmu, "getInteger(nx, nu, ny)", fmu.slave.getInteger, fmu.vr(["nx", "nu", "ny"]))
+    return fmu.call("getInteger", fmu.vr(["nx", "nu", "ny"]))
 
 
 def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
@@ -40,50 +37,23 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
     if m.letter not in "FGIJ":
         raise ParameterError(f"method = {method!r}: the FMU linearization covers the film methods with ring DoFs "
                              "(F, G, I, J)")
-    sys_ = read_ssp(ssp)
-    params = sys_.parameters(parameter_set)
-    system = system_from_parameters(params)
+    master = Master(ssp, parameter_set)
+    system = master.system
     ov = operating_point_overrides(system, speed_rpm, method=m.letter)
-    for comp, d in ov.items():
-        params.setdefault(comp, {}).update(d)
-        params[comp]["linearization"] = ("Boolean", True)
-    tmp = tempfile.mkdtemp(prefix="frb_lin_")
-    fmus = {}
-    try:
-        fmus = {name: _Fmu(name, path, tmp) for name, path in sys_.components.items()}
-        for fmu in fmus.values():
-            _call(fmu, "setupExperiment", fmu.slave.setupExperiment, None, 0.0, None)
-            _call(fmu, "enterInitializationMode", fmu.slave.enterInitializationMode)
-            fmu.set_parameters(params.get(fmu.name, {}))
-            _call(fmu, "exitInitializationMode", fmu.slave.exitInitializationMode)
-        rotor = fmus["rotor"]
-        # journal / speed connections: set the bearings' inputs from the rotor's outputs
-        prefix_of = {}
-        for s_el, s_c, e_el, e_c in sys_.connections:
-            if s_el == "rotor":
-                v = _call(rotor, "getReal", rotor.slave.getReal, rotor.vr([s_c]))
-                _call(fmus[e_el], "setReal", fmus[e_el].slave.setReal, fmus[e_el].vr([e_c]), v)
-                if e_c == "journal.x":
-                    prefix_of[e_el] = s_c.split(".")[0]
+    for comp in master.ssp.components:
+        master.params.setdefault(comp, {}).update(ov.get(comp, {}))
+        master.params[comp]["linearization"] = ("Boolean", True)
+    with master:
+        master.initialize()  # parameters, then the journals and speed to the bearings (the operating point)
+        rotor = master.rotor
         nx_r, nu_r, ny_r = _dims(rotor)
         Ar, Br, Cr = _matrix(rotor, "A", nx_r, nx_r), _matrix(rotor, "B", nx_r, nu_r), _matrix(rotor, "C", ny_r, nx_r)
         n_r = nx_r // 2
-        order = ("turbine_bearing", "compressor_bearing")
         blocks = []
-        for name in BEARING_NAMES:
-            f = fmus[name]
+        for k, f in enumerate(master.bearings):  # the rotor's input/output blocks follow the system's bearings
             nx, nu, ny = _dims(f)
-            k = order.index(prefix_of[name])
             blocks.append((k, _matrix(f, "A", nx, nx), _matrix(f, "B", nx, nu), _matrix(f, "C", ny, nx),
                            _matrix(f, "D", ny, nu)))
-    finally:
-        for fmu in fmus.values():
-            try:
-                fmu.slave.terminate()
-                fmu.slave.freeInstance()
-            except Exception:  # noqa: BLE001
-                pass
-        shutil.rmtree(tmp, ignore_errors=True)
     nb = 4 * len(blocks)
     N = nx_r + nb
     A = np.zeros((N, N))

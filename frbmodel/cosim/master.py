@@ -1,348 +1,367 @@
-"""Co-simulation master on fmpy's FMU2Slave, driven by the SSP.
+"""Co-simulation master on fmpy's FMU2Slave, driven by the SSP (:class:`Master`, :func:`cosimulate`).
 
 Per communication point: the rotor's outputs (journal states, speed) go to the bearings; the bearings'
-outputs (force, interface stiffness and damping) are read *after* their inputs are set and go to the rotor;
-then all FMUs step with the fixed macro step. Every FMI status is checked; results stream to ``runup.csv`` /
-``runup.json`` in the same format as the monolithic run-up, so the same spectrogram and composite figure apply.
-Optional step rejection: when an FMU returns Discard, all FMUs are rolled back (FMU state get/set) and the
-interval is retried with half the step.
+outputs (force, interface stiffness and damping, the journal state they belong to) are read *after* their inputs
+are set and go to the rotor. Then the bearings step first (journal on a quadratic path) and publish their
+end-of-step force and journal acceleration, which go to the rotor before it steps (staggered coupling, README
+"Using the FMUs"). Every FMI call goes through :meth:`FmuInstance.call` (status checked, optional trace). Results
+stream through the :class:`~frbmodel.recorder.Recorder` in the same format as the monolithic run-up, so the
+same spectrogram and composite figure apply. Optional rollback: an interval that an FMU discards (or whose new
+state gives non-finite outputs) is retried with half the step after restoring all FMU states.
 """
 from __future__ import annotations
 
 import math
-import shutil
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import FRBError, ParameterError
-from ..runup import FILM_LABELS, RunupResult, _columns, _result_from_rows, _Writer
+from ..errors import CosimStopped, ParameterError
+from ..recorder import Recorder, RunupResult, RunupSchema
+from ..units import rad_s_to_rpm, rpm_to_rad_s
+from .fmu import FmiCallFailed, FmuInstance
 from .ssp import read_ssp
 
-BEARING_NAMES = ("turbine", "compressor")
+BEARING_FMU, ROTOR_FMU = "FloatingRingBearing", "TurbochargerRotor"
+#: connectors passed after the bearings have stepped (staggered coupling)
+END_OF_STEP = ("force_end", "journal_accel")
+#: bearing outputs recorded per bearing, in the order the recorder's row needs them
+BEARING_RECORD = ("ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer")
 
 
 def system_from_parameters(params):
-    """The frbmodel Turbocharger described by an SSP parameter set (rotor system file + bearing parameters)."""
+    """The frbmodel Turbocharger described by an SSP parameter set: the rotor's ``rotor_file`` (empty: Table 2)
+    with each bearing's film and ring parameters taken from the bearing component of the same name."""
     from dataclasses import replace
 
-    import frbmodel as frb
-    from frbmodel.film import Film
+    from ..film import Film
+    from ..parameters import load_system
+    from ..presets import turbocharger
 
-    rp = params.get("rotor", {})
-    sys_file = rp.get("rotor_file", ("String", ""))[1]
-    tc = frb.load_system(sys_file) if sys_file else frb.turbocharger()
+    sys_file = params.get("rotor", {}).get("rotor_file", ("String", ""))[1]
+    tc = load_system(sys_file) if sys_file else turbocharger()
     bs = []
-    for name, b in zip(BEARING_NAMES, tc.bearings):
-        p = {k: v[1] for k, v in params.get(name, {}).items()}
-        films = []
-        for fname, film in (("inner", b.inner), ("outer", b.outer)):
-            films.append(Film(p.get(f"{fname}.radius", film.radius), p.get(f"{fname}.length", film.length),
-                              p.get(f"{fname}.clearance", film.clearance), p.get(f"{fname}.viscosity", film.viscosity)))
+    for b in tc.bearings:
+        p = {k: v[1] for k, v in params.get(b.name, {}).items()}
+        films = [Film(p.get(f"{f}.radius", film.radius), p.get(f"{f}.length", film.length),
+                      p.get(f"{f}.clearance", film.clearance), p.get(f"{f}.viscosity", film.viscosity))
+                 for f, film in (("inner", b.inner), ("outer", b.outer))]
         bs.append(replace(b, inner=films[0], outer=films[1], ring_mass=p.get("ring.mass", b.ring_mass),
                           ring_inertia=p.get("ring.inertia", b.ring_inertia)))
-    model = params.get(BEARING_NAMES[0], {}).get("film_model", ("String", tc.film_model))[1]
+    model = params.get(tc.bearings[0].name, {}).get("film_model", ("String", tc.film_model))[1]
     return tc.with_(bearings=tuple(bs), film_model=model)
 
 
-class CosimStopped(FRBError):
-    """The co-simulation stopped early; ``.result`` holds the samples up to there (also on disk)."""
-
-    def __init__(self, message, result=None):
-        super().__init__(message)
-        self.result = result
-
-
-class _Fmu:
-    def __init__(self, name, path, tmp):
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-
-        self.name = name
-        self.md = read_model_description(str(path))
-        self.dir = extract(str(path), unzipdir=str(Path(tmp) / name))
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.slave.instantiate(loggingOn=True)
-        self.can_state = bool(self.md.coSimulation.canGetAndSetFMUstate)
-
-    def vr(self, names):
-        try:
-            return [self.vars[n].valueReference for n in names]
-        except KeyError as exc:
-            raise ParameterError(f"FMU {self.name!r} has no variable {exc.args[0]!r}") from None
-
-    def set_parameters(self, params):
-        for name, (typ, val) in params.items():
-            vr = self.vr([name])
-            {"Real": self.slave.setReal, "Integer": self.slave.setInteger, "Boolean": self.slave.setBoolean,
-             "String": self.slave.setString}[typ](vr, [val])
-
-
-def _call(fmu, what, fn, *args):
-    from fmpy.fmi1 import FMICallException
-
-    try:
-        return fn(*args)
-    except FMICallException as exc:
-        raise CosimStopped(f"{fmu.name}: {what} failed ({exc})") from None
-
-
-def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_dir=None, progress=True,
-               rollback=False, output_rate_hz=20e3, overrides=None, max_halvings=6, coupling="jacobian"):
-    """Run the SSP system with frbmodel's master.
+class Master:
+    """Fixed-step (optionally rolling-back) co-simulation of an SSP system of one rotor and its bearing FMUs.
 
     Parameters
     ----------
     ssp : path
         ``.ssp`` archive or folder (SystemStructure.ssd + resources/).
     parameter_set : str
-        Name of the .ssv set (``co36``, ``co40``, ``co42``, ``co46``).
+        Name of the parameter set (``co36``, ``co40``, ``co42``, ``co46``).
     stop_time, step_size : float, optional
         Default: the SSP's DefaultExperiment stop time and OSP fixed step [s].
-    out_dir : path, optional
-        Stream ``runup.csv`` / ``runup.json`` there.
-    rollback : bool
-        Retry a Discarded interval with half steps after restoring all FMU states.
-    output_rate_hz : float
-        Sampling rate of the recorded results [Hz]: every n-th communication point with n = round(1 / (H rate)),
-        at least 1 (default 20 kHz, as the monolithic run-up).
     overrides : dict, optional
         {component: {parameter: (type, value)}} applied after the parameter set.
     coupling : {"jacobian", "force"}
         "force" drops the stiffness/damping connections (plain force exchange, for comparison).
+    rollback : bool
+        Retry a discarded interval with half steps (up to ``max_halvings``) after restoring all FMU states.
+    trace : callable, optional
+        Receives one line per FMI call (``frb cosim --trace-fmi``).
+
+    Use as a context manager (or call :meth:`close`): the FMU instances are freed and the extracted files deleted.
+    """
+
+    def __init__(self, ssp, parameter_set="co36", stop_time=None, step_size=None, overrides=None,
+                 coupling="jacobian", rollback=False, max_halvings=6, trace=None):
+        if coupling not in ("jacobian", "force"):
+            raise ParameterError(f"coupling = {coupling!r} is unknown; valid: 'jacobian', 'force'")
+        self.ssp_path, self.parameter_set, self.coupling = ssp, parameter_set, coupling
+        self.ssp = read_ssp(ssp)
+        self.params = self.ssp.parameters(parameter_set)
+        for comp, ov in (overrides or {}).items():
+            self.params.setdefault(comp, {}).update(ov)
+        self.stop_time = float(stop_time if stop_time is not None else (self.ssp.stop_time or 1.0))
+        self.step_size = float(step_size if step_size is not None else (self.ssp.step_size or 1e-5))
+        H, T = self.step_size, self.stop_time
+        if not (H > 0 and T > 0 and math.isfinite(H) and math.isfinite(T)):
+            raise ParameterError(f"step size = {H!r} s and stop time = {T!r} s must be finite and > 0")
+        self.rollback, self.max_halvings, self.trace = bool(rollback), int(max_halvings), trace
+        self.system = system_from_parameters(self.params)
+        self.fmus = {}
+        self._tmp = None
+        self.fmi_time_s = 0.0
+        self.rejected_steps = 0
+
+    # ------------------------------------------------------------------ set-up
+    def setup(self):
+        """Extract and instantiate every FMU, identify rotor and bearings, plan the exchange."""
+        self._tmp = tempfile.TemporaryDirectory(prefix="frb_cosim_")
+        self.fmus = {name: FmuInstance(name, path, self._tmp.name, self.trace)
+                     for name, path in self.ssp.components.items()}
+        rotors = [f for f in self.fmus.values() if f.model_identifier == ROTOR_FMU]
+        if len(rotors) != 1:
+            raise ParameterError(f"{self.ssp_path}: the system needs exactly one {ROTOR_FMU} component, found "
+                                 f"{[f.name for f in rotors]}")
+        self.rotor = rotors[0]
+        names = [b.name for b in self.system.bearings]
+        found = sorted(f.name for f in self.fmus.values() if f.model_identifier == BEARING_FMU)
+        if sorted(names) != found:
+            raise ParameterError(f"{self.ssp_path}: the {BEARING_FMU} components {found} do not match the rotor "
+                                 f"system's bearings {names}")
+        self.bearings = [self.fmus[n] for n in names]
+        self._plan_exchange()
+        self.schema = RunupSchema.from_system(self.system)
+        self._rec_rotor = self.rotor.vr(["rotor_speed"] + [f"{n}_bearing.journal.{q}" for n in names for q in "xy"] +
+                                        [f"{d}.{q}" for d in self.schema.discs for q in "xy"])
+        self._rec_bearing = [b.vr(BEARING_RECORD) for b in self.bearings]
+        return self
+
+    def _plan_exchange(self):
+        """Group the SSP connections into two phases (rotor -> bearings, then bearings -> rotor, so that the
+        bearings' outputs are read after their inputs are set), one getReal per source and one setReal per
+        destination each, and the end-of-step links (bearings -> rotor after the bearings stepped)."""
+        groups, end = {}, {}
+        for s_el, s_c, e_el, e_c in self.ssp.connections:
+            if self.coupling == "force" and s_c.startswith(("stiffness", "damping")):
+                self.params.setdefault(e_el, {})[e_c] = ("Real", 0.0)  # no interface Jacobian at all
+                continue
+            if s_c.startswith(END_OF_STEP):
+                if self.coupling == "jacobian":
+                    if e_el != self.rotor.name:
+                        raise ParameterError(f"the staggered connection {s_el}.{s_c} -> {e_el}.{e_c} must end at "
+                                             "the rotor")
+                    end.setdefault(s_el, []).append((s_c, e_c))
+                continue
+            groups.setdefault((s_el, e_el), []).append((s_c, e_c))
+        if end:
+            self.params.setdefault(self.rotor.name, {})["force_interpolation"] = ("Boolean", True)
+        self._phases = [self._phase([(s, e, c) for (s, e), c in groups.items() if (s == self.rotor.name) == first])
+                        for first in (True, False)]
+        self._end_gets = [(self.fmus[s], self.fmus[s].vr([a for a, _ in c])) for s, c in end.items()]
+        self._end_dvr = self.rotor.vr([b for c in end.values() for _, b in c])
+
+    def _phase(self, links):
+        gets, dests, pos = {}, {}, 0
+        for src, dst, conns in links:
+            gets.setdefault(src, []).extend(self.fmus[src].vr([a for a, _ in conns]))
+        offsets = {}
+        for src in gets:
+            offsets[src] = pos
+            pos += len(gets[src])
+        seen = {src: 0 for src in gets}
+        for src, dst, conns in links:
+            d = dests.setdefault(dst, ([], []))
+            d[0].extend(self.fmus[dst].vr([b for _, b in conns]))
+            d[1].extend(range(offsets[src] + seen[src], offsets[src] + seen[src] + len(conns)))
+            seen[src] += len(conns)
+        return ([(self.fmus[s], v) for s, v in gets.items()], [(self.fmus[d], v, i) for d, (v, i) in dests.items()])
+
+    def initialize(self):
+        """setupExperiment, parameters (parameter set + overrides) in initialization mode, first exchange."""
+        for fmu in self.fmus.values():
+            fmu.call("setupExperiment", None, 0.0, None)
+            fmu.call("enterInitializationMode")
+            try:
+                fmu.set_parameters(self.params.get(fmu.name, {}))
+            except (FmiCallFailed, ParameterError):
+                raise
+            except Exception as exc:  # noqa: BLE001  (a value fmpy cannot convert)
+                raise CosimStopped(f"{fmu.name}: setting parameters failed: {exc}") from None
+            fmu.call("exitInitializationMode")
+        self.exchange()
+
+    # ------------------------------------------------------------------ exchange
+    def exchange(self):
+        """Pass all coupling values at the current communication point (two phases)."""
+        t0 = time.perf_counter()
+        try:
+            for gets, sets in self._phases:
+                vals = []
+                for src, svr in gets:
+                    v = src.call("getReal", svr)
+                    if not math.isfinite(sum(v)):
+                        names = [n for n, var in src.vars.items() if var.valueReference in svr]
+                        raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
+                    vals += v
+                for dst, dvr, idx in sets:
+                    dst.call("setReal", dvr, [vals[i] for i in idx])
+        finally:
+            self.fmi_time_s += time.perf_counter() - t0
+
+    def _pass_end_of_step(self):
+        vals = []
+        for src, svr in self._end_gets:
+            v = src.call("getReal", svr)
+            if not math.isfinite(sum(v)):
+                raise CosimStopped(f"{src.name}: published a non-finite end-of-step force")
+            vals += v
+        self.rotor.call("setReal", self._end_dvr, vals)
+
+    # ------------------------------------------------------------------ step
+    def _do_step(self, t, h):
+        """Bearings, end-of-step values, rotor, exchange. Returns None or (message, retryable)."""
+        t0 = time.perf_counter()
+        try:
+            for fmu in self.bearings:
+                fmu.call("doStep", t, h, True)
+            if self._end_gets:
+                self._pass_end_of_step()
+            self.rotor.call("doStep", t, h, True)
+        except FmiCallFailed as exc:
+            return str(exc).replace(" (see the FMU log above)", ""), exc.discarded, exc.fmu
+        except CosimStopped as exc:
+            return str(exc), True, None
+        finally:
+            self.fmi_time_s += time.perf_counter() - t0
+        try:  # the new journal states may already put a film at its wall: non-finite outputs
+            self.exchange()
+        except CosimStopped as exc:
+            return str(exc), True, None
+        return None
+
+    def step(self, t, H):
+        """Advance from ``t`` by ``H`` [s]; with rollback, rejected intervals are retried with halved steps.
+        Returns the new time. Raises :class:`CosimStopped` naming the FMU and the interval."""
+        t_target, h = t + H, H
+        while t < t_target - 1e-12 * H:
+            h = min(h, t_target - t)
+            states = self._get_states() if self.rollback else None
+            failure = self._do_step(t, h)
+            retry = (failure is not None and failure[1] and self.rollback and bool(states)
+                     and h > H / 2 ** self.max_halvings)
+            if states:
+                self._restore_and_free(states, restore=retry)
+            if retry:
+                h /= 2
+                self.rejected_steps += 1
+                self.exchange()
+                continue
+            if failure is not None:
+                msg, retryable, who = failure
+                tried = f" (after {self.max_halvings} step halvings with rollback)" if retryable and self.rollback else ""
+                raise CosimStopped(f"{msg} in the interval t = {t:.6g} s + {h:.3g} s{tried}" +
+                                   ("; see the FMU log above" if who else ""))
+            t += h
+        return t_target
+
+    def _get_states(self):
+        t0 = time.perf_counter()
+        states = {n: f.call("getFMUstate") for n, f in self.fmus.items() if f.can_state}
+        self.fmi_time_s += time.perf_counter() - t0
+        return states
+
+    def _restore_and_free(self, states, restore):
+        for n, st in states.items():
+            if restore:
+                self.fmus[n].call("setFMUstate", st)
+            self.fmus[n].call("freeFMUstate", st)
+
+    # ------------------------------------------------------------------ record
+    def sample(self, t):
+        """The recorder row at time ``t`` from the rotor's and bearings' outputs."""
+        r = self.rotor.call("getReal", self._rec_rotor)
+        b = np.array([f.call("getReal", v) for f, v in zip(self.bearings, self._rec_bearing)])
+        nb, nd = len(self.bearings), len(self.schema.discs)
+        journal = np.reshape(r[1:1 + 2 * nb], (nb, 2))
+        discs = np.reshape(r[1 + 2 * nb:1 + 2 * nb + 2 * nd], (nd, 2))
+        return self.schema.row(t, rad_s_to_rpm(r[0]), b[:, 0], journal, b[:, 1:3], b[:, 3:5], discs)
+
+    def meta(self, output_rate_hz):
+        return {"ssp": str(self.ssp_path), "parameter_set": self.parameter_set, "step_size_s": self.step_size,
+                "stop_time_s": self.stop_time, "output_rate_hz": output_rate_hz, "system": self.system.to_dict(),
+                "coupling": self.coupling, "rollback": self.rollback, "units": "SI; speed in rpm",
+                "master": "frbmodel.cosim (fmpy FMU2Slave, staggered interface-Jacobian coupling)"}
+
+    # ------------------------------------------------------------------ run / close
+    def run(self, out_dir=None, progress=False, output_rate_hz=20e3):
+        """Set up, initialize and step to the stop time, recording every n-th communication point
+        (n = round(1 / (H · output_rate_hz)), at least 1). Returns a :class:`RunupResult`; raises
+        :class:`CosimStopped` (with ``.result``) when an FMU fails."""
+        from tqdm.auto import tqdm
+
+        H, T = self.step_size, self.stop_time
+        every = max(1, int(round(1.0 / (H * output_rate_hz))))
+        n_steps = int(round(T / H))
+        t_wall = time.perf_counter()
+        status, message = "finished", ""
+        with Recorder(RunupSchema.from_system(self.system), n_steps // every + 2, out_dir,
+                      self.meta(1.0 / (H * every))) as rec:
+            try:
+                if not self.fmus:
+                    self.setup()
+                self.initialize()
+                rec.append(self.sample(0.0))
+                t = 0.0
+                with tqdm(total=T, disable=not progress, desc="cosim", leave=False,
+                          bar_format="{desc}: {n:.4f}/{total:g} s simulated |{bar}| {elapsed}<{remaining} {postfix}") as bar:
+                    for k in range(1, n_steps + 1):
+                        t = self.step(t, H)
+                        if k % every == 0:
+                            rec.append(self.sample(t))
+                        if k % 1000 == 0:
+                            bar.update(t - bar.n)
+                            bar.set_postfix_str(f"{rec.last[1]:.0f} rpm", refresh=False)
+            except CosimStopped as exc:
+                status, message = "stopped", str(exc)
+            finally:
+                self.close()
+            wall = time.perf_counter() - t_wall
+            if progress:
+                sys.stderr.write(f"cosim: {status} after {wall:.1f} s wall "
+                                 f"({self.fmi_time_s / max(wall, 1e-9):.0%} in FMI calls)\n")
+            result = rec.close(status, message, wall_time_s=wall, fmi_time_s=self.fmi_time_s,
+                               rejected_steps=self.rejected_steps)
+        if status != "finished":
+            raise CosimStopped(message, result)
+        return result
+
+    def close(self):
+        """Terminate and free every FMU instance and delete the extracted files."""
+        for fmu in self.fmus.values():
+            fmu.free()
+        self.fmus = {}
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+
+    def __enter__(self):
+        return self.setup()
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
+def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_dir=None, progress=False,
+               rollback=False, output_rate_hz=20e3, overrides=None, max_halvings=6, coupling="jacobian",
+               trace=None):
+    """Run the SSP system with frbmodel's master (see :class:`Master` for the parameters).
+
+    ``out_dir``: stream ``runup.csv`` / ``runup.json`` there; ``output_rate_hz``: sampling rate of the recorded
+    results [Hz] (default 20 kHz, as the monolithic run-up); ``progress``: progress bar on stderr.
 
     Returns
     -------
-    RunupResult (``meta`` has wall time, FMI call time, steps).
+    RunupResult
+        ``meta`` has the wall time, the time inside FMI calls and the number of rejected steps.
 
     Raises
     ------
     CosimStopped
-        An FMU failed; the message names it and its log; ``.result`` holds the samples so far.
+        An FMU failed; the message names it; ``.result`` holds the samples so far (also on disk).
     """
-    sys_ = read_ssp(ssp)
-    params = sys_.parameters(parameter_set)
-    for comp, ov in (overrides or {}).items():
-        params.setdefault(comp, {}).update(ov)
-    stop_time = float(stop_time if stop_time is not None else (sys_.stop_time or 1.0))
-    H = float(step_size if step_size is not None else (sys_.step_size or 2e-5))
-    if not (H > 0 and stop_time > 0 and math.isfinite(H) and math.isfinite(stop_time)):
-        raise ParameterError(f"step size = {H!r} s and stop time = {stop_time!r} s must be finite and > 0")
-    output_every = max(1, int(round(1.0 / (H * output_rate_hz))))
-    tmp = tempfile.mkdtemp(prefix="frb_cosim_")
-    fmus = {name: _Fmu(name, path, tmp) for name, path in sys_.components.items()}
-    rotor = fmus["rotor"]
-    bearings = [fmus[n] for n in BEARING_NAMES]
-    # connections grouped: rotor -> bearings (pass 1), bearings -> rotor (pass 2, after the bearings' inputs)
-    if coupling not in ("jacobian", "force"):
-        raise ParameterError(f"coupling = {coupling!r} is unknown; valid: 'jacobian', 'force'")
-    groups, end_groups = {}, {}
-    for s_el, s_c, e_el, e_c in sys_.connections:
-        if coupling == "force" and (s_c.startswith("stiffness") or s_c.startswith("damping")):
-            params.setdefault(e_el, {})[e_c] = ("Real", 0.0)  # no interface Jacobian at all
-            continue
-        if s_c.startswith(("force_end", "journal_accel")):  # staggered: passed after the bearings have stepped
-            if coupling == "jacobian":
-                end_groups.setdefault((s_el, e_el), []).append((s_c, e_c))
-            continue
-        groups.setdefault((s_el, e_el), []).append((s_c, e_c))
-    if end_groups:
-        params.setdefault("rotor", {})["force_interpolation"] = ("Boolean", True)
-    order = sorted(groups, key=lambda k: 0 if k[0] == "rotor" else 1)
-    links = [(fmus[s], fmus[e], fmus[s].vr([c[0] for c in groups[(s, e)]]), fmus[e].vr([c[1] for c in groups[(s, e)]]))
-             for s, e in order]
-    end_links = [(fmus[s], fmus[e], fmus[s].vr([c[0] for c in g]), fmus[e].vr([c[1] for c in g]))
-                 for (s, e), g in end_groups.items()]
-    if any(e != "rotor" for _, e in end_groups):
-        raise ParameterError("the staggered connections (force_end, journal_accel) must end at the rotor")
-    end_src = [(src, svr) for src, _, svr, _ in end_links]  # one getReal per bearing, one setReal on the rotor
-    end_dvr = [v for *_, dvr in end_links for v in dvr]
-    # two phases (rotor -> bearings, then bearings -> rotor, so that the bearings' outputs are read after their
-    # inputs are set); per phase one getReal per source and one setReal per destination
-    phases = []
-    for from_rotor in (True, False):
-        mine = [lk for lk in links if (lk[0] is rotor) == from_rotor]
-        srcs = {}
-        for src, dst, svr, dvr in mine:
-            srcs.setdefault(src, []).append((dst, svr, dvr))
-        gets = [(src, [v for _, svr, _ in ls for v in svr]) for src, ls in srcs.items()]
-        dests = {}
-        pos = 0
-        for src, ls in srcs.items():
-            for dst, svr, dvr in ls:
-                d = dests.setdefault(dst, ([], []))
-                d[0].extend(dvr)
-                d[1].extend(range(pos, pos + len(svr)))
-                pos += len(svr)
-        phases.append((gets, [(dst, dvr, idx) for dst, (dvr, idx) in dests.items()]))
-    # recorded variables
-    rec_rotor = rotor.vr(["rotor_speed"] + [f"{b}_bearing.journal.{q}" for b in BEARING_NAMES for q in "xy"] +
-                         [f"{w}.{q}" for w in ("turbine_wheel", "compressor_wheel") for q in "xy"])
-    rec_bear = [b.vr(["ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer"]) for b in bearings]
-    columns = _columns(["turbine_wheel", "compressor_wheel"])
-    meta = {"ssp": str(ssp), "parameter_set": parameter_set, "step_size_s": H, "stop_time_s": stop_time,
-            "output_rate_hz": 1.0 / (H * output_every),
-            "system": system_from_parameters(params).to_dict(),
-            "coupling": coupling,
-            "master": "frbmodel.cosim (fmpy FMU2Slave, staggered interface-Jacobian coupling)", "rollback": rollback,
-            "units": "SI; speed in rpm"}
-    writer = _Writer(out_dir, columns, meta) if out_dir is not None else None
-    n_steps = int(round(stop_time / H))
-    rows = np.full((n_steps // output_every + 2, len(columns)), np.nan)
-    t_fmi = 0.0
-
-    def exchange():
-        nonlocal t_fmi
-        t0 = time.perf_counter()
-        for gets, sets in phases:
-            vals = []
-            for src, svr in gets:
-                v = _call(src, "getReal", src.slave.getReal, svr)
-                if not math.isfinite(sum(v)):
-                    names = [n for n, var in src.vars.items() if var.valueReference in svr]
-                    raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
-                vals += v
-            for dst, dvr, idx in sets:
-                _call(dst, "setReal", dst.slave.setReal, dvr, [vals[i] for i in idx])
-        t_fmi += time.perf_counter() - t0
-
-    def record(k, t):
-        r = rotor.slave.getReal(rec_rotor)
-        w = r[0]
-        b = [fmu.slave.getReal(v) for fmu, v in zip(bearings, rec_bear)]
-        row = [t, w * 30 / math.pi, b[0][0], b[0][0] / w if w else 0.0, b[1][0], b[1][0] / w if w else 0.0,
-               r[1], r[2], r[3], r[4], b[0][1], b[0][2], b[1][1], b[1][2], b[0][3], b[0][4], b[1][3], b[1][4],
-               r[5], r[6], r[7], r[8]]
-        rows[k] = row
-
-    from fmpy.fmi1 import FMICallException
-
-    status, message = "finished", ""
-    n_rejected = 0
-    k_rec = 0
-    last_flush = 0
-    t_wall = time.perf_counter()
-    try:
-        for fmu in fmus.values():
-            _call(fmu, "setupExperiment", fmu.slave.setupExperiment, None, 0.0, None)
-            _call(fmu, "enterInitializationMode", fmu.slave.enterInitializationMode)
-            try:
-                fmu.set_parameters(params.get(fmu.name, {}))
-            except FRBError:
-                raise
-            except Exception as exc:  # noqa: BLE001
-                raise CosimStopped(f"{fmu.name}: setting parameters failed: {exc}") from None
-            _call(fmu, "exitInitializationMode", fmu.slave.exitInitializationMode)
-        exchange()  # links are ordered rotor -> bearings first: bearing forces are read after their inputs are set
-        record(0, 0.0)
-        k_rec = 1
-        t = 0.0
-        last_print = t_wall
-        for k in range(1, n_steps + 1):
-            t_target = k * H
-            h = H
-            while t < t_target - 1e-12 * H:
-                h = min(h, t_target - t)
-                states = None
-                if rollback:
-                    t0 = time.perf_counter()
-                    states = {n: f.slave.getFMUstate() for n, f in fmus.items() if f.can_state}
-                    t_fmi += time.perf_counter() - t0
-                failure = None  # (FMU, what happened) of a rejected interval
-                t0 = time.perf_counter()
-                # staggered: bearings first (journal extrapolated), their end-of-step force to the rotor, then the
-                # rotor with the force interpolated over the step
-                for fmu in (*bearings, rotor):
-                    if fmu is rotor and end_links:
-                        vals = []
-                        for src, svr in end_src:
-                            v = _call(src, "getReal", src.slave.getReal, svr)
-                            if not math.isfinite(sum(v)):
-                                failure = (src, "published a non-finite end-of-step force")
-                                break
-                            vals += v
-                        if failure:
-                            break
-                        _call(rotor, "setReal", rotor.slave.setReal, end_dvr, vals)
-                    try:
-                        fmu.slave.doStep(t, h)
-                    except FMICallException as exc:
-                        st = int(exc.status)
-                        failure = (fmu, "doStep returned status " +
-                                   ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"][st], st)
-                        break
-                t_fmi += time.perf_counter() - t0
-                if failure is None:
-                    try:  # the new journal states may already put a film at its wall: non-finite outputs
-                        exchange()
-                    except CosimStopped as exc:
-                        failure = (None, str(exc))
-                retryable = failure is not None and (len(failure) < 3 or failure[2] == 2)  # Discard, non-finite
-                retry = retryable and rollback and states and h > H / 2 ** max_halvings
-                if retry:
-                    for n, f in fmus.items():
-                        if n in states:
-                            f.slave.setFMUstate(states[n])
-                if states:
-                    for n, f in fmus.items():
-                        if n in states:
-                            f.slave.freeFMUstate(states[n])
-                if retry:
-                    h /= 2
-                    n_rejected += 1
-                    exchange()
-                    continue
-                if failure is not None:
-                    who = f"{failure[0].name}: " if failure[0] is not None else ""
-                    tried = f" (after {max_halvings} step halvings with rollback)" if retryable and rollback else ""
-                    raise CosimStopped(f"{who}{failure[1]} in the interval t = {t:.6g} s + {h:.3g} s{tried}" +
-                                       ("; see the FMU log above" if failure[0] is not None else ""))
-                t += h
-            if k % output_every == 0:
-                record(k_rec, t)
-                k_rec += 1
-            now = time.perf_counter()
-            if writer is not None and k_rec - last_flush >= 2000:
-                writer.append(rows[last_flush:k_rec])
-                last_flush = k_rec
-            if progress and now - last_print > 1.0:
-                last_print = now
-                el = now - t_wall
-                frac = t / stop_time
-                sys.stderr.write(f"\rcosim: t = {t:.4f}/{stop_time:g} s  {rows[k_rec - 1, 1]:8.0f} rpm  wall {el:6.1f} s  "
-                                 f"ETA {el / frac * (1 - frac):6.1f} s ")
-                sys.stderr.flush()
-    except CosimStopped as exc:
-        status, message = "stopped", str(exc)
-    finally:
-        wall = time.perf_counter() - t_wall
-        for fmu in fmus.values():
-            try:
-                fmu.slave.terminate()
-                fmu.slave.freeInstance()
-            except Exception:  # noqa: BLE001  (an FMU that already failed may refuse)
-                pass
-        shutil.rmtree(tmp, ignore_errors=True)
-    if progress:
-        sys.stderr.write(f"\rcosim: {status} after {wall:.1f} s wall ({t_fmi / max(wall, 1e-9):.0%} in FMI calls)"
-                         f"{' ' * 30}\n")
-    rows = rows[:k_rec]
-    meta.update({"wall_time_s": wall, "fmi_time_s": t_fmi, "samples": int(k_rec), "rejected_steps": n_rejected})
-    if writer is not None:
-        writer.append(rows[last_flush if k_rec else 0:] if k_rec else rows[:0])
-        writer.write_meta(status, message)
-    result = _result_from_rows(rows, columns, ["turbine_wheel", "compressor_wheel"], status, message, meta)
-    if status != "finished":
-        raise CosimStopped(message, result)
-    return result
+    master = Master(ssp, parameter_set, stop_time, step_size, overrides, coupling, rollback, max_halvings, trace)
+    return master.run(out_dir, progress, output_rate_hz)
 
 
-__all__ = ["cosimulate", "CosimStopped", "RunupResult", "FILM_LABELS"]
+__all__ = ["Master", "cosimulate", "CosimStopped", "RunupResult", "operating_point_overrides",
+           "system_from_parameters"]
 
 
 def operating_point_overrides(system, speed_rpm, end_rpm=None, ramp_time=1.0, method="J", perturbation=0.0):
@@ -352,12 +371,11 @@ def operating_point_overrides(system, speed_rpm, end_rpm=None, ramp_time=1.0, me
     from ..equilibrium import equilibrium
 
     eq = equilibrium(system, method, speed_rpm)
-    w0 = speed_rpm * math.pi / 30
-    w1 = (end_rpm if end_rpm is not None else speed_rpm) * math.pi / 30
+    w0 = rpm_to_rad_s(speed_rpm)
+    w1 = rpm_to_rad_s(end_rpm if end_rpm is not None else speed_rpm)
     ov = {"rotor": {"speed_start": ("Real", w0), "speed_end": ("Real", w1), "ramp_time": ("Real", float(ramp_time))}}
-    for name, prefix, b, e in zip(BEARING_NAMES, ("turbine_bearing", "compressor_bearing"), system.bearings,
-                                  eq.bearings):
-        ci, co = b.inner.clearance, b.outer.clearance
+    for b, e in zip(system.bearings, eq.bearings):
+        name, prefix, ci, co = b.name, f"{b.name}_bearing", b.inner.clearance, b.outer.clearance
         ov["rotor"][f"{prefix}.journal_x0"] = ("Real", float(e.journal[0] + perturbation * (ci + co)))
         ov["rotor"][f"{prefix}.journal_y0"] = ("Real", float(e.journal[1]))
         ov[name] = {"ring.x0": ("Real", float(e.ring[0] + perturbation * co)), "ring.y0": ("Real", float(e.ring[1])),

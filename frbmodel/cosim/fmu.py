@@ -1,0 +1,104 @@
+"""One FMU instance of a co-simulation and the one place through which every FMI call goes.
+
+:meth:`FmuInstance.call` calls an fmpy ``FMU2Slave`` function, checks the returned status (fmpy raises for
+Discard, Error and Fatal) and, with a ``trace`` callable, logs each call with its arguments and status — the
+``--trace-fmi`` option of ``frb cosim`` costs nothing when it is off.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import CosimStopped, ParameterError
+
+#: fmi2Status names by value
+STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
+
+
+class FmiCallFailed(CosimStopped):
+    """An FMI function returned Discard, Error or Fatal. ``.fmu`` (instance name), ``.function``, ``.status``
+    (fmi2Status value; 2 = Discard, the only one a master may retry after a rollback)."""
+
+    def __init__(self, fmu, function, status):
+        super().__init__(f"{fmu}: {function} returned status {STATUS[status] if 0 <= status < 6 else status} "
+                         "(see the FMU log above)")
+        self.fmu, self.function, self.status = fmu, function, status
+
+    @property
+    def discarded(self):
+        return self.status == 2
+
+
+class FmuInstance:
+    """An instantiated FMU of the system.
+
+    Parameters
+    ----------
+    name : str
+        Instance name (the SSP component name).
+    path : path
+        The ``.fmu`` archive.
+    unzip_root : path
+        Folder under which the FMU is extracted (``<unzip_root>/<name>``).
+    trace : callable, optional
+        ``trace(text)`` receives one line per FMI call: ``"<instance>.<function>(<args>) -> <status>"``.
+    """
+
+    def __init__(self, name, path, unzip_root, trace=None):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.name = name
+        self.trace = trace
+        self.md = read_model_description(str(path))
+        self.model_identifier = self.md.coSimulation.modelIdentifier
+        self.dir = extract(str(path), unzipdir=str(Path(unzip_root) / name))
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir, modelIdentifier=self.model_identifier,
+                               instanceName=name)
+        self.can_state = bool(self.md.coSimulation.canGetAndSetFMUstate)
+        self.call("instantiate", True)
+
+    def call(self, function, *args):
+        """``slave.<function>(*args)`` with status check (and trace). Raises :class:`FmiCallFailed`."""
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            out = getattr(self.slave, function)(*args)
+        except FMICallException as exc:
+            if self.trace is not None:
+                self.trace(f"{self.name}.{function}{_brief(args)} -> {STATUS[int(exc.status)]}")
+            raise FmiCallFailed(self.name, function, int(exc.status)) from None
+        if self.trace is not None:
+            self.trace(f"{self.name}.{function}{_brief(args)} -> OK" + ("" if out is None else f" {_brief(out)}"))
+        return out
+
+    def vr(self, names):
+        """Value references of the variables ``names``; a ParameterError names a missing one."""
+        try:
+            return [self.vars[n].valueReference for n in names]
+        except KeyError as exc:
+            raise ParameterError(f"FMU {self.name!r} ({self.model_identifier}) has no variable {exc.args[0]!r}") from None
+
+    def has(self, name):
+        return name in self.vars
+
+    def set_parameters(self, params):
+        """Set ``{name: (type, value)}`` (types Real, Integer, Boolean, String as in an .ssv file)."""
+        setter = {"Real": "setReal", "Integer": "setInteger", "Boolean": "setBoolean", "String": "setString"}
+        for name, (typ, val) in params.items():
+            if typ not in setter:
+                raise ParameterError(f"{self.name}.{name}: parameter type {typ!r} is unknown; valid: {sorted(setter)}")
+            self.call(setter[typ], self.vr([name]), [val])
+
+    def free(self):
+        """Terminate and free the instance (ignoring the refusal of an instance that already failed)."""
+        for function in ("terminate", "freeInstance"):
+            try:
+                self.call(function)
+            except Exception:  # noqa: BLE001  (a failed FMU may refuse terminate; freeInstance must still run)
+                pass
+
+
+def _brief(x, limit=120):
+    text = repr(x)
+    return text if len(text) <= limit else text[:limit] + "...]"

@@ -1,0 +1,323 @@
+"""Named-column, streamed time-series results of run-ups and co-simulations.
+
+The column schema follows the system: one group of columns per bearing (ring speed, RSR, journal and ring
+position, the eccentricity ratio of its inner and outer film) and per disc (its displacement). The monolithic
+run-up (:func:`frbmodel.runup.runup`) and the co-simulation master (:mod:`frbmodel.cosim.master`) both fill rows by
+name through :meth:`RunupSchema.row` and stream them with a :class:`Recorder`, so their files are read back by the
+same :meth:`RunupResult.load`.
+
+>>> schema = RunupSchema(bearings=("front", "rear"), discs=("impeller",))
+>>> schema.columns[:4]
+['time [s]', 'speed [rpm]', 'ring speed front [rad/s]', 'RSR front [-]']
+>>> schema.film_labels
+('front inner', 'front outer', 'rear inner', 'rear outer')
+>>> RunupSchema.from_columns(schema.columns) == schema
+True
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ParameterError
+from .units import RPM
+
+FILMS = ("inner", "outer")
+
+#: run status values written to ``runup.json``
+STATUSES = ("running", "finished", "stopped", "interrupted")
+
+
+@dataclass(frozen=True)
+class RunupSchema:
+    """Column layout of a run-up result, derived from the system's bearing and disc names.
+
+    Parameters
+    ----------
+    bearings : tuple of str
+        Bearing names in the system's order (e.g. ``("turbine", "compressor")``).
+    discs : tuple of str
+        Disc names whose displacement is recorded (e.g. ``("turbine_wheel", "compressor_wheel")``).
+    """
+
+    bearings: tuple
+    discs: tuple
+
+    @classmethod
+    def from_system(cls, system):
+        """Schema of a :class:`~frbmodel.parameters.Turbocharger`: its bearings and the rotor's discs."""
+        return cls(tuple(b.name for b in system.bearings), tuple(d.name for d in system.rotor.discs))
+
+    @classmethod
+    def from_columns(cls, columns):
+        """Schema read back from a CSV header (inverse of :attr:`columns`).
+
+        Raises
+        ------
+        ParameterError
+            If the header lacks the time/speed columns or a bearing's column group is incomplete.
+        """
+        columns = list(columns)
+        if columns[:2] != ["time [s]", "speed [rpm]"]:
+            raise ParameterError(f"not a run-up result: the first columns are {columns[:2]}, expected "
+                                 "['time [s]', 'speed [rpm]']")
+        bearings = tuple(c[len("ring speed "):-len(" [rad/s]")] for c in columns
+                         if c.startswith("ring speed ") and c.endswith(" [rad/s]"))
+        taken = {c for b in bearings for c in cls._bearing_columns(b)} | {"time [s]", "speed [rpm]"}
+        missing = [c for b in bearings for c in cls._bearing_columns(b) if c not in columns]
+        if missing:
+            raise ParameterError(f"run-up result is missing the columns {missing}")
+        discs = tuple(c[:-len(" x [m]")] for c in columns if c.endswith(" x [m]") and c not in taken)
+        return cls(bearings, discs)
+
+    @staticmethod
+    def _bearing_columns(b):
+        return [f"ring speed {b} [rad/s]", f"RSR {b} [-]", f"journal {b} x [m]", f"journal {b} y [m]",
+                f"ring {b} x [m]", f"ring {b} y [m]", f"eps {b} inner [-]", f"eps {b} outer [-]"]
+
+    @property
+    def film_labels(self):
+        """``"<bearing> inner"``, ``"<bearing> outer"`` per bearing, in column order."""
+        return tuple(f"{b} {f}" for b in self.bearings for f in FILMS)
+
+    @property
+    def columns(self):
+        """Column names with units (one group per bearing, then x/y per disc)."""
+        cols = ["time [s]", "speed [rpm]"]
+        for b in self.bearings:
+            cols += [f"ring speed {b} [rad/s]", f"RSR {b} [-]"]
+        for kind in ("journal", "ring"):
+            cols += [f"{kind} {b} {q} [m]" for b in self.bearings for q in "xy"]
+        cols += [f"eps {lab} [-]" for lab in self.film_labels]
+        cols += [f"{d} {q} [m]" for d in self.discs for q in "xy"]
+        return cols
+
+    def row(self, time_s, speed_rpm, ring_speed, journal, ring, eps, discs):
+        """One row by name: ``ring_speed`` (nb,) [rad/s]; ``journal``, ``ring`` (nb, 2) [m] relative to the housing;
+        ``eps`` (nb, 2) inner/outer film eccentricity ratios; ``discs`` (nd, 2) disc displacements [m].
+        The RSR is ring speed / rotor speed (NaN at zero rotor speed)."""
+        nb, nd = len(self.bearings), len(self.discs)
+        ring_speed = np.asarray(ring_speed, dtype=float).reshape(nb)
+        omega = speed_rpm * RPM
+        rsr = ring_speed / omega if omega != 0.0 else np.full(nb, math.nan)
+        return np.concatenate([[time_s, speed_rpm], np.column_stack([ring_speed, rsr]).ravel(),
+                               np.asarray(journal, dtype=float).reshape(2 * nb),
+                               np.asarray(ring, dtype=float).reshape(2 * nb),
+                               np.asarray(eps, dtype=float).reshape(2 * nb),
+                               np.asarray(discs, dtype=float).reshape(2 * nd)])
+
+    def eps_slice(self):
+        """Slice of the eccentricity columns in a row."""
+        start = 2 + 6 * len(self.bearings)
+        return slice(start, start + 2 * len(self.bearings))
+
+
+class Recorder:
+    """Collects rows of a :class:`RunupSchema` in memory and streams them to ``<out_dir>/runup.csv`` (header with
+    units) with the metadata and status in ``runup.json``.
+
+    Use as a context manager: leaving the block by an exception marks the run ``"interrupted"`` (Ctrl-C,
+    SIGTERM turned into an exception) or ``"stopped"`` and flushes what was recorded, so nothing computed is lost.
+
+    Parameters
+    ----------
+    schema : RunupSchema
+    capacity : int
+        Number of rows expected (grows if exceeded).
+    out_dir : path, optional
+        Folder to stream to (created); None keeps the rows in memory only.
+    meta : dict, optional
+        Metadata written to ``runup.json`` (status and message are added).
+    flush_rows : int
+        Rows buffered between two appends to the CSV.
+
+    Examples
+    --------
+    >>> rec = Recorder(RunupSchema(("b",), ("d",)), capacity=2)
+    >>> rec.append(rec.schema.row(0.0, 1000.0, [50.0], [[0, 0]], [[0, 0]], [[0.1, 0.2]], [[1e-6, 0]]))
+    >>> rec.close("finished").eccentricity.tolist()
+    [[0.1, 0.2]]
+    """
+
+    def __init__(self, schema, capacity=1024, out_dir=None, meta=None, flush_rows=2000):
+        self.schema = schema
+        self.columns = schema.columns
+        self.rows = np.full((max(int(capacity), 1), len(self.columns)), np.nan)
+        self.n = 0
+        self.flushed = 0
+        self.flush_rows = int(flush_rows)
+        self.meta = dict(meta or {})
+        self.status = "running"
+        self.dir = None if out_dir is None else Path(out_dir)
+        if self.dir is not None:
+            self.dir.mkdir(parents=True, exist_ok=True)
+            self.csv = self.dir / "runup.csv"
+            self.json = self.dir / "runup.json"
+            with open(self.csv, "w") as fh:
+                fh.write(",".join(self.columns) + "\n")
+            self._write_meta("running", "")
+
+    def append(self, row):
+        """Add one row (from :meth:`RunupSchema.row`); streams every ``flush_rows`` rows."""
+        if self.n == self.rows.shape[0]:
+            self.rows = np.vstack([self.rows, np.full_like(self.rows, np.nan)])
+        self.rows[self.n] = row
+        self.n += 1
+        if self.dir is not None and self.n - self.flushed >= self.flush_rows:
+            self.flush()
+
+    @property
+    def last(self):
+        """The last recorded row (or None)."""
+        return self.rows[self.n - 1] if self.n else None
+
+    def flush(self):
+        """Append the rows not yet on disk to the CSV."""
+        if self.dir is None or self.n == self.flushed:
+            return
+        with open(self.csv, "a") as fh:
+            np.savetxt(fh, self.rows[self.flushed:self.n], delimiter=",", fmt="%.10g")
+        self.flushed = self.n
+
+    def _write_meta(self, status, message):
+        self.meta.update({"status": status, "message": message})
+        tmp = self.json.with_suffix(".json.tmp")
+        tmp.write_text(json.dumps(self.meta, indent=2, default=str))
+        os.replace(tmp, self.json)
+
+    def close(self, status, message="", **meta):
+        """Flush, write the final status (one of :data:`STATUSES`) and return the :class:`RunupResult`."""
+        if status not in STATUSES:
+            raise ParameterError(f"status = {status!r} is unknown; valid: {STATUSES}")
+        self.status = status
+        self.meta.update(meta, samples=int(self.n))
+        if self.dir is not None:
+            self.flush()
+            self._write_meta(status, message)
+        else:
+            self.meta.update({"status": status, "message": message})
+        return self.result()
+
+    def result(self):
+        """The recorded rows as a :class:`RunupResult`."""
+        return RunupResult.from_rows(self.schema, self.rows[:self.n], self.meta)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is not None and self.status == "running":
+            interrupted = issubclass(exc_type, (KeyboardInterrupt, SystemExit))
+            t = self.last[0] if self.n else 0.0
+            self.close("interrupted" if interrupted else "stopped",
+                       f"{'interrupted' if interrupted else exc_type.__name__ + ': ' + str(exc)} at t = {t:.6g} s; "
+                       "results up to there are kept", time_reached_s=float(t))
+        return False
+
+
+@dataclass
+class RunupResult:
+    """Sampled result of a run-up or co-simulation (SI units; speeds also in rpm).
+
+    Attributes
+    ----------
+    time : (n,) [s]
+    speed_rpm : (n,) rotor speed [rpm]
+    ring_speed : (n, nb) ring spin speeds [rad/s], bearings in the system's order
+    journal, ring : dict bearing name -> (n, 2) positions [m] relative to the housing
+    eccentricity : (n, 2 nb) ε of the films, in the order of :attr:`film_labels`
+    displacement : dict disc name -> (n, 2) [m]
+    status : "finished" | "stopped" | "interrupted"
+    message : str
+    meta : dict
+        Metadata of the run (system, tolerances, wall time, ...), as in ``runup.json``.
+    """
+
+    time: np.ndarray
+    speed_rpm: np.ndarray
+    ring_speed: np.ndarray
+    journal: dict
+    ring: dict
+    eccentricity: np.ndarray
+    displacement: dict
+    status: str = "finished"
+    message: str = ""
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def schema(self):
+        """The :class:`RunupSchema` of this result (bearings and discs it holds)."""
+        return RunupSchema(tuple(self.journal), tuple(self.displacement))
+
+    @property
+    def bearing_names(self):
+        return tuple(self.journal)
+
+    @property
+    def film_labels(self):
+        """``"<bearing> inner"``, ``"<bearing> outer"`` per bearing: the columns of :attr:`eccentricity`."""
+        return self.schema.film_labels
+
+    @property
+    def ring_speed_ratio(self):
+        """Ring speed / rotor speed (n, nb) [-]."""
+        return self.ring_speed / (self.speed_rpm * RPM)[:, None]
+
+    def to_dataframe(self):
+        """One row per sample; units in the column names (the layout of ``runup.csv``)."""
+        import pandas as pd
+
+        return pd.DataFrame(self._rows(), columns=self.schema.columns)
+
+    def _rows(self):
+        nb = len(self.journal)
+        cols = [self.time, self.speed_rpm]
+        for i in range(nb):
+            cols += [self.ring_speed[:, i], self.ring_speed_ratio[:, i]]
+        for d in (self.journal, self.ring):
+            cols += [a[:, k] for a in d.values() for k in range(2)]
+        cols += [self.eccentricity[:, k] for k in range(2 * nb)]
+        cols += [a[:, k] for a in self.displacement.values() for k in range(2)]
+        return np.column_stack(cols)
+
+    @classmethod
+    def load(cls, path):
+        """Read a result written by :func:`frbmodel.runup` or :func:`frbmodel.cosim.cosimulate` (``runup.csv`` +
+        ``runup.json`` in a folder, or the CSV itself)."""
+        import pandas as pd
+
+        path = Path(path)
+        csv = path / "runup.csv" if path.is_dir() else path
+        if not csv.is_file():
+            raise ParameterError(f"{csv}: no run-up result there (runup.csv not found)")
+        meta_p = csv.with_suffix(".json")
+        meta = json.loads(meta_p.read_text()) if meta_p.exists() else {}
+        return cls.from_dataframe(pd.read_csv(csv), meta)
+
+    @classmethod
+    def from_dataframe(cls, df, meta=None):
+        """Result from a table with the columns of :attr:`RunupSchema.columns`."""
+        return cls.from_rows(RunupSchema.from_columns(df.columns), df.to_numpy(dtype=float), meta)
+
+    @classmethod
+    def from_rows(cls, schema, rows, meta=None):
+        """Result from rows laid out by ``schema`` (see :meth:`RunupSchema.row`)."""
+        meta = dict(meta or {})
+        rows = np.asarray(rows, dtype=float).reshape(-1, len(schema.columns))
+        nb = len(schema.bearings)
+        c = 2 + 2 * nb
+        ring_speed = rows[:, 2:c:2]
+        journal = {b: rows[:, c + 2 * i:c + 2 * i + 2] for i, b in enumerate(schema.bearings)}
+        c += 2 * nb
+        ring = {b: rows[:, c + 2 * i:c + 2 * i + 2] for i, b in enumerate(schema.bearings)}
+        c += 2 * nb
+        ecc = rows[:, c:c + 2 * nb]
+        c += 2 * nb
+        disp = {d: rows[:, c + 2 * i:c + 2 * i + 2] for i, d in enumerate(schema.discs)}
+        return cls(rows[:, 0], rows[:, 1], ring_speed, journal, ring, ecc, disp, meta.get("status", "finished"),
+                   meta.get("message", ""), meta)
