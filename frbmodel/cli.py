@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import FRBError, ParameterError
+from .errors import FRBError, ParameterError, check_positive
 
 
 class Progress:
@@ -60,6 +60,15 @@ def load_from_args(args):
     return tc
 
 
+def _refuse_with_fmu(args, names):
+    """Options that cannot apply to an FMU-based command: the FMUs take their system from the SSP parameter set."""
+    given = [f"--{n.replace('_', '-')}" for n in names if getattr(args, n, None) not in (None, False)]
+    if given:
+        raise ParameterError(f"{', '.join(given)} cannot apply with an SSP: the FMUs take the system from the SSP "
+                             f"parameter set (--parameter-set, now {args.parameter_set!r}); choose a parameter set or "
+                             "write your own (frb system + frb build-fmus)")
+
+
 def _system_args(p):
     p.add_argument("--outer-clearance", type=float, default=None, metavar="M",
                    help="radial clearance of both outer films [m] (default 36e-6)")
@@ -72,9 +81,12 @@ def cmd_campbell(args):
     from .campbell import campbell
 
     speeds = parse_speeds(args.speeds)
+    fmax = None if args.fmax is None else check_positive("--fmax", args.fmax, "Hz")
+    out = writable_dir(args.out)
     if args.from_fmu:
         from .cosim.linearize import campbell_from_fmu
 
+        _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky"))
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set,
                                progress=Progress(f"campbell {args.method} from FMUs"))
     else:
@@ -82,8 +94,7 @@ def cmd_campbell(args):
         kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
         cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=Progress(f"campbell {args.method}"),
                       **kw)
-    out = Path(args.out)
-    paths = cd.save(out, fmax_hz=args.fmax)
+    paths = cd.save(out, fmax_hz=fmax)
     print(f"method {cd.method}: {cd.meta.get('method_title', cd.meta.get('source', ''))}; {speeds.size} speeds")
     if not args.no_whirl:
         from .whirl import FILM_NAMES
@@ -105,11 +116,10 @@ def cmd_equilibrium(args):
     from .equilibrium import equilibrium
 
     tc = load_from_args(args)
+    out = writable_dir(args.out) if args.out else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
     print(eq)
-    if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         p = out / f"equilibrium_{eq.method}_{args.speed_rpm:.0f}rpm.csv"
         eq.to_dataframe().to_csv(p, index=False)
         print(f"wrote {p.resolve()}")
@@ -125,6 +135,7 @@ def cmd_paper_figures(args):
     from .paper import paper_figures
 
     tc = load_from_args(args)
+    writable_dir(args.out)
     paths = paper_figures(tc, args.out, n_speeds=args.n_speeds, progress=lambda msg: print(msg, flush=True))
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {Path(args.out).resolve()}")
@@ -185,29 +196,49 @@ def write_composites(run, system, out, xscale="linear", title="run-up"):
 
 
 def cmd_runup(args):
-    from .runup import RunupStopped, runup
+    from .runup import runup
 
     tc = load_from_args(args)
-    out = Path(args.out)
     prof = _profile(args)
-    print(f"run-up: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
-    run, code = _stoppable("runup", RunupStopped, lambda: runup(
+    out = writable_dir(args.out)
+    print(f"{'run-down' if prof.direction == 'down' else 'run-up'}: {prof.description}, film model {tc.film_model}, "
+          f"results stream to {out.resolve()}")
+    run, code = _stoppable("runup", lambda: runup(
         tc, profile=prof, duration=args.duration, unbalance=_parse_unbalance(args.unbalance),
-        output_rate_hz=args.rate, rtol=args.rtol, out_dir=out, progress=True))
-    print(f"wall time {run.meta.get('wall_time_s', float('nan')):.1f} s, {run.meta.get('rhs_evaluations')} RHS and "
-          f"{run.meta.get('jacobian_evaluations')} Jacobian evaluations, {run.time.size} samples")
-    _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear")
+        output_rate_hz=args.rate, rtol=args.rtol, out_dir=out, progress=True), out)
+    if "wall_time_s" in run.meta:
+        print(f"wall time {run.meta['wall_time_s']:.1f} s, {run.meta['rhs_evaluations']} RHS and "
+              f"{run.meta['jacobian_evaluations']} Jacobian evaluations, {run.time.size} samples")
+    _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear",
+                title="run-down" if prof.direction == "down" else "run-up")
     return code
 
 
-def _stoppable(command, stopped, fn):
-    """(result, exit code) of a long run; a ``stopped`` exception (the run ended early, its samples kept) is
-    reported and gives exit code 3 with the partial result."""
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, turned into an exception so that long runs close their files as ``interrupted``."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _stoppable(command, fn, out):
+    """(result, exit code) of a long run that streams into ``out``: a :class:`RunStopped` (the run ended early,
+    its samples kept) gives exit code 3, Ctrl-C 130 and SIGTERM 143 — the partial result is read back from
+    ``out``, where the recorder marked it ``interrupted``."""
+    from .errors import RunStopped
+    from .recorder import RunupResult
+
     try:
         return fn(), 0
-    except stopped as exc:
+    except RunStopped as exc:
         print(f"frb {command}: stopped: {exc}", file=sys.stderr)
         return exc.result, 3
+    except KeyboardInterrupt as exc:
+        code = 143 if isinstance(exc, Terminated) else 130
+        print(f"\nfrb {command}: interrupted ({'SIGTERM' if code == 143 else 'Ctrl-C'}); what was computed is kept in "
+              f"{out.resolve()}", file=sys.stderr)
+        return RunupResult.load(out), code
 
 
 def _finish_run(args, run, system, out, **figure_kw):
@@ -218,16 +249,51 @@ def _finish_run(args, run, system, out, **figure_kw):
     print(f"results in {out.resolve()}")
 
 
+def writable_dir(path, option="--out"):
+    """Create folder ``path`` and check that files can be written there — before any computing starts.
+    Raises ParameterError naming the option, the path and the reason."""
+    import tempfile
+
+    p = Path(path)
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=p, prefix=".frb_write_check_"):
+            pass
+    except OSError as exc:
+        raise ParameterError(f"{option} = {str(path)!r} is not a writable folder: {exc.strerror or exc}") from None
+    return p
+
+
 def cmd_compare(args):
     from .compare import compare
 
     tc = load_from_args(args)
-    cl = [float(x) for x in args.clearances.split(",")]
+    writable_dir(args.out)
+    cl = [check_positive("--clearances", x, "m") for x in args.clearances.split(",")]
     a, b = _speed_pair(args.speeds)
     table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out,
                            progress=lambda m: print(m, flush=True), fmax_hz=args.fmax)
     print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     print(f"results in {Path(args.out).resolve()}")
+
+
+def cmd_plot(args):
+    """Re-render the figures of a results folder written by frb runup / frb cosim (finished, stopped or
+    interrupted)."""
+    from .parameters import Turbocharger
+    from .recorder import RunupResult
+
+    out = Path(args.dir)
+    run = RunupResult.load(out)
+    if run.time.size < 64:
+        raise ParameterError(f"{out}: {run.time.size} samples recorded; the figures need at least 64")
+    system = Turbocharger.from_dict(run.meta["system"]) if "system" in run.meta else None
+    if system is None:
+        raise ParameterError(f"{out / 'runup.json'}: no system recorded, cannot draw the Campbell overlay")
+    down = run.speed_rpm[-1] < run.speed_rpm[0]
+    title = f"{'run-down' if down else 'run-up'} ({run.status})"
+    write_composites(run, system, out, xscale=args.xscale, title=title)
+    print(f"results in {out.resolve()}")
 
 
 def cmd_build_fmus(args):
@@ -238,17 +304,19 @@ def cmd_build_fmus(args):
 
 
 def cmd_cosim(args):
-    from .cosim.master import CosimStopped, cosimulate, system_from_parameters
-    from .cosim.ssp import read_ssp
+    from .cosim.master import cosimulate
+    from .parameters import Turbocharger
 
-    out = Path(args.out)
+    out = writable_dir(args.out)
     trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
-    run, code = _stoppable("cosim", CosimStopped, lambda: cosimulate(
+    run, code = _stoppable("cosim", lambda: cosimulate(
         args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True, rollback=args.rollback,
-        trace=trace))
-    print(f"wall time {run.meta['wall_time_s']:.1f} s ({run.meta['fmi_time_s'] / max(run.meta['wall_time_s'], 1e-9):.0%} "
-          f"in FMI calls), macro step {run.meta['step_size_s']:g} s, {run.time.size} samples")
-    _finish_run(args, run, lambda: system_from_parameters(read_ssp(args.ssp).parameters(args.parameter_set)), out,
+        trace=trace, unvalidated_step=args.unvalidated_step), out)
+    if "wall_time_s" in run.meta:
+        wall = run.meta["wall_time_s"]
+        print(f"wall time {wall:.1f} s ({run.meta['fmi_time_s'] / max(wall, 1e-9):.0%} in FMI calls), macro step "
+              f"{run.meta['step_size_s']:g} s, {run.time.size} samples")
+    _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
                 title=f"co-simulated run-up ({args.parameter_set})")
     return code
 
@@ -257,6 +325,7 @@ def cmd_linearize(args):
     from .cosim.linearize import linearize
     from .modal import modes_from_state
 
+    out = writable_dir(args.out) if args.out else None
     A, tc = linearize(args.ssp, args.speed_rpm, args.method, args.parameter_set)
     md = modes_from_state(A, A.shape[0] // 2)
     print(f"global A from the FMUs: {A.shape[0]} states, method {args.method.upper()} operating point at "
@@ -264,11 +333,11 @@ def cmd_linearize(args):
     print(f"{'f [Hz]':>10} {'damping [-]':>12} {'Re(lambda) [1/s]':>17}")
     for lam in md.eigenvalues:
         print(f"{lam.imag / (2 * np.pi):10.2f} {-lam.real / abs(lam):12.4f} {lam.real:17.2f}")
-    if args.out:
-        p = Path(args.out)
-        p.mkdir(parents=True, exist_ok=True)
-        np.savetxt(p / f"A_{args.method.upper()}_{args.speed_rpm:.0f}rpm.csv", A, delimiter=",")
-        print(f"wrote {(p / f'A_{args.method.upper()}_{args.speed_rpm:.0f}rpm.csv').resolve()}")
+    if out is not None:
+        p = out / f"A_{args.method.upper()}_{args.speed_rpm:.0f}rpm.csv"
+        np.savetxt(p, A, delimiter=",", header=f"global state matrix A [SI], {A.shape[0]} states, method "
+                   f"{args.method.upper()} at {args.speed_rpm:.0f} rpm, set {args.parameter_set}, SSP {args.ssp}")
+        print(f"wrote {p.resolve()}")
 
 
 def cmd_sweep(args):
@@ -318,17 +387,22 @@ def cmd_sweep(args):
     return 4 if n_fail else 0
 
 
-def build_parser():
-    from . import __version__
+class _Formatter(argparse.HelpFormatter):
+    """Help with the defaults shown (where there is one and the help text does not state it)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if action.default not in (None, False, argparse.SUPPRESS) and "default" not in text:
+            text += " (default: %(default)s)"
+        return text
+
+
+def _add_campbell(sub):
     from .methods import METHODS
 
-    p = argparse.ArgumentParser(prog="frb", description="Rotordynamics of turbochargers on floating-ring bearings "
-                                "(SI units inside; speeds on the command line in rpm).")
-    p.add_argument("--version", action="version", version=f"frbmodel {__version__}")
-    sub = p.add_subparsers(dest="command", required=True)
-
-    c = sub.add_parser("campbell", help="holistic Campbell diagram for one method (CSV + PNG + HTML)")
-    c.add_argument("--method", default="J", type=str.upper, choices=list(METHODS))
+    c = sub.add_parser("campbell", formatter_class=_Formatter,
+                       help="holistic Campbell diagram for one method (CSV + PNG + HTML)")
+    c.add_argument("--method", default="J", type=str.upper, choices=list(METHODS), help="bearing model (Table 1)")
     c.add_argument("--speeds", default="10000:250000:100", help="START:STOP:COUNT [rpm] or comma list")
     c.add_argument("--out", default="results/campbell", help="output folder")
     c.add_argument("--fmax", type=float, default=None, help="upper frequency limit of the plots [Hz]")
@@ -342,19 +416,30 @@ def build_parser():
     _system_args(c)
     c.set_defaults(func=cmd_campbell)
 
-    e = sub.add_parser("equilibrium", help="static equilibrium of both bearings (methods C, D, F, G, I, J)")
-    e.add_argument("--method", default="J", type=str.upper, choices=list(METHODS))
+
+def _add_equilibrium(sub):
+    from .methods import METHODS
+
+    e = sub.add_parser("equilibrium", formatter_class=_Formatter,
+                       help="static equilibrium of both bearings (methods C, D, F, G, I, J)")
+    e.add_argument("--method", default="J", type=str.upper, choices=list(METHODS), help="bearing model (Table 1)")
     e.add_argument("--speed-rpm", type=float, default=150e3, help="rotor speed [rpm]")
     e.add_argument("--out", default=None, help="also write a CSV into this folder")
     _system_args(e)
     e.set_defaults(func=cmd_equilibrium)
 
-    s = sub.add_parser("system", help="write the system description (default: Table 2) to a .toml/.json file")
+
+def _add_system(sub):
+    s = sub.add_parser("system", formatter_class=_Formatter,
+                       help="write the system description (default: Table 2) to a .toml/.json file")
     s.add_argument("--out", default="turbocharger.toml")
     _system_args(s)
     s.set_defaults(func=cmd_system)
 
-    r = sub.add_parser("runup", help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
+
+def _add_runup(sub):
+    r = sub.add_parser("runup", formatter_class=_Formatter,
+                       help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
     r.add_argument("--speeds", default="20000:250000", help="START:END [rpm]")
     r.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
     r.add_argument("--profile", choices=["ramp", "exponential", "constant"], default="ramp")
@@ -367,7 +452,10 @@ def build_parser():
     _system_args(r)
     r.set_defaults(func=cmd_runup)
 
-    m = sub.add_parser("compare", help="run-ups vs method-J stability per outer clearance (Figs. 12-14 + table)")
+
+def _add_compare(sub):
+    m = sub.add_parser("compare", formatter_class=_Formatter,
+                       help="run-ups vs method-J stability per outer clearance (Figs. 12-14 + table)")
     m.add_argument("--clearances", default="36e-6,40e-6,42e-6,46e-6", help="outer clearances [m], comma list")
     m.add_argument("--speeds", default="1000:250000", help="START:END [rpm]")
     m.add_argument("--duration", type=float, default=4.0, help="simulated time per run-up [s]")
@@ -377,31 +465,45 @@ def build_parser():
     _system_args(m)
     m.set_defaults(func=cmd_compare)
 
-    bf = sub.add_parser("build-fmus", help="build the bearing and rotor FMUs and pack build/turbocharger.ssp")
+
+def _add_build_fmus(sub):
+    bf = sub.add_parser("build-fmus", formatter_class=_Formatter,
+                       help="build the bearing and rotor FMUs and pack build/turbocharger.ssp")
     bf.add_argument("--out", default="build")
     bf.add_argument("--src", default=None, help="checkout holding fmu_src/ and ssp/ (default: auto)")
     bf.set_defaults(func=cmd_build_fmus)
 
-    cs = sub.add_parser("cosim", help="co-simulated run-up of an SSP system (fmpy master)")
+
+def _add_cosim(sub):
+    cs = sub.add_parser("cosim", formatter_class=_Formatter,
+                       help="co-simulated run-up of an SSP system (fmpy master)")
     cs.add_argument("ssp", help=".ssp archive or folder (see frb build-fmus)")
     cs.add_argument("--parameter-set", default="co36", help="co36, co40, co42 or co46")
     cs.add_argument("--stop-time", type=float, default=None, help="simulated time [s] (default: from the SSP)")
     cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 1e-5)")
     cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
+    cs.add_argument("--unvalidated-step", action="store_true",
+                    help="allow a macro step outside the validated range 1e-7 ... 2e-5 s")
     cs.add_argument("--trace-fmi", action="store_true", help="print every FMI call with its arguments and status")
     cs.add_argument("--no-figure", action="store_true")
     cs.add_argument("--out", default="results/cosim")
     cs.set_defaults(func=cmd_cosim)
 
-    li = sub.add_parser("linearize", help="global A matrix and modes from the FMUs' linearization mode")
+
+def _add_linearize(sub):
+    li = sub.add_parser("linearize", formatter_class=_Formatter,
+                       help="global A matrix and modes from the FMUs' linearization mode")
     li.add_argument("ssp")
     li.add_argument("--speed-rpm", type=float, default=150e3)
-    li.add_argument("--method", default="J", type=str.upper, choices=list("FGIJ"))
+    li.add_argument("--method", default="J", type=str.upper, choices=list("FGIJ"), help="operating point method")
     li.add_argument("--parameter-set", default="co36")
     li.add_argument("--out", default=None, help="write A as CSV into this folder")
     li.set_defaults(func=cmd_linearize)
 
-    sw = sub.add_parser("sweep", help="parameter study on Dask (stability map over clearance, viscosity, ...)")
+
+def _add_sweep(sub):
+    sw = sub.add_parser("sweep", formatter_class=_Formatter,
+                       help="parameter study on Dask (stability map over clearance, viscosity, ...)")
     sw.add_argument("--example", choices=["outer-clearance"], help="built-in study: outer clearance 36-46 um")
     sw.add_argument("--param", action="append", metavar="NAME=V1,V2",
                     help="swept parameter (repeatable; SI): outer_clearance, inner_clearance, viscosity_turbine, "
@@ -419,24 +521,72 @@ def build_parser():
     sw.add_argument("--out", default="results/sweep")
     sw.set_defaults(func=cmd_sweep)
 
-    f = sub.add_parser("paper-figures", help="regenerate the paper's linear figures 4-11")
+
+def _add_paper_figures(sub):
+    f = sub.add_parser("paper-figures", formatter_class=_Formatter,
+                       help="regenerate the paper's linear figures 4-11")
     f.add_argument("--out", default="results/paper-figures")
     f.add_argument("--n-speeds", type=int, default=100, help="speeds per Campbell diagram")
     _system_args(f)
     f.set_defaults(func=cmd_paper_figures)
+
+
+def _add_plot(sub):
+    pl = sub.add_parser("plot", formatter_class=_Formatter,
+                        help="re-render the figures of a run-up / co-simulation results folder")
+    pl.add_argument("dir", help="folder with runup.csv and runup.json")
+    pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
+    pl.set_defaults(func=cmd_plot)
+
+
+def build_parser():
+    from . import __version__
+
+    p = argparse.ArgumentParser(prog="frb", description="Rotordynamics of turbochargers on floating-ring bearings "
+                                "(SI units inside; speeds on the command line in rpm).")
+    p.add_argument("--version", action="version", version=f"frbmodel {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+    _add_campbell(sub)
+    _add_equilibrium(sub)
+    _add_system(sub)
+    _add_runup(sub)
+    _add_compare(sub)
+    _add_build_fmus(sub)
+    _add_cosim(sub)
+    _add_linearize(sub)
+    _add_sweep(sub)
+    _add_paper_figures(sub)
+    _add_plot(sub)
     return p
+
+
+#: optional packages and the extra that installs them
+EXTRAS = {"fmpy": "fmi", "pythonfmu": "fmi", "libcosimpy": "fmi", "dask": "dist", "distributed": "dist"}
 
 
 def main(argv=None):
     import os
+    import signal
 
     os.environ.setdefault("MPLBACKEND", "Agg")  # figures are written to files; the library never sets a backend
     args = build_parser().parse_args(argv)
+    signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return args.func(args) or 0
     except FRBError as exc:
         print(f"frb {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except ModuleNotFoundError as exc:
+        top = (exc.name or "").split(".")[0]
+        if top not in EXTRAS:
+            raise
+        print(f"frb {args.command}: error: this command needs the optional package {top!r}, which is not installed: "
+              f"python -m pip install \"frbmodel[{EXTRAS[top]}]\" (or .[{EXTRAS[top]}] in a checkout)", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:  # outside a long run: nothing to keep
+        code = 143 if isinstance(exc, Terminated) else 130
+        print(f"\nfrb {args.command}: interrupted", file=sys.stderr)
+        return code
 
 
 if __name__ == "__main__":

@@ -26,18 +26,39 @@ from .units import RPM
 #: numerical guard: film forces of trial states beyond this ε are evaluated at this ε (physics.md §2.7)
 EPS_CAP = 0.999
 
-__all__ = ["Problem", "RunupResult", "RunupStopped", "SpeedProfile", "Unbalance", "atol_vector", "build_problem",
-           "initial_state", "runup", "static_rotor_state"]
+__all__ = ["MAX_SPEED_RPM", "Problem", "RunupResult", "RunupStopped", "SpeedProfile", "Unbalance", "atol_vector",
+           "build_problem", "check_speed", "initial_state", "runup", "static_rotor_state"]
 
 
 # --------------------------------------------------------------------------------------------------
 # problem set-up
 # --------------------------------------------------------------------------------------------------
+#: largest rotor speed accepted [rpm]; the model is verified over 1 ... 250 krpm (README)
+MAX_SPEED_RPM = 1e6
+
+
+def check_speed(name, speed_rpm):
+    """Return ``float(speed_rpm)`` or raise :class:`ParameterError`: rotor speeds must be finite, > 0 and at most
+    :data:`MAX_SPEED_RPM` rpm."""
+    v = check_positive(name, speed_rpm, "rpm")
+    if v > MAX_SPEED_RPM:
+        raise ParameterError(f"{name} = {speed_rpm!r} rpm is invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm "
+                             "(the model is verified for 1 ... 250 krpm)")
+    return v
+
+
 @dataclass
 class SpeedProfile:
     """Rotor speed vs time, tabulated (linear interpolation inside the RHS).
 
-    Build with :meth:`ramp`, :meth:`constant` or :meth:`from_function`.
+    Build with :meth:`ramp`, :meth:`constant`, :meth:`exponential` or :meth:`from_function`. A profile whose end
+    speed is below its start speed is a run-down (:attr:`direction` ``"down"``).
+
+    Examples
+    --------
+    >>> p = SpeedProfile.ramp(250e3, 20e3, 1.0)
+    >>> p.direction, p.description
+    ('down', 'linear run-down 250000 -> 20000 rpm in 1 s')
     """
 
     t: np.ndarray  # [s], uniform grid
@@ -45,15 +66,31 @@ class SpeedProfile:
     omega_dot: np.ndarray  # [rad/s²]
     description: str
 
+    @property
+    def direction(self):
+        """``"up"``, ``"down"`` or ``"constant"``: the sign of the end speed minus the start speed."""
+        d = float(self.omega[-1] - self.omega[0])
+        return "up" if d > 0 else "down" if d < 0 else "constant"
+
+    @staticmethod
+    def _checked(start_rpm, end_rpm, duration):
+        return (check_speed("start speed", start_rpm), check_speed("end speed", end_rpm),
+                check_positive("duration", duration, "s"))
+
     @classmethod
     def ramp(cls, start_rpm, end_rpm, duration):
+        """Linear ramp from ``start_rpm`` to ``end_rpm`` [rpm] in ``duration`` [s] (a run-down if end < start)."""
+        start_rpm, end_rpm, duration = cls._checked(start_rpm, end_rpm, duration)
         t = np.array([0.0, duration])
         w = np.array([start_rpm, end_rpm]) * RPM
         a = (w[1] - w[0]) / duration
-        return cls(t, w, np.array([a, a]), f"linear ramp {start_rpm:.0f} -> {end_rpm:.0f} rpm in {duration:g} s")
+        kind = "run-down" if end_rpm < start_rpm else "ramp"
+        return cls(t, w, np.array([a, a]), f"linear {kind} {start_rpm:.0f} -> {end_rpm:.0f} rpm in {duration:g} s")
 
     @classmethod
     def constant(cls, speed_rpm, duration):
+        """Constant speed [rpm] for ``duration`` [s]."""
+        speed_rpm, _, duration = cls._checked(speed_rpm, speed_rpm, duration)
         return cls(np.array([0.0, duration]), np.full(2, speed_rpm * RPM), np.zeros(2),
                    f"constant {speed_rpm:.0f} rpm")
 
@@ -61,18 +98,24 @@ class SpeedProfile:
     def exponential(cls, start_rpm, end_rpm, duration, n=20001):
         """Constant relative acceleration: Ω(t) = Ω0 (Ω1/Ω0)^(t/T) — equal time per speed octave, so low-speed
         onsets get as many vibration periods as high-speed ones."""
+        start_rpm, end_rpm, duration = cls._checked(start_rpm, end_rpm, duration)
         t = np.linspace(0.0, duration, n)
         rate = math.log(end_rpm / start_rpm) / duration
         w = start_rpm * RPM * np.exp(rate * t)
-        return cls(t, w, rate * w, f"exponential ramp {start_rpm:.0f} -> {end_rpm:.0f} rpm in {duration:g} s")
+        kind = "run-down" if end_rpm < start_rpm else "ramp"
+        return cls(t, w, rate * w, f"exponential {kind} {start_rpm:.0f} -> {end_rpm:.0f} rpm in {duration:g} s")
 
     @classmethod
     def from_function(cls, fun, duration, n=20001):
         """``fun(t [s]) -> speed [rpm]``, tabulated on ``n`` points; Ω̇ by central differences."""
+        duration = check_positive("duration", duration, "s")
         t = np.linspace(0.0, duration, n)
-        w = np.array([float(fun(x)) for x in t]) * RPM
-        if not np.all(np.isfinite(w)) or np.any(w <= 0):
-            raise ParameterError("speed profile function must return finite speeds > 0 rpm for 0 <= t <= duration")
+        rpm = np.array([float(fun(x)) for x in t])
+        bad = np.flatnonzero(~(np.isfinite(rpm) & (rpm > 0) & (rpm <= MAX_SPEED_RPM)))
+        if bad.size:
+            raise ParameterError(f"speed profile function: speed = {rpm[bad[0]]!r} rpm at t = {t[bad[0]]:g} s is "
+                                 f"invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm for 0 <= t <= duration")
+        w = rpm * RPM
         return cls(t, w, np.gradient(w, t), "user function")
 
     def __call__(self, t):
@@ -365,9 +408,9 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
 
     Examples
     --------
-    >>> import frbmodel as frb
-    >>> run = frb.runup(frb.turbocharger(), profile=frb.SpeedProfile.constant(1500, 0.002), duration=0.002,
-    ...                 output_rate_hz=5e3)
+    >>> from frbmodel import turbocharger
+    >>> from frbmodel.runup import SpeedProfile, runup
+    >>> run = runup(turbocharger(), profile=SpeedProfile.constant(1500, 0.002), duration=0.002, output_rate_hz=5e3)
     >>> run.time.tolist(), run.status
     ([0.0, 0.0002, 0.0004, 0.0006, 0.0008, 0.001, 0.0012, 0.0014, 0.0016, 0.0018, 0.002], 'finished')
     """
@@ -376,8 +419,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     output_rate_hz = check_positive("output_rate_hz", output_rate_hz, "Hz")
     rtol = check_positive("rtol", rtol)
     if profile is None:
-        s0, s1 = (check_positive(nm, v, "rpm") for nm, v in zip(("start speed", "end speed"), speed_rpm))
-        profile = SpeedProfile.ramp(s0, s1, duration)
+        profile = SpeedProfile.ramp(speed_rpm[0], speed_rpm[1], duration)
     elif not isinstance(profile, SpeedProfile):
         profile = SpeedProfile.from_function(profile, duration)
     if not 0.0 < contact_eps < 1.0:
