@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import json
 import math
+import tomllib
 from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+import tomli_w
 
 from .errors import ParameterError, check_positive
 from .film import Film, check_model
@@ -56,11 +58,30 @@ class FloatingRingBearing:
                 f"{self.inner.radius + self.inner.clearance:g} m must be < outer film radius = {self.outer.radius:g} m")
 
     def to_dict(self) -> dict:
+        """The bearing as plain data (SI units), as written by :meth:`Turbocharger.save`.
+
+        Returns
+        -------
+        dict
+            ``node``, ``name``, ``ring_mass`` [kg], ``ring_inertia`` [kg m²] and the films ``inner``,
+            ``outer`` (each :meth:`Film.to_dict`).
+        """
         return {"node": self.node, "name": self.name, "ring_mass": self.ring_mass, "ring_inertia": self.ring_inertia,
                 "inner": self.inner.to_dict(), "outer": self.outer.to_dict()}
 
     @classmethod
     def from_dict(cls, d: dict) -> "FloatingRingBearing":
+        """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            Keys as written by :meth:`to_dict` (``name`` optional).
+
+        Returns
+        -------
+        FloatingRingBearing
+        """
         return cls(node=d["node"], name=d.get("name", "bearing"), ring_mass=d["ring_mass"],
                    ring_inertia=d["ring_inertia"], inner=Film(**d["inner"]), outer=Film(**d["outer"]))
 
@@ -103,7 +124,8 @@ class Turbocharger:
         nodes = [b.node for b in self.bearings]
         for b in self.bearings:
             if b.node >= self.rotor.n_nodes:
-                raise ParameterError(f"{b.name} bearing node = {b.node} is invalid: valid range 0..{self.rotor.n_nodes - 1}")
+                raise ParameterError(f"{b.name} bearing node = {b.node} is invalid: "
+                                     f"valid range 0..{self.rotor.n_nodes - 1}")
         if nodes[0] == nodes[1]:
             raise ParameterError(f"bearing nodes = {nodes} are invalid: the two bearings need different nodes")
 
@@ -113,22 +135,66 @@ class Turbocharger:
         return self.rotor.static_reactions([b.node for b in self.bearings], self.gravity)
 
     def with_(self, **changes) -> "Turbocharger":
-        """Copy with changed fields (``film_model=``, ``gravity=``...)."""
+        """Copy with changed fields.
+
+        Parameters
+        ----------
+        **changes
+            Field values, e.g. ``film_model="short_corrected"``, ``gravity=0.0`` [m/s²].
+
+        Returns
+        -------
+        Turbocharger
+        """
         return replace(self, **changes)
 
     def with_outer_clearance(self, clearance: float) -> "Turbocharger":
-        """Copy with both outer films' radial clearance set to ``clearance`` [m]."""
+        """Copy with both outer films' radial clearance changed.
+
+        Parameters
+        ----------
+        clearance : float
+            Radial clearance of both outer films [m].
+
+        Returns
+        -------
+        Turbocharger
+        """
         bs = tuple(replace(b, outer=replace(b.outer, clearance=clearance)) for b in self.bearings)
         return replace(self, bearings=bs)
 
     # ------------------------------------------------------------------ I/O
     def to_dict(self) -> dict:
+        """The system as plain data (SI units), the content of the files written by :meth:`save`.
+
+        Returns
+        -------
+        dict
+            ``name``, ``gravity`` [m/s²], ``film_model``, ``rotor`` (:meth:`Rotor.to_dict`), ``bearings``
+            (two :meth:`FloatingRingBearing.to_dict`) and ``units`` (a note for readers of the file).
+        """
         return {"name": self.name, "gravity": self.gravity, "film_model": self.film_model,
                 "rotor": self.rotor.to_dict(), "bearings": [b.to_dict() for b in self.bearings],
                 "units": "SI: m, kg, s, Pa, Pa s, kg m^2"}
 
     @classmethod
     def from_dict(cls, d: dict) -> "Turbocharger":
+        """Inverse of :meth:`to_dict`; every value is validated.
+
+        Parameters
+        ----------
+        d : dict
+            Needs ``rotor`` and ``bearings``; ``gravity``, ``film_model`` and ``name`` are optional.
+
+        Returns
+        -------
+        Turbocharger
+
+        Raises
+        ------
+        ParameterError
+            A section is missing or a value is out of its valid range (the message names it).
+        """
         for key in ("rotor", "bearings"):
             if key not in d:
                 raise ParameterError(f"system description lacks the required section '{key}'")
@@ -138,65 +204,87 @@ class Turbocharger:
                    name=d.get("name", "turbocharger"))
 
     def save(self, path) -> Path:
-        """Write the system to ``path`` (``.toml`` or ``.json``)."""
+        """Write the system to a TOML (written by tomli-w) or JSON file.
+
+        Parameters
+        ----------
+        path : str or Path
+            File name ending in ``.toml`` or ``.json``.
+
+        Returns
+        -------
+        Path
+            ``path``.
+
+        Raises
+        ------
+        ParameterError
+            Unknown suffix, or a value that is not finite.
+
+        Examples
+        --------
+        >>> import tempfile, frbmodel as frb
+        >>> tc = frb.turbocharger(outer_clearance=40e-6)
+        >>> with tempfile.TemporaryDirectory() as d:
+        ...     frb.load_system(tc.save(f"{d}/tc.toml")) == tc
+        True
+        """
         path = Path(path)
         d = self.to_dict()
         if path.suffix.lower() == ".json":
             path.write_text(json.dumps(d, indent=2))
         elif path.suffix.lower() == ".toml":
-            path.write_text(_to_toml(d))
+            path.write_text(tomli_w.dumps(_toml_ready(d)))
         else:
             raise ParameterError(f"system file suffix = {path.suffix!r} is unknown; use .toml or .json")
         return path
 
 
 def load_system(path) -> Turbocharger:
-    """Read a system written by :meth:`Turbocharger.save` (or by hand) from TOML or JSON."""
+    """Read a system written by :meth:`Turbocharger.save` (or by hand) from TOML or JSON.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.toml`` (read by :mod:`tomllib`) or ``.json`` file with the keys of :meth:`Turbocharger.to_dict`.
+
+    Returns
+    -------
+    Turbocharger
+
+    Raises
+    ------
+    ParameterError
+        The file does not exist, cannot be parsed, lacks a section or holds an invalid value.
+    """
     path = Path(path)
     if not path.exists():
         raise ParameterError(f"system file = {str(path)!r} does not exist")
     text = path.read_text()
     if path.suffix.lower() == ".json":
-        d = json.loads(text)
+        try:
+            d = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ParameterError(f"system file = {str(path)!r} is not valid JSON: {exc}") from None
     elif path.suffix.lower() == ".toml":
-        import tomllib
-
-        d = tomllib.loads(text)
+        try:
+            d = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ParameterError(f"system file = {str(path)!r} is not valid TOML: {exc}") from None
     else:
         raise ParameterError(f"system file suffix = {path.suffix!r} is unknown; use .toml or .json")
     return Turbocharger.from_dict(d)
 
 
-def _toml_value(v):
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, (float, np.floating)):
-        if not math.isfinite(v):
-            raise ParameterError(f"value {v!r} cannot be written to TOML: it must be finite")
-        return repr(float(v))
-    if isinstance(v, str):
-        return json.dumps(v)
-    raise TypeError(f"cannot write {type(v).__name__} to TOML")
-
-
-def _to_toml(d: dict) -> str:
-    """Minimal TOML writer for the system dictionary (scalars, nested tables, arrays of tables)."""
-    lines = []
-
-    def table(prefix, t):
-        scalars = {k: v for k, v in t.items() if not isinstance(v, (dict, list))}
-        for k, v in scalars.items():
-            lines.append(f"{k} = {_toml_value(v)}")
-        for k, v in t.items():
-            if isinstance(v, dict):
-                lines.append(f"\n[{prefix}{k}]")
-                table(f"{prefix}{k}.", v)
-            elif isinstance(v, list):
-                for item in v:
-                    lines.append(f"\n[[{prefix}{k}]]")
-                    table(f"{prefix}{k}.", item)
-
-    table("", d)
-    return "\n".join(lines) + "\n"
+def _toml_ready(v):
+    """Copy of the system dictionary with plain Python scalars (numpy scalars converted), as tomli-w needs;
+    a non-finite number raises :class:`ParameterError` (no system quantity may be NaN or infinite)."""
+    if isinstance(v, dict):
+        return {k: _toml_ready(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_toml_ready(x) for x in v]
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        raise ParameterError(f"value {v!r} cannot be written to TOML: it must be finite")
+    return v

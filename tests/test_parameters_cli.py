@@ -1,5 +1,6 @@
 """System description (validation, TOML/JSON round trip) and the command line."""
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -30,6 +31,21 @@ def test_round_trip(tmp_path, suffix):
     np.testing.assert_array_equal(back.rotor.M, tc.rotor.M)
 
 
+def test_toml_file_keeps_its_layout_and_takes_numpy_scalars(tmp_path):
+    ref = frb.turbocharger(42e-6)
+    # a bearing node given as a numpy integer (e.g. from np.argmin) must be written as a TOML integer
+    b0 = replace(ref.bearings[0], node=np.int64(ref.bearings[0].node))
+    text = ref.with_(bearings=(b0, ref.bearings[1])).save(tmp_path / "sys.toml").read_text()
+    # what users edit by hand: top-level scalars with the units note, one [[rotor.shaft]] table per shaft
+    # element, one [[bearings]] table per bearing with its [bearings.inner] / [bearings.outer] films
+    assert 'units = "SI: m, kg, s, Pa, Pa s, kg m^2"' in text.splitlines()
+    assert text.count("[[rotor.shaft]]\n") == len(ref.rotor.shaft)
+    assert text.count("[[bearings]]\n") == 2 and text.count("[bearings.outer]\n") == 2
+    assert f"node = {ref.bearings[0].node}" in text.splitlines()
+    assert "clearance = 4.2e-05" in text.splitlines()  # floats as their shortest repr: exact round trip
+    assert frb.load_system(tmp_path / "sys.toml").to_dict() == ref.to_dict()
+
+
 def test_bad_file_content_names_the_quantity(tmp_path):
     d = frb.turbocharger().to_dict()
     d["bearings"][0]["outer"]["clearance"] = -3e-6
@@ -44,6 +60,12 @@ def test_bad_file_content_names_the_quantity(tmp_path):
         frb.load_system(p)
     with pytest.raises(frb.ParameterError, match="does not exist"):
         frb.load_system(tmp_path / "missing.toml")
+    (tmp_path / "broken.toml").write_text("gravity = \n")
+    with pytest.raises(frb.ParameterError, match="broken.toml.*not valid TOML"):
+        frb.load_system(tmp_path / "broken.toml")
+    (tmp_path / "broken.json").write_text("{")
+    with pytest.raises(frb.ParameterError, match="broken.json.*not valid JSON"):
+        frb.load_system(tmp_path / "broken.json")
 
 
 def test_invalid_system_parameters():

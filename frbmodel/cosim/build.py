@@ -1,4 +1,9 @@
-"""Build the bearing and rotor FMUs with pythonfmu and pack the SSP system."""
+"""Build the bearing and rotor FMUs with pythonfmu and pack the SSP system.
+
+The FMU sources (``fmu_src/``) and the SSP folder (``ssp/``) are top-level folders of the repository; the
+wheel ships copies of both as ``frbmodel/_data/fmu_src`` and ``frbmodel/_data/ssp`` (pyproject.toml), so
+``frb build-fmus`` works from a plain ``pip install`` as well as from a checkout.
+"""
 from __future__ import annotations
 
 import shutil
@@ -8,32 +13,101 @@ from pathlib import Path
 
 import frbmodel
 
+from ..errors import FRBError, ParameterError
+
 FMUS = ("FloatingRingBearing", "TurbochargerRotor")
+#: the installed (or checked-out) frbmodel package folder
+PACKAGE = Path(frbmodel.__file__).resolve().parent
+#: where the wheel puts its copies of fmu_src/ and ssp/
+PACKAGE_DATA = PACKAGE / "_data"
+
+
+def _has_sources(folder: Path) -> bool:
+    return (folder / "fmu_src").is_dir() and (folder / "ssp").is_dir()
 
 
 def find_source(root=None) -> Path:
-    """The project checkout that holds ``fmu_src/`` and ``ssp/`` (default: the current directory or the
-    checkout this frbmodel was imported from)."""
-    cands = [Path(root)] if root else [Path.cwd(), Path(frbmodel.__file__).resolve().parents[1]]
-    for c in cands:
-        if (c / "fmu_src").is_dir() and (c / "ssp").is_dir():
-            return c
-    raise FileNotFoundError("fmu_src/ and ssp/ not found: run from a frbmodel checkout (git clone) or pass --src")
+    """The folder holding ``fmu_src/`` and ``ssp/``.
+
+    Parameters
+    ----------
+    root : str or Path, optional
+        Use this folder. Default: the checkout this frbmodel was imported from (an editable install), else
+        the copies shipped inside the installed package (``frbmodel/_data``).
+
+    Returns
+    -------
+    Path
+        A folder with the subfolders ``fmu_src`` and ``ssp``.
+
+    Raises
+    ------
+    ParameterError
+        ``root`` lacks one of the two subfolders.
+    FRBError
+        No ``root`` given and neither a checkout nor the package data has them (a broken install).
+    """
+    if root is not None:
+        root = Path(root)
+        if not _has_sources(root):
+            raise ParameterError(f"--src = {str(root)!r} is invalid: it must hold the folders fmu_src/ and ssp/ "
+                                 "(the root of a frbmodel checkout)")
+        return root
+    checkout = PACKAGE.parent
+    if (checkout / "pyproject.toml").is_file() and _has_sources(checkout):
+        return checkout
+    if _has_sources(PACKAGE_DATA):
+        return PACKAGE_DATA
+    raise FRBError(f"fmu_src/ and ssp/ are neither in a checkout ({checkout}) nor in the installed package "
+                   f"({PACKAGE_DATA}): reinstall frbmodel or pass --src CHECKOUT")
+
+
+def _bundle_ignore(dirname, names):
+    """shutil.copytree filter for the frbmodel copy inside each FMU: no caches, no packaged FMU sources."""
+    skip = {n for n in names if n == "__pycache__" or n.endswith((".pyc", ".nbi", ".nbc"))}
+    if Path(dirname) == PACKAGE and "_data" in names:
+        skip.add("_data")  # fmu_src/ and ssp/: already the FMU's own script and the SSP, not needed at run time
+    return skip
+
+
+def _pack_ssp(ssp, ssp_src, fmus):
+    """Zip the SSP folder ``ssp_src`` (SSDs and parameter sets) and the FMUs into the archive ``ssp``."""
+    with zipfile.ZipFile(ssp, "w", zipfile.ZIP_DEFLATED) as z:
+        for f in sorted(ssp_src.rglob("*")):
+            rel = f.relative_to(ssp_src)
+            if f.is_file() and "__pycache__" not in rel.parts and f.suffix not in (".py", ".pyc", ".fmu"):
+                z.write(f, rel)
+        for fmu in fmus:
+            z.write(fmu, f"resources/{fmu.name}")
 
 
 def build_fmus(out_dir="build", src=None, progress=print):
-    """Build ``<out>/fmus/FloatingRingBearing.fmu`` and ``TurbochargerRotor.fmu`` (bundling frbmodel) and
-    ``<out>/turbocharger.ssp``. Returns the list of written paths."""
+    """Build the two FMUs (each bundling this frbmodel) and the SSP archive.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Output folder; gets ``fmus/FloatingRingBearing.fmu``, ``fmus/TurbochargerRotor.fmu`` and
+        ``turbocharger.ssp`` (the ``ssp/`` folder plus both FMUs).
+    src : str or Path, optional
+        Folder with ``fmu_src/`` and ``ssp/`` (see :func:`find_source`).
+    progress : callable, optional
+        Called with one message per written file.
+
+    Returns
+    -------
+    list of Path
+        The two FMUs and the SSP archive.
+    """
     from pythonfmu import FmuBuilder
 
     src = find_source(src)
     out = Path(out_dir)
     (out / "fmus").mkdir(parents=True, exist_ok=True)
-    pkg = Path(frbmodel.__file__).resolve().parent
     paths = []
     with tempfile.TemporaryDirectory(prefix="frb_fmu_") as tmp:
         bundle = Path(tmp) / "frbmodel"
-        shutil.copytree(pkg, bundle, ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc"))
+        shutil.copytree(PACKAGE, bundle, ignore=_bundle_ignore)
         for name in FMUS:
             fmu = FmuBuilder.build_FMU(src / "fmu_src" / f"{name}.py", dest=out / "fmus",
                                        project_files=[bundle, src / "fmu_src" / "_fmu_common.py"],
@@ -42,19 +116,25 @@ def build_fmus(out_dir="build", src=None, progress=print):
             paths.append(Path(fmu))
             progress(f"built {fmu} (bundles frbmodel {frbmodel.__version__})")
     ssp = out / "turbocharger.ssp"
-    with zipfile.ZipFile(ssp, "w", zipfile.ZIP_DEFLATED) as z:
-        for f in sorted((src / "ssp").rglob("*")):
-            if f.is_file():
-                z.write(f, f.relative_to(src / "ssp"))
-        for fmu in paths:
-            z.write(fmu, f"resources/{fmu.name}")
+    _pack_ssp(ssp, src / "ssp", paths)
     paths.append(ssp)
-    progress(f"packed {ssp} (SystemStructure.ssd, parameter sets, both FMUs)")
+    progress(f"packed {ssp} (SSD variants, parameter sets, both FMUs)")
     return paths
 
 
 def built_ssp(out_dir="build", src=None, progress=print) -> Path:
-    """``<out>/turbocharger.ssp``, building the FMUs first if it is not there yet."""
+    """The SSP archive in ``out_dir``, building the FMUs first if it is not there yet.
+
+    Parameters
+    ----------
+    out_dir, src, progress
+        As for :func:`build_fmus`.
+
+    Returns
+    -------
+    Path
+        ``<out_dir>/turbocharger.ssp``.
+    """
     ssp = Path(out_dir) / "turbocharger.ssp"
     if not ssp.exists():
         build_fmus(out_dir, src, progress)

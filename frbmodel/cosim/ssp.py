@@ -1,25 +1,37 @@
 """SSP 1.0 system of the turbocharger: one rotor FMU, two bearing FMUs, their connections and parameter sets.
 
-:func:`write_ssp` generates ``ssp/`` (SystemStructure.ssd + one .ssv per parameter set and component);
-:func:`read_ssp` parses a folder or ``.ssp`` archive for the master. The SSD is flat (no system-level
-connectors) and carries the OSP fixed-step annotation, so libcosim runs it unchanged.
+:func:`write_ssp` generates ``ssp/``; :func:`read_ssp` parses a folder or ``.ssp`` archive for the master.
+The SSD is flat (no system-level connectors) and carries the OSP fixed-step annotation, so libcosim runs it
+unchanged.
+
+Parameter sets are SSP *variants*: the archive's default ``SystemStructure.ssd`` binds the first set (co36)
+and one more SSD per further set (``co40.ssd``, ...: the same system) binds that set, each component through
+its ``ssd:ParameterBindings`` to a ``resources/<set>_<component>.ssv``. SSP 1.0 applies *all* bindings of a
+component (later ones override earlier ones), so alternative sets cannot be listed side by side in one SSD;
+variants are the standard's way (an SSP may hold several .ssd files at its root, SystemStructure.ssd being the
+default one), any SSP tool runs the default, and libcosim can load a variant by its SSD file name. The reader
+takes every binding from the SSDs (file names carry no meaning) and names a set by the ``name`` of the
+``ssv:ParameterSet`` its SSD binds.
 """
 from __future__ import annotations
 
-import math
 import tempfile
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from ..errors import ParameterError
+from ..units import rpm_to_rad_s
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
       "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
 BEARINGS = (("turbine", "turbine_bearing"), ("compressor", "compressor_bearing"))
-DEFAULT_SET = "co36"
+#: the default variant of an SSP (SSP 1.0); further variants are the other .ssd files at the archive's root
+DEFAULT_SSD = "SystemStructure.ssd"
+PARAMETER_SET_TYPE = "application/x-ssp-parameter-set"
 
 
 def _bearing_connections(inst, prefix):
@@ -35,7 +47,14 @@ def _bearing_connections(inst, prefix):
 
 
 def connections():
-    """(start element, start connector, end element, end connector) of the system."""
+    """Connections of the system (per bearing: rotor -> bearing journal state and speed, bearing -> rotor force,
+    interface Jacobian and end-of-step values).
+
+    Returns
+    -------
+    list of tuple
+        ``(start element, start connector, end element, end connector)``.
+    """
     out = []
     for inst, prefix in BEARINGS:
         out += _bearing_connections(inst, prefix)
@@ -61,15 +80,34 @@ def _unit(conn):
     raise ValueError(f"no unit known for connector {conn!r}")
 
 
-UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "m/s2": dict(m=1, s=-2), "rad/s": dict(rad=1, s=-1), "N": dict(kg=1, m=1, s=-2),
-         "N/m": dict(kg=1, s=-2), "N.s/m": dict(kg=1, s=-1)}
+UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "m/s2": dict(m=1, s=-2), "rad/s": dict(rad=1, s=-1),
+         "N": dict(kg=1, m=1, s=-2), "N/m": dict(kg=1, s=-2), "N.s/m": dict(kg=1, s=-1)}
 
 
 def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_rpm=250e3, ramp_time=1.0,
                    perturbation=0.05):
-    """{set name: {component: {parameter: (type, value, unit)}}} with initial states from the method-J
-    equilibrium at the start speed (journals and rings offset in +x by ``perturbation`` × clearance, as in
-    :func:`frbmodel.runup.runup`)."""
+    """Parameter sets of the turbocharger FMUs, one per outer clearance.
+
+    Initial states come from the method-J equilibrium at the start speed (journals and rings offset in +x by
+    ``perturbation`` × clearance, as in :func:`frbmodel.runup.runup`).
+
+    Parameters
+    ----------
+    clearances : sequence of float
+        Outer-film radial clearances [m]; set ``co<c in µm>`` each (``co36`` for 36e-6).
+    start_rpm, end_rpm : float
+        Speed ramp of the rotor FMU [rpm] (written in rad/s).
+    ramp_time : float
+        Ramp duration [s].
+    perturbation : float
+        Initial offset of journals and rings in +x as a fraction of the clearance [-].
+
+    Returns
+    -------
+    dict
+        ``{set name: {component: {parameter: (type, value, unit)}}}`` with SSP types ``"Real"`` /
+        ``"String"`` and SI units (None for strings).
+    """
     import frbmodel as frb
 
     sets = {}
@@ -77,12 +115,12 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
         tc = frb.turbocharger(outer_clearance=c)
         eq = frb.equilibrium(tc, "J", start_rpm)
         name = f"co{c * 1e6:.0f}"
-        comp = {"rotor": {"speed_start": ("Real", start_rpm * math.pi / 30, "rad/s"),
-                          "speed_end": ("Real", end_rpm * math.pi / 30, "rad/s"),
+        comp = {"rotor": {"speed_start": ("Real", rpm_to_rad_s(start_rpm), "rad/s"),
+                          "speed_end": ("Real", rpm_to_rad_s(end_rpm), "rad/s"),
                           "ramp_time": ("Real", ramp_time, "s"), "gravity": ("Real", tc.gravity, "m/s2")}}
         from ..components import BearingComponent
 
-        w0 = start_rpm * math.pi / 30
+        w0 = rpm_to_rad_s(start_rpm)
         for (inst, prefix), b, e in zip(BEARINGS, tc.bearings, eq.bearings):
             jx = float(e.journal[0] + perturbation * (b.inner.clearance + b.outer.clearance))
             rx = float(e.ring[0] + perturbation * b.outer.clearance)
@@ -123,129 +161,317 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
     return sets
 
 
+def _q(ns, tag):
+    """Qualified XML tag ``{namespace}tag``."""
+    return f"{{{NS[ns]}}}{tag}"
+
+
+def _ssd_tree(bound_set, step_size, stop_time):
+    """SSD of the system whose components bind ``resources/<bound_set>_<component>.ssv``."""
+    root = ET.Element(_q("ssd", "SystemStructureDescription"), {"version": "1.0", "name": "turbocharger"})
+    system = ET.SubElement(root, _q("ssd", "System"), {"name": "turbocharger", "description":
+                           "Turbocharger rotor on two floating-ring bearings (frbmodel), interface-Jacobian coupling"})
+    elements = ET.SubElement(system, _q("ssd", "Elements"))
+    cons = connections()
+    comps = [("rotor", "TurbochargerRotor")] + [(inst, "FloatingRingBearing") for inst, _ in BEARINGS]
+    for name, fmu in comps:
+        el = ET.SubElement(elements, _q("ssd", "Component"), {"name": name, "source": f"resources/{fmu}.fmu",
+                                                               "type": "application/x-fmu-sharedlibrary"})
+        ctors = ET.SubElement(el, _q("ssd", "Connectors"))
+        for s_el, s_c, e_el, e_c in cons:
+            for el_name, c_name, kind in ((s_el, s_c, "output"), (e_el, e_c, "input")):
+                if el_name == name:
+                    ce = ET.SubElement(ctors, _q("ssd", "Connector"), {"name": c_name, "kind": kind})
+                    ET.SubElement(ce, _q("ssc", "Real"), {"unit": _unit(c_name)})
+        pb = ET.SubElement(el, _q("ssd", "ParameterBindings"))
+        ET.SubElement(pb, _q("ssd", "ParameterBinding"), {"source": f"resources/{bound_set}_{name}.ssv"})
+    cs = ET.SubElement(system, _q("ssd", "Connections"))
+    for s_el, s_c, e_el, e_c in cons:
+        ET.SubElement(cs, _q("ssd", "Connection"), {"startElement": s_el, "startConnector": s_c,
+                                                    "endElement": e_el, "endConnector": e_c})
+    units = ET.SubElement(root, _q("ssd", "Units"))
+    for uname, base in UNITS.items():
+        u = ET.SubElement(units, _q("ssc", "Unit"), {"name": uname})
+        ET.SubElement(u, _q("ssc", "BaseUnit"), {k: str(v) for k, v in base.items()})
+    de = ET.SubElement(root, _q("ssd", "DefaultExperiment"), {"startTime": "0", "stopTime": repr(float(stop_time))})
+    ann = ET.SubElement(ET.SubElement(de, _q("ssd", "Annotations")), _q("ssc", "Annotation"),
+                        {"type": "com.opensimulationplatform"})
+    alg = ET.SubElement(ann, _q("osp", "Algorithm"))
+    ET.SubElement(alg, _q("osp", "FixedStepAlgorithm"), {"baseStepSize": repr(float(step_size))})
+    ET.indent(root)
+    return ET.ElementTree(root)
+
+
+def _ssv_tree(set_name, params):
+    """``ssv:ParameterSet`` named ``set_name`` of ``{parameter: (type, value, unit)}``."""
+    ps = ET.Element(_q("ssv", "ParameterSet"), {"version": "1.0", "name": set_name})
+    pars = ET.SubElement(ps, _q("ssv", "Parameters"))
+    for pname, (typ, val, _) in params.items():
+        p = ET.SubElement(pars, _q("ssv", "Parameter"), {"name": pname})
+        ET.SubElement(p, _q("ssv", typ), {"value": repr(float(val)) if typ == "Real" else str(val)})
+    ET.indent(ps)
+    return ET.ElementTree(ps)
+
+
 def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, **kw):
-    """Write ``SystemStructure.ssd`` and ``resources/<set>_<component>.ssv`` into ``out_dir``."""
+    """Write the SSP folder: the SSDs (one variant per parameter set) and the parameter sets.
+
+    ``SystemStructure.ssd`` (the default variant) binds the first parameter set, ``<set>.ssd`` each further
+    one; ``resources/<set>_<component>.ssv`` hold the values. The FMUs (``resources/*.fmu``) are added by
+    :func:`frbmodel.cosim.build.build_fmus`.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Folder to write (created if needed).
+    step_size : float
+        Macro step of the OSP fixed-step annotation [s].
+    stop_time : float
+        Stop time of the default experiment [s].
+    **kw
+        Passed to :func:`parameter_sets` (``clearances``, ``start_rpm``, ...).
+
+    Returns
+    -------
+    list of Path
+        The written files, SSDs first.
+    """
     out = Path(out_dir)
     (out / "resources").mkdir(parents=True, exist_ok=True)
     for k, v in NS.items():
         ET.register_namespace(k, v)
-    q = lambda ns, tag: f"{{{NS[ns]}}}{tag}"  # noqa: E731
-    root = ET.Element(q("ssd", "SystemStructureDescription"), {"version": "1.0", "name": "turbocharger"})
-    system = ET.SubElement(root, q("ssd", "System"), {"name": "turbocharger", "description":
-                           "Turbocharger rotor on two floating-ring bearings (frbmodel), interface-Jacobian coupling"})
-    elements = ET.SubElement(system, q("ssd", "Elements"))
-    cons = connections()
-    comps = [("rotor", "TurbochargerRotor")] + [(inst, "FloatingRingBearing") for inst, _ in BEARINGS]
-    for name, fmu in comps:
-        el = ET.SubElement(elements, q("ssd", "Component"), {"name": name, "source": f"resources/{fmu}.fmu",
-                                                              "type": "application/x-fmu-sharedlibrary"})
-        ctors = ET.SubElement(el, q("ssd", "Connectors"))
-        for s_el, s_c, e_el, e_c in cons:
-            for el_name, c_name, kind in ((s_el, s_c, "output"), (e_el, e_c, "input")):
-                if el_name == name:
-                    ce = ET.SubElement(ctors, q("ssd", "Connector"), {"name": c_name, "kind": kind})
-                    ET.SubElement(ce, q("ssc", "Real"), {"unit": _unit(c_name)})
-        pb = ET.SubElement(el, q("ssd", "ParameterBindings"))
-        ET.SubElement(pb, q("ssd", "ParameterBinding"), {"source": f"resources/{DEFAULT_SET}_{name}.ssv"})
-    cs = ET.SubElement(system, q("ssd", "Connections"))
-    for s_el, s_c, e_el, e_c in cons:
-        ET.SubElement(cs, q("ssd", "Connection"), {"startElement": s_el, "startConnector": s_c,
-                                                   "endElement": e_el, "endConnector": e_c})
-    units = ET.SubElement(root, q("ssd", "Units"))
-    for uname, base in UNITS.items():
-        u = ET.SubElement(units, q("ssc", "Unit"), {"name": uname})
-        ET.SubElement(u, q("ssc", "BaseUnit"), {k: str(v) for k, v in base.items()})
-    de = ET.SubElement(root, q("ssd", "DefaultExperiment"), {"startTime": "0", "stopTime": repr(float(stop_time))})
-    ann = ET.SubElement(ET.SubElement(de, q("ssd", "Annotations")), q("ssc", "Annotation"),
-                        {"type": "com.opensimulationplatform"})
-    alg = ET.SubElement(ann, q("osp", "Algorithm"))
-    ET.SubElement(alg, q("osp", "FixedStepAlgorithm"), {"baseStepSize": repr(float(step_size))})
-    ET.indent(root)
-    paths = [out / "SystemStructure.ssd"]
-    ET.ElementTree(root).write(paths[0], xml_declaration=True, encoding="UTF-8")
-    for set_name, comps_p in parameter_sets(**kw).items():
+    sets = parameter_sets(**kw)
+    paths = []
+    for i, set_name in enumerate(sets):
+        paths.append(out / (DEFAULT_SSD if i == 0 else f"{set_name}.ssd"))
+        _ssd_tree(set_name, step_size, stop_time).write(paths[-1], xml_declaration=True, encoding="UTF-8")
+    for set_name, comps_p in sets.items():
         for comp, params in comps_p.items():
-            ps = ET.Element(q("ssv", "ParameterSet"), {"version": "1.0", "name": set_name})
-            pars = ET.SubElement(ps, q("ssv", "Parameters"))
-            for pname, (typ, val, unit) in params.items():
-                p = ET.SubElement(pars, q("ssv", "Parameter"), {"name": pname})
-                attrs = {"value": repr(float(val)) if typ == "Real" else str(val)}
-                ET.SubElement(p, q("ssv", typ), attrs)
-            ET.indent(ps)
-            f = out / "resources" / f"{set_name}_{comp}.ssv"
-            ET.ElementTree(ps).write(f, xml_declaration=True, encoding="UTF-8")
-            paths.append(f)
+            paths.append(out / "resources" / f"{set_name}_{comp}.ssv")
+            _ssv_tree(set_name, params).write(paths[-1], xml_declaration=True, encoding="UTF-8")
     return paths
 
 
 @dataclass
 class SSPSystem:
-    """Parsed system: components {name: fmu path}, connections, parameter sets, step and stop time."""
+    """A parsed SSP: components, connections, parameter sets (one per SSD variant), step and stop time.
+
+    Attributes
+    ----------
+    root : Path
+        Folder holding the SSDs (an archive is extracted to a temporary folder).
+    components : dict
+        ``{component name: FMU path}``.
+    connections : list of tuple
+        ``(start element, start connector, end element, end connector)``.
+    parameter_files : dict
+        ``{set name: {component: tuple of .ssv paths}}``, the files the set's SSD binds, in binding order.
+    step_size : float or None
+        Macro step of the OSP fixed-step annotation [s].
+    stop_time : float or None
+        Stop time of the default experiment [s].
+    parameter_sets : dict
+        ``{set name: {component: {parameter: (type, value)}}}`` (bindings of a component merged in order,
+        later ones overriding earlier ones, as SSP 1.0 prescribes).
+    default_set : str or None
+        The set bound by ``SystemStructure.ssd``.
+    source : Path or None
+        The folder or archive that was read (named in error messages).
+    """
 
     root: Path
     components: dict
     connections: list
-    parameter_files: dict = field(default_factory=dict)  # set name -> {component: path}
+    parameter_files: dict = field(default_factory=dict)
     step_size: float | None = None
     stop_time: float | None = None
+    parameter_sets: dict = field(default_factory=dict)
+    default_set: str | None = None
+    source: Path | None = None
 
-    def parameters(self, set_name):
-        """{component: {name: (type, value)}} of parameter set ``set_name``."""
-        if set_name not in self.parameter_files:
-            from ..errors import ParameterError
+    def parameters(self, set_name=None):
+        """Parameter values of one set.
 
-            raise ParameterError(f"parameter set = {set_name!r} is unknown; available: {sorted(self.parameter_files)}")
-        return {c: read_ssv(p) for c, p in self.parameter_files[set_name].items()}
+        Parameters
+        ----------
+        set_name : str, optional
+            Name of the set (``co36``, ...); default: :attr:`default_set`.
+
+        Returns
+        -------
+        dict
+            ``{component: {parameter: (type, value)}}`` (a copy).
+
+        Raises
+        ------
+        ParameterError
+            The SSP has no such set; the message names the SSP, the set and the available sets.
+        """
+        name = self.default_set if set_name is None else set_name
+        if name not in self.parameter_sets:
+            raise ParameterError(f"parameter set = {name!r} is not in SSP {str(self.source or self.root)!r}; "
+                                 f"available sets: {sorted(self.parameter_sets)}")
+        return {c: dict(p) for c, p in self.parameter_sets[name].items()}
+
+
+def _value(typ, text):
+    """Python value of an SSV value attribute of SSP type ``typ``."""
+    if typ == "Real":
+        return float(text)
+    if typ == "Integer":
+        return int(text)
+    if typ == "Boolean":
+        return text.lower() == "true"
+    return text
+
+
+def _parameter_set(element):
+    """(name, {parameter: (type, value)}) of an ``ssv:ParameterSet`` element."""
+    out = {}
+    for p in element.iter(_q("ssv", "Parameter")):
+        for child in p:
+            typ = child.tag.split("}")[1]
+            out[p.get("name")] = (typ, _value(typ, child.get("value")))
+    return element.get("name"), out
+
+
+def _parse(path, what):
+    """Root element of the XML file ``path`` or :class:`ParameterError` naming ``what``."""
+    try:
+        return ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        raise ParameterError(f"{what} {str(path)!r} is not well-formed XML: {exc}") from None
 
 
 def read_ssv(path):
-    tree = ET.parse(path)
-    out = {}
-    for p in tree.getroot().iter(f"{{{NS['ssv']}}}Parameter"):
-        for child in p:
-            typ = child.tag.split("}")[1]
-            v = child.get("value")
-            out[p.get("name")] = (typ, float(v) if typ == "Real" else int(v) if typ == "Integer" else
-                                  (v.lower() == "true") if typ == "Boolean" else v)
-    return out
+    """Parameters of an SSP parameter-set file.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.ssv`` file (``ssv:ParameterSet``).
+
+    Returns
+    -------
+    dict
+        ``{parameter: (type, value)}``: type ``"Real"`` (float), ``"Integer"`` (int), ``"Boolean"`` (bool) or
+        ``"String"``.
+    """
+    return _parameter_set(_parse(path, "parameter set"))[1]
 
 
-def read_ssp(path) -> SSPSystem:
-    """Parse an SSP folder or archive (an archive is extracted to a temporary folder)."""
-    from ..errors import ParameterError
+def _binding_values(binding, ssd_path, where):
+    """(set name, {parameter: (type, value)}, source path or None) of one ``ssd:ParameterBinding``."""
+    typ = binding.get("type", PARAMETER_SET_TYPE)
+    if typ != PARAMETER_SET_TYPE or binding.get("sourceBase", "SSD") != "SSD" \
+            or binding.find("ssd:ParameterMapping", NS) is not None:
+        raise ParameterError(f"{where}: only ParameterBindings of type {PARAMETER_SET_TYPE} resolved against the "
+                             "SSD, without ParameterMapping, are supported")
+    source = binding.get("source")
+    if source:
+        path = ssd_path.parent / source
+        if not path.is_file():
+            raise ParameterError(f"{where} binds {source!r}, which is not in the SSP")
+        name, values = _parameter_set(_parse(path, "parameter set"))
+    else:
+        inline = binding.find("ssd:ParameterValues/ssv:ParameterSet", NS)
+        if inline is None:
+            raise ParameterError(f"{where}: a ParameterBinding has neither a source nor inline ParameterValues")
+        path = None
+        name, values = _parameter_set(inline)
+    prefix = binding.get("prefix", "")
+    return name, {prefix + k: v for k, v in values.items()}, path
 
-    path = Path(path)
-    if not path.exists():
-        raise ParameterError(f"SSP = {str(path)!r} does not exist")
-    if path.is_file():
-        tmp = Path(tempfile.mkdtemp(prefix="frb_ssp_"))
-        try:
-            with zipfile.ZipFile(path) as z:
-                z.extractall(tmp)
-        except zipfile.BadZipFile:
-            raise ParameterError(f"SSP = {str(path)!r} is not a valid .ssp (zip) archive") from None
-        path = tmp
-    ssd = path / "SystemStructure.ssd"
-    if not ssd.exists():
-        raise ParameterError(f"SSP {str(path)!r} has no SystemStructure.ssd")
-    try:
-        root = ET.parse(ssd).getroot()
-    except ET.ParseError as exc:
-        raise ParameterError(f"SystemStructure.ssd is not well-formed XML: {exc}") from None
-    comps = {}
-    for c in root.iter(f"{{{NS['ssd']}}}Component"):
-        comps[c.get("name")] = path / c.get("source")
+
+def _bound_set(ssd_root, ssd_path):
+    """(set name, {component: values}, {component: tuple of .ssv paths}) that one SSD binds."""
+    if ssd_root.find("ssd:System/ssd:ParameterBindings", NS) is not None:
+        raise ParameterError(f"{ssd_path.name}: system-level ParameterBindings are not supported; bind the "
+                             "parameter sets to the components")
+    values, files, names = {}, {}, set()
+    for comp in ssd_root.iterfind("ssd:System/ssd:Elements/ssd:Component", NS):
+        cname = comp.get("name")
+        values[cname], files[cname] = {}, []
+        for b in comp.iterfind("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+            name, vals, path = _binding_values(b, ssd_path, f"{ssd_path.name} component {cname!r}")
+            values[cname].update(vals)  # SSP 1.0: later bindings override earlier ones
+            names.add(name)
+            if path is not None:
+                files[cname].append(path)
+        files[cname] = tuple(files[cname])
+    # the set is named by its parameter sets; bindings of differently named sets name it by the variant's file
+    set_name = names.pop() if len(names) == 1 and None not in names else ssd_path.stem
+    return set_name, values, files
+
+
+def _structure(ssd_root, folder):
+    """({component: FMU path}, [(start element, start connector, end element, end connector)])."""
+    comps = {c.get("name"): folder / c.get("source")
+             for c in ssd_root.iterfind("ssd:System/ssd:Elements/ssd:Component", NS)}
     cons = [(c.get("startElement"), c.get("startConnector"), c.get("endElement"), c.get("endConnector"))
-            for c in root.iter(f"{{{NS['ssd']}}}Connection")]
+            for c in ssd_root.iterfind("ssd:System/ssd:Connections/ssd:Connection", NS)]
     for s_el, s_c, e_el, e_c in cons:
         for el in (s_el, e_el):
             if el not in comps:
                 raise ParameterError(f"SSP connection {s_el}.{s_c} -> {e_el}.{e_c} names an unknown component "
                                      f"{el!r}; components are {sorted(comps)}")
-    sets = {}
-    for f in sorted((path / "resources").glob("*_*.ssv")):
-        set_name, comp = f.stem.split("_", 1)
-        sets.setdefault(set_name, {})[comp] = f
+    return comps, cons
+
+
+def _ssp_folder(path):
+    """Folder of an SSP: ``path`` itself, or a temporary folder with the extracted archive."""
+    if not path.exists():
+        raise ParameterError(f"SSP = {str(path)!r} does not exist")
+    if path.is_dir():
+        return path
+    tmp = Path(tempfile.mkdtemp(prefix="frb_ssp_"))
+    try:
+        with zipfile.ZipFile(path) as z:
+            z.extractall(tmp)
+    except zipfile.BadZipFile:
+        raise ParameterError(f"SSP = {str(path)!r} is not a valid .ssp (zip) archive") from None
+    return tmp
+
+
+def read_ssp(path) -> SSPSystem:
+    """Parse an SSP folder or ``.ssp`` archive, its parameter sets from the SSDs' ParameterBindings.
+
+    ``SystemStructure.ssd`` gives the components, connections, step and stop time and the default set; every
+    further ``.ssd`` at the root is a variant that must describe the same system and gives one more set.
+
+    Parameters
+    ----------
+    path : str or Path
+        Folder or ``.ssp`` archive (extracted to a temporary folder).
+
+    Returns
+    -------
+    SSPSystem
+
+    Raises
+    ------
+    ParameterError
+        Missing or malformed files, a connection to an unknown component, a variant that differs in
+        structure, two variants binding sets of the same name, or an unsupported kind of binding.
+    """
+    source = Path(path)
+    folder = _ssp_folder(source)
+    ssd = folder / DEFAULT_SSD
+    if not ssd.exists():
+        raise ParameterError(f"SSP {str(source)!r} has no {DEFAULT_SSD}")
+    root = _parse(ssd, DEFAULT_SSD + " of SSP")
+    comps, cons = _structure(root, folder)
+    sets, files = {}, {}
+    for f in [ssd] + sorted(p for p in folder.glob("*.ssd") if p.name != DEFAULT_SSD):
+        r = root if f == ssd else _parse(f, "SSD variant")
+        if f != ssd and _structure(r, folder) != (comps, cons):
+            raise ParameterError(f"SSP {str(source)!r}: variant {f.name} has other components or connections "
+                                 f"than {DEFAULT_SSD}; only parameter variants are supported")
+        name, values, paths = _bound_set(r, f)
+        if name in sets:
+            raise ParameterError(f"SSP {str(source)!r}: {f.name} binds parameter set {name!r}, which another "
+                                 "SSD binds already")
+        sets[name], files[name] = values, paths
     step = stop = None
     fsa = root.find(".//osp:FixedStepAlgorithm", NS)
     if fsa is not None:
@@ -253,7 +479,7 @@ def read_ssp(path) -> SSPSystem:
     de = root.find("ssd:DefaultExperiment", NS)
     if de is not None and de.get("stopTime"):
         stop = float(de.get("stopTime"))
-    return SSPSystem(path, comps, cons, sets, step, stop)
+    return SSPSystem(folder, comps, cons, files, step, stop, sets, next(iter(sets)), source)
 
 
 __all__ = ["write_ssp", "read_ssp", "read_ssv", "connections", "parameter_sets", "SSPSystem"]
