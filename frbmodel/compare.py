@@ -20,7 +20,21 @@ from .spectral import spectrogram
 def associate(component, cd, window=1.5):
     """Pair a run-up component with a Campbell mode: among the modes with an unstable range that starts within a
     factor ``window`` of the component's onset speed (or contains it), the one closest in frequency there.
-    Returns dict(mode, kind, precession, linear onset [rpm], linear f [Hz], cost) or None."""
+
+    Parameters
+    ----------
+    component : Component
+        A sub-synchronous component of the run-up (:meth:`SpectrogramResult.components`).
+    cd : CampbellResult
+    window : float
+        Speed factor [-] around the component's onset in which an unstable range may start.
+
+    Returns
+    -------
+    dict or None
+        Keys "cost" (relative frequency mismatch [-]), "mode", "kind", "precession", "linear onset [rpm]",
+        "linear f at onset [Hz]", "starts at sweep begin"; None if no mode qualifies.
+    """
     best = None
     s_on = component.onset_rpm
     f_on = component.onset_hz
@@ -45,15 +59,115 @@ def associate(component, cd, window=1.5):
     return best
 
 
+def write_spectrogram(sp, cd, folder, title, xscale="linear", fmax_hz=None):
+    """Write the composite figure (PNG + HTML) and the components table of a spectrogram into ``folder``.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    cd : CampbellResult
+        Method-J Campbell diagram for the overlay.
+    folder : Path
+    title : str
+    xscale : {"linear", "log"}
+    fmax_hz : float, optional
+        Upper frequency limit [Hz].
+
+    Returns
+    -------
+    list of Path
+        ``composite.png``, ``composite.html``, ``components.csv``.
+    """
+    import matplotlib.pyplot as plt
+
+    fig = sp.plot(campbell=cd, title=title, xscale=xscale, fmax_hz=fmax_hz)
+    paths = [folder / "composite.png", folder / "composite.html", folder / "components.csv"]
+    fig.savefig(paths[0], dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    sp.plot_html(paths[1], campbell=cd, fmax_hz=fmax_hz)
+    sp.components_table().to_csv(paths[2], index=False)
+    return paths
+
+
+def comparison_rows(clearance, sp, comps, cd, status):
+    """Rows of the linear-vs-nonlinear table for one outer clearance: one per sub-synchronous component (with its
+    associated method-J mode, :func:`associate`) and one per internal resonance.
+
+    Parameters
+    ----------
+    clearance : float
+        Outer clearance [m].
+    sp : SpectrogramResult
+    comps : list of Component
+        ``sp.components()``.
+    cd : CampbellResult
+    status : str
+        "finished" or "stopped" (the run-up's).
+
+    Returns
+    -------
+    list of dict
+    """
+    rows = []
+    for comp in comps:
+        if not comp.label.startswith("sub"):
+            continue
+        a = associate(comp, cd)
+        row = {"c_o [um]": clearance * 1e6, "component": comp.label, "direction": comp.direction,
+               "nonlinear onset [rpm]": comp.onset_rpm, "first detection [rpm]": comp.onset_threshold_rpm,
+               "f at onset [Hz]": comp.onset_hz, "end [rpm]": comp.end_rpm,
+               "max amplitude [um]": float(comp.amplitude_m.max() * 1e6), "run-up": status}
+        if a:
+            row.update({"J mode": f"{a['precession']} {a['kind']}", "linear onset [rpm]": a["linear onset [rpm]"],
+                        "linear f [Hz]": a["linear f at onset [Hz]"],
+                        "rel. difference [-]": comp.onset_rpm / a["linear onset [rpm]"] - 1.0,
+                        "frequency mismatch [-]": a["cost"]})
+        rows.append(row)
+    for res in sp.internal_resonances(comps):
+        rows.append({"c_o [um]": clearance * 1e6, "component": "total instability?",
+                     "direction": f"{res['components'][0]} & {res['components'][1]}: {res['condition']}",
+                     "nonlinear onset [rpm]": res["from [rpm]"], "end [rpm]": res["to [rpm]"], "run-up": status})
+    return rows
+
+
 def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250e3), duration=4.0,
             profile="exponential", node="turbine_wheel", out_dir="results/compare", n_speeds=300, progress=print,
             runup_kw=None, segment_s=0.1, fmax_hz=1000.0):
     """Run the run-up and the method-J Campbell diagram per outer clearance; write per clearance the run-up
     data, the composite figure (PNG + HTML) and the components; return and write the comparison table.
 
-    Returns ``(table: pandas.DataFrame, paths: list)``.
+    Parameters
+    ----------
+    system : Turbocharger
+    clearances : sequence of float
+        Outer film clearances [m].
+    speed_rpm : (float, float)
+        Start and end speed [rpm] of the run-ups and the Campbell sweeps.
+    duration : float
+        Run-up duration [s].
+    profile : {"exponential", "ramp"}
+        Speed profile of the run-ups (and spacing of the Campbell speeds).
+    node : str
+        Node whose orbit is analysed.
+    out_dir : path
+    n_speeds : int
+        Speeds of the Campbell sweeps.
+    progress : callable
+        Called with a message per step.
+    runup_kw : dict, optional
+        Further arguments of :func:`frbmodel.runup`.
+    segment_s : float
+        Spectrogram segment length [s] (at most duration / 8).
+    fmax_hz : float
+        Upper frequency limit of the figures [Hz].
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        :func:`comparison_rows` of all clearances (also written as ``linear_vs_nonlinear.csv`` / ``.md``).
+    paths : list of Path
+        Files written.
     """
-    import matplotlib.pyplot as plt
     import pandas as pd
 
     out = Path(out_dir)
@@ -79,36 +193,9 @@ def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250
         paths += [out / tag / "runup.csv", out / tag / "runup.json"]
         sp = spectrogram(run, node, segment_s=min(segment_s, duration / 8))
         comps = sp.components()
-        fig = sp.plot(campbell=cd, title=f"c_o = {c * 1e6:.0f} um: run-up spectrogram ({node}) vs method J",
-                      xscale="log" if profile == "exponential" else "linear", fmax_hz=fmax_hz)
-        p = out / tag / "composite.png"
-        fig.savefig(p, dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        paths.append(p)
-        p = out / tag / "composite.html"
-        sp.plot_html(p, campbell=cd, fmax_hz=fmax_hz)
-        paths.append(p)
-        p = out / tag / "components.csv"
-        sp.components_table().to_csv(p, index=False)
-        paths.append(p)
-        for comp in comps:
-            if not comp.label.startswith("sub"):
-                continue
-            a = associate(comp, cd)
-            row = {"c_o [um]": c * 1e6, "component": comp.label, "direction": comp.direction,
-                   "nonlinear onset [rpm]": comp.onset_rpm, "first detection [rpm]": comp.onset_threshold_rpm,
-                   "f at onset [Hz]": comp.onset_hz, "end [rpm]": comp.end_rpm,
-                   "max amplitude [um]": float(comp.amplitude_m.max() * 1e6), "run-up": status}
-            if a:
-                row.update({"J mode": f"{a['precession']} {a['kind']}", "linear onset [rpm]": a["linear onset [rpm]"],
-                            "linear f [Hz]": a["linear f at onset [Hz]"],
-                            "rel. difference [-]": comp.onset_rpm / a["linear onset [rpm]"] - 1.0,
-                            "frequency mismatch [-]": a["cost"]})
-            rows.append(row)
-        for res in sp.internal_resonances(comps):
-            rows.append({"c_o [um]": c * 1e6, "component": "total instability?",
-                         "direction": f"{res['components'][0]} & {res['components'][1]}: {res['condition']}",
-                         "nonlinear onset [rpm]": res["from [rpm]"], "end [rpm]": res["to [rpm]"], "run-up": status})
+        title = f"c_o = {c * 1e6:.0f} um: run-up spectrogram ({node}) vs method J"
+        paths += write_spectrogram(sp, cd, out / tag, title, "log" if profile == "exponential" else "linear", fmax_hz)
+        rows += comparison_rows(c, sp, comps, cd, status)
     table = pd.DataFrame(rows)
     p = out / "linear_vs_nonlinear.csv"
     table.to_csv(p, index=False)
@@ -120,6 +207,17 @@ def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250
 
 
 def table_markdown(table) -> str:
+    """The main columns of a :func:`compare` table as a Markdown table (speeds with thousands separators,
+    relative differences in %).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+
+    Returns
+    -------
+    str
+    """
     cols = ["c_o [um]", "component", "direction", "nonlinear onset [rpm]", "first detection [rpm]", "f at onset [Hz]",
             "J mode", "linear onset [rpm]", "linear f [Hz]", "rel. difference [-]"]
     cols = [c for c in cols if c in table.columns]

@@ -1,4 +1,9 @@
-"""Figures: holistic Campbell diagram (matplotlib PNG and plotly HTML), RSR and equilibrium-cost figures."""
+"""Figures: holistic Campbell diagram (matplotlib PNG and plotly HTML), RSR and equilibrium-cost figures, the
+run-up composite (spectrogram with Campbell overlay and RSR).
+
+matplotlib and plotly are imported inside the functions that draw, so ``import frbmodel`` needs neither; the
+matplotlib backend is the caller's choice (the CLI and the tests select Agg), never switched here.
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -12,8 +17,17 @@ WHIRL_STYLES = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a")
 
 
 def whirl_curves(cd):
-    """(film index, name, speeds [rpm], whirl frequency [Hz] — NaN below the film's onset) for the films that
-    are past their onset somewhere in the sweep."""
+    """Film whirl curves of a Campbell sweep, for the films that are past their onset somewhere in it.
+
+    Parameters
+    ----------
+    cd : CampbellResult
+
+    Returns
+    -------
+    list of tuple
+        ``(film index, film name, speeds [rpm], whirl frequency [Hz] — NaN below the film's onset)``.
+    """
     out = []
     for k, name in enumerate(FILM_NAMES):
         w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
@@ -36,10 +50,23 @@ def _default_fmax(cd):
 def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None):
     """Holistic Campbell diagram: frequency vs speed, colour = modal damping (diverging, centred at 0),
     marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge;
-    dashed film whirl curves above their onset; optional 1X line. Returns the Figure."""
-    import matplotlib
+    dashed film whirl curves above their onset; optional 1X line.
 
-    matplotlib.use("Agg", force=False)
+    Parameters
+    ----------
+    cd : CampbellResult
+    fmax_hz : float, optional
+        Upper frequency limit [Hz] (default: 1.15 × the highest rotor frequency, at least 500 Hz).
+    whirl, one_x : bool
+        Draw the film whirl curves and the 1X line.
+    ax : matplotlib.axes.Axes, optional
+        Draw into these axes (default: a new figure).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt
     from matplotlib.colors import TwoSlopeNorm
 
@@ -83,7 +110,17 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
 
 
 def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
-    """Interactive holistic Campbell diagram (plotly); hover shows speed, frequency, D and precession."""
+    """Interactive holistic Campbell diagram (plotly); hover shows speed, frequency, D and precession.
+
+    Parameters
+    ----------
+    cd, fmax_hz, whirl, one_x
+        As for :func:`campbell_figure`.
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+    """
     import plotly.graph_objects as go
 
     fmax = fmax_hz or _default_fmax(cd)
@@ -123,8 +160,19 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
 
 
 def rsr_figure(results, title="Ring-speed ratio"):
-    """RSR vs speed for several Campbell/equilibrium sweeps; ``results`` maps a label to
-    ``(speeds_rpm, rsr (n, 2))``. Returns the Figure (turbine and compressor bearing side by side)."""
+    """Ring-speed ratio vs speed for several Campbell/equilibrium sweeps, turbine and compressor bearing side by
+    side.
+
+    Parameters
+    ----------
+    results : dict
+        Label (method letter) -> ``(speeds [rpm] (n,), RSR [-] (n, 2))``.
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
@@ -144,9 +192,19 @@ def rsr_figure(results, title="Ring-speed ratio"):
 
 
 def equilibrium_cost_figure(stats, title="Equilibrium cost per speed"):
-    """Bar chart of CPU time [ms], iterations and evaluations per equilibrium for several methods.
-    ``stats`` maps a method letter to a dict with keys ``time_ms``, ``iterations``, ``evaluations``
-    (arrays over speeds)."""
+    """Bar chart of CPU time [ms], iterations and film evaluations per equilibrium for several methods (mean and
+    standard deviation over speeds).
+
+    Parameters
+    ----------
+    stats : dict
+        Method letter -> dict with keys ``time_ms``, ``iterations``, ``evaluations`` (arrays over speeds).
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.6))
@@ -174,20 +232,77 @@ def _unstable_lines(cd, fmax):
 
 
 def linear_rsr(system, speeds_rpm, methods="FIJ"):
-    """RSR (n, 2) of the linear methods' equilibria over ``speeds_rpm`` (dict letter -> array)."""
+    """Ring-speed ratios of the linear methods' equilibria.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    speeds_rpm : (n,) array_like
+        Rotor speeds [rpm].
+    methods : str
+        Method letters.
+
+    Returns
+    -------
+    dict
+        Method letter -> RSR [-] (n, 2) (turbine, compressor bearing).
+    """
     from .equilibrium import equilibrium
 
     return {m: np.array([[b.ring_speed_ratio for b in equilibrium(system, m, s).bearings] for s in speeds_rpm])
             for m in methods}
 
 
+def _rsr_panel(ax, run, xscale):
+    """Ring-speed ratios of the run-up and, with the system in ``run.meta``, of the linear methods F, I, J."""
+    names = ("turbine", "compressor")
+    rr = run.ring_speed_ratio
+    for j in range(2):
+        ax.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"run-up, {names[j]}")
+    sys_d = (run.meta or {}).get("system")
+    if sys_d:
+        from .parameters import Turbocharger
+
+        tc = Turbocharger.from_dict(sys_d)
+        speeds = np.linspace(max(run.speed_rpm.min(), 1e3), run.speed_rpm.max(), 25)
+        styles = {"F": "-", "I": "-.", "J": "--"}
+        for m, arr in linear_rsr(tc, speeds).items():
+            for j in range(2):
+                ax.plot(speeds / 1e3, arr[:, j], styles[m], color="k" if j == 0 else "0.55", lw=1.2,
+                        label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {names[j]}")
+    ax.set_xscale(xscale)
+    ax.set_xlabel("rotor speed [krpm]")
+    ax.set_ylabel("RSR = ω_FR / ω_R [-]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title("ring-speed ratio", fontsize=10)
+
+
 def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None,
                      xscale="linear"):
     """The paper's Figs. 12–14: spectrogram (25 dB, log) with unstable Campbell modes (solid), film whirl
-    curves (dashed), 1X (dotted), component labels; RSR of the run-up vs the linear methods beside it."""
-    import matplotlib
+    curves (dashed), 1X (dotted), component labels; RSR of the run-up vs the linear methods beside it.
 
-    matplotlib.use("Agg", force=False)
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    campbell : CampbellResult, optional
+        Method-J Campbell diagram for the overlay.
+    whirl : bool
+        Draw the film whirl curves of ``campbell``.
+    rsr : bool
+        Add the RSR panel (needs ``sp.run``; the linear methods' RSR needs the system in ``sp.run.meta``).
+    fmax_hz : float, optional
+        Upper frequency limit [Hz] (default: 1.1 × the highest rotor frequency, at most the Nyquist frequency).
+    components : bool
+        Label the tracked components at their onset.
+    title : str, optional
+    xscale : {"linear", "log"}
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt
 
     run = sp.run
@@ -207,7 +322,8 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     if campbell is not None:
         first = True
         for sk, f, _ in _unstable_lines(campbell, fmax):
-            ax.plot(sk, f, "-", color="#00e5ff", lw=1.6, label=f"unstable modes, method {campbell.method}" if first else None)
+            ax.plot(sk, f, "-", color="#00e5ff", lw=1.6,
+                    label=f"unstable modes, method {campbell.method}" if first else None)
             first = False
         if whirl:
             _plot_whirl(ax, campbell, lw=1.2)
@@ -223,33 +339,23 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     ax.legend(fontsize=7, loc="upper left", framealpha=0.6)
     ax.set_title(title or f"Run-up spectrogram, {sp.node} (orbit x + iy)", fontsize=10)
     if ax2 is not None:
-        names = ("turbine", "compressor")
-        rr = run.ring_speed_ratio
-        for j in range(2):
-            ax2.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"run-up, {names[j]}")
-        sys_d = (run.meta or {}).get("system")
-        if sys_d:
-            from .parameters import Turbocharger
-
-            tc = Turbocharger.from_dict(sys_d)
-            speeds = np.linspace(max(run.speed_rpm.min(), 1e3), run.speed_rpm.max(), 25)
-            styles = {"F": "-", "I": "-.", "J": "--"}
-            for m, arr in linear_rsr(tc, speeds).items():
-                for j in range(2):
-                    ax2.plot(speeds / 1e3, arr[:, j], styles[m], color="k" if j == 0 else "0.55", lw=1.2,
-                             label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {names[j]}")
-        ax2.set_xscale(xscale)
-        ax2.set_xlabel("rotor speed [krpm]")
-        ax2.set_ylabel("RSR = ω_FR / ω_R [-]")
-        ax2.grid(alpha=0.3)
-        ax2.legend(fontsize=7)
-        ax2.set_title("ring-speed ratio", fontsize=10)
+        _rsr_panel(ax2, run, xscale)
     fig.tight_layout()
     return fig
 
 
 def composite_plotly(sp, campbell=None, fmax_hz=None):
-    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and 1X."""
+    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and 1X.
+
+    Parameters
+    ----------
+    sp, campbell, fmax_hz
+        As for :func:`composite_figure`.
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+    """
     import plotly.graph_objects as go
 
     fmax = fmax_hz or float(min(sp.freqs_hz[-1], 1.1 * sp.speeds_rpm.max() / 60.0))

@@ -304,10 +304,20 @@ def stability_map(out_dir):
 
 def plot_stability_map(out_dir, parameter=None):
     """Onset speed vs the (first) swept parameter, one line per linear mode / nonlinear component; writes
-    ``stability_map.png`` / ``.html`` / ``.csv`` into ``out_dir`` and returns their paths."""
-    import matplotlib
+    ``stability_map.png`` / ``.html`` / ``.csv`` into ``out_dir``.
 
-    matplotlib.use("Agg", force=False)
+    Parameters
+    ----------
+    out_dir : path
+        Folder of a study (:func:`run_study`).
+    parameter : str, optional
+        Swept parameter on the x axis (default: the first).
+
+    Returns
+    -------
+    list of Path
+        The CSV and, if there are onsets, the PNG and HTML figures.
+    """
     import matplotlib.pyplot as plt
     import plotly.graph_objects as go
 
@@ -333,8 +343,8 @@ def plot_stability_map(out_dir, parameter=None):
         pfig.add_trace(go.Scatter(x=x, y=y, mode="lines+markers", name=lab,
                                   line=dict(dash="solid" if kind == "linear" else "dash"),
                                   customdata=g["f at onset [Hz]"].to_numpy(),
-                                  hovertemplate=f"{xlabel} %{{x:.4g}}<br>onset %{{y:.1f}} krpm<br>f %{{customdata:.1f}} Hz"
-                                                f"<extra>{lab}</extra>"))
+                                  hovertemplate=f"{xlabel} %{{x:.4g}}<br>onset %{{y:.1f}} krpm<br>"
+                                                f"f %{{customdata:.1f}} Hz<extra>{lab}</extra>"))
     ax.set_xlabel(xlabel)
     ax.set_ylabel("onset speed [krpm]")
     ax.set_title("Stability map: linear (solid) and nonlinear (dashed) onsets", fontsize=10)

@@ -1,0 +1,631 @@
+"""Spectral components of a run-up: peaks per spectrogram segment, tracks through the segments, onsets, labels.
+
+The input is a spectrogram as :func:`frbmodel.spectral.spectrogram` computes it: the orbit amplitude [m] of
+forward and backward whirl, ``(n_freqs, n_segments)`` each, on non-negative frequencies [Hz], with the rotor
+speed [rpm] of every segment. In each segment the spectral peaks within ``db_range`` of the segment's largest
+one are found; harmonics and mirror images of stronger peaks are dropped; forward peaks at the rotor frequency
+form the synchronous component "1X"; the sub-synchronous peaks are assigned to the tracks of the previous
+segments by :func:`scipy.optimize.linear_sum_assignment` (gate: same direction and
+|Δf| < max(3 df, 0.15 f)). Fragments of one component are joined, short tracks dropped, and each component gets
+two onset estimates (turning point and threshold crossing).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: |f/f_rot − 1| below this is the synchronous (1X) component
+SYNC_TOL = 0.04
+#: relative tolerance of the internal-resonance conditions (2:1 and combination with 1X)
+RESONANCE_TOL = 0.03
+#: +1 forward whirl (f > 0 in the spectrum of x + i y), −1 backward
+FORWARD, BACKWARD = 1, -1
+
+
+@dataclass(frozen=True)
+class Peak:
+    """A spectral peak of one segment.
+
+    Parameters
+    ----------
+    freq_hz : float
+        Peak frequency [Hz], refined between bins (:func:`peak_frequency_hz`).
+    amplitude_m : float
+        Orbit amplitude at the peak bin [m].
+    direction : int
+        ``FORWARD`` (+1) or ``BACKWARD`` (−1) whirl.
+    """
+
+    freq_hz: float
+    amplitude_m: float
+    direction: int
+
+
+@dataclass
+class Track:
+    """A sequence of peaks of one component through the spectrogram segments.
+
+    Parameters
+    ----------
+    direction : int
+        ``FORWARD`` (+1) or ``BACKWARD`` (−1); all peaks of a track whirl in this direction.
+    segments : list of int
+        Segment index of every peak.
+    freqs_hz : list of float
+        Peak frequencies [Hz].
+    amplitudes_m : list of float
+        Peak orbit amplitudes [m].
+    thresholds_m : list of float
+        Detection threshold [m] of the segment of every peak.
+    misses : int
+        Consecutive segments without a peak for this track (while tracking).
+
+    Examples
+    --------
+    >>> tr = Track(FORWARD)
+    >>> tr.add(3, Peak(120.0, 2e-6, FORWARD), 1e-7)
+    >>> tr.segments, tr.last_hz, tr.direction_name
+    ([3], 120.0, 'forward')
+    """
+
+    direction: int
+    segments: list = field(default_factory=list)
+    freqs_hz: list = field(default_factory=list)
+    amplitudes_m: list = field(default_factory=list)
+    thresholds_m: list = field(default_factory=list)
+    misses: int = 0
+
+    def add(self, k, peak, threshold_m):
+        """Append ``peak`` (a :class:`Peak`) found in segment ``k`` with detection threshold ``threshold_m`` [m]."""
+        self.segments.append(k)
+        self.freqs_hz.append(peak.freq_hz)
+        self.amplitudes_m.append(peak.amplitude_m)
+        self.thresholds_m.append(threshold_m)
+        self.misses = 0
+
+    def extend(self, other):
+        """Append all peaks of a later fragment ``other`` of the same component."""
+        self.segments += other.segments
+        self.freqs_hz += other.freqs_hz
+        self.amplitudes_m += other.amplitudes_m
+        self.thresholds_m += other.thresholds_m
+
+    def __len__(self):
+        return len(self.segments)
+
+    @property
+    def last_hz(self) -> float:
+        """Frequency of the latest peak [Hz]."""
+        return self.freqs_hz[-1]
+
+    @property
+    def direction_name(self) -> str:
+        """Whirl direction, "forward" or "backward"."""
+        return "forward" if self.direction > 0 else "backward"
+
+
+@dataclass
+class Component:
+    """A tracked and labelled spectral component of a run-up.
+
+    Parameters
+    ----------
+    label : str
+        "1X" (synchronous) or "sub1", "sub2", ... (sub-synchronous, in the order of their first detection).
+    speeds_rpm : ndarray
+        Rotor speed [rpm] of each detection.
+    freqs_hz : ndarray
+        Component frequency [Hz] of each detection.
+    amplitude_m : ndarray
+        Orbit amplitude [m] of each detection.
+    direction : str
+        "forward" or "backward" whirl.
+    onset_interp_rpm : float
+        Onset speed [rpm] (turning point for sub-synchronous components, threshold crossing for 1X).
+    onset_threshold_rpm : float
+        Speed [rpm] where the amplitude crosses the detection threshold (interpolated between segments).
+    """
+
+    label: str
+    speeds_rpm: np.ndarray
+    freqs_hz: np.ndarray
+    amplitude_m: np.ndarray
+    direction: str
+
+    onset_interp_rpm: float = math.nan
+    onset_threshold_rpm: float = math.nan
+
+    @property
+    def onset_rpm(self) -> float:
+        """Onset speed [rpm]: ``onset_interp_rpm``, or the first detection if that is unknown."""
+        return self.onset_interp_rpm if math.isfinite(self.onset_interp_rpm) else float(self.speeds_rpm[0])
+
+    @property
+    def end_rpm(self) -> float:
+        """Speed of the last detection [rpm]."""
+        return float(self.speeds_rpm[-1])
+
+    @property
+    def onset_hz(self) -> float:
+        """Frequency at the onset speed [Hz]: the median f/f_rot of the first three detections (robust to a
+        one-segment shift of the first detection), times the onset speed (constant-ratio extrapolation)."""
+        n = min(3, self.freqs_hz.size)
+        return float(np.median(self.freqs_hz[:n] / self.speeds_rpm[:n]) * self.onset_rpm)
+
+    @property
+    def first_detection_hz(self) -> float:
+        """Frequency of the first detection [Hz]."""
+        return float(self.freqs_hz[0])
+
+    @property
+    def ratio(self) -> np.ndarray:
+        """Frequency / rotor frequency [-] of each detection."""
+        return self.freqs_hz / (self.speeds_rpm / 60.0)
+
+
+# ---------------------------------------------------------------------------------------------------- peaks
+def peak_frequency_hz(freqs_hz, spec, i):
+    """Frequency [Hz] of the spectral peak at bin ``i``, refined between bins by the vertex of a parabola through
+    the log magnitudes of the bin and its neighbours (Hann window: error well below 1 % of a bin).
+
+    Parameters
+    ----------
+    freqs_hz : (f,) ndarray
+        Equally spaced bin frequencies [Hz].
+    spec : (f,) ndarray
+        Magnitudes (any unit).
+    i : int
+        Bin index of the peak.
+
+    Returns
+    -------
+    float
+        Peak frequency [Hz]; the bin frequency at the ends or where the parabola opens upwards.
+
+    Examples
+    --------
+    A Gaussian is a parabola in log magnitude, so its centre is found exactly:
+
+    >>> f = np.arange(10.0)
+    >>> float(round(peak_frequency_hz(f, np.exp(-(f - 4.3) ** 2), 4), 12))
+    4.3
+    """
+    f = freqs_hz
+    if 0 < i < f.size - 1 and spec[i - 1] > 0 and spec[i + 1] > 0:
+        a, b, c = np.log(spec[i - 1]), np.log(spec[i]), np.log(spec[i + 1])
+        den = a - 2 * b + c
+        if den < 0:
+            return float(f[i] + 0.5 * (a - c) / den * (f[1] - f[0]))
+    return float(f[i])
+
+
+def segment_peaks(freqs_hz, forward, backward, threshold_m):
+    """Peaks above ``threshold_m`` of one segment's forward and backward spectra.
+
+    Parameters
+    ----------
+    freqs_hz : (f,) ndarray
+        Non-negative bin frequencies [Hz].
+    forward, backward : (f,) ndarray
+        Orbit amplitude [m] of forward and backward whirl.
+    threshold_m : float
+        Minimum peak height [m].
+
+    Returns
+    -------
+    list of Peak
+        Forward peaks by increasing frequency, then backward ones.
+    """
+    from scipy.signal import find_peaks
+
+    peaks = []
+    for sign, spec in ((FORWARD, forward), (BACKWARD, backward)):
+        idx, _ = find_peaks(spec, height=threshold_m)
+        peaks += [Peak(peak_frequency_hz(freqs_hz, spec, i), spec[i], sign) for i in idx]
+    return peaks
+
+
+def secondary_peaks(peaks, df_hz):
+    """Indices of peaks that are not components of their own: harmonics (2×, 3×) of a stronger lower peak, and
+    the mirror (−f) of a stronger peak (an elliptic orbit whirls at +f and −f at once).
+
+    Parameters
+    ----------
+    peaks : list of Peak
+    df_hz : float
+        Bin spacing [Hz]; peaks closer than max(1.5 df, 2 % of f) to a harmonic or mirror count as one.
+
+    Returns
+    -------
+    set of int
+
+    Examples
+    --------
+    >>> secondary_peaks([Peak(100.0, 5.0, FORWARD), Peak(200.5, 1.0, FORWARD), Peak(100.2, 2.0, BACKWARD)], 1.0)
+    {1, 2}
+    """
+    out = set()
+    for p, pk in enumerate(peaks):
+        tol = max(1.5 * df_hz, 0.02 * pk.freq_hz)
+        for q in peaks:
+            if q.amplitude_m > pk.amplitude_m and (
+                    (q.freq_hz < pk.freq_hz and any(abs(pk.freq_hz - h * q.freq_hz) < tol for h in (2, 3))) or
+                    (q.direction != pk.direction and abs(pk.freq_hz - q.freq_hz) < tol)):
+                out.add(p)
+                break
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------- tracks
+def assign(tracks, peaks, df_hz):
+    """Assign peaks of the current segment to existing tracks.
+
+    A peak may continue a track if it whirls in the track's direction and lies within
+    |Δf| < max(3 df, 0.15 f_last) of the track's latest frequency. Among these pairs the assignment with the
+    most matches and, among those, the smallest total |Δf| is taken (:func:`scipy.optimize.linear_sum_assignment`).
+    Where every track's nearest admissible peak is a different one, this is each track's nearest peak.
+
+    Parameters
+    ----------
+    tracks : list of Track
+    peaks : list of Peak
+    df_hz : float
+        Bin spacing [Hz].
+
+    Returns
+    -------
+    list of (int, int)
+        (track index, peak index) pairs, by increasing track index.
+
+    Examples
+    --------
+    Track 0 (at 100 Hz) is nearer to the peak at 102 Hz than to its own at 97 Hz; a greedy nearest-neighbour
+    search starting with track 0 would swap the two tracks:
+
+    >>> tracks = [Track(FORWARD, [0], [100.0]), Track(FORWARD, [0], [104.0])]
+    >>> assign(tracks, [Peak(97.0, 1.0, FORWARD), Peak(102.0, 1.0, FORWARD)], 1.0)
+    [(0, 0), (1, 1)]
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    if not tracks or not peaks:
+        return []
+    f_tr = np.array([t.last_hz for t in tracks])
+    d = np.abs(np.array([p.freq_hz for p in peaks])[None, :] - f_tr[:, None])
+    ok = (np.array([t.direction for t in tracks])[:, None] == np.array([p.direction for p in peaks])[None, :]) & \
+        (d < np.maximum(3 * df_hz, 0.15 * f_tr)[:, None])
+    if not ok.any():
+        return []
+    cost = np.where(ok, d, np.inf)
+    best = cost.argmin(axis=1)
+    has = ok.any(axis=1)
+    if np.unique(best[has]).size == has.sum():  # every track's nearest peak is distinct: that is the optimum
+        return [(int(i), int(best[i])) for i in np.flatnonzero(has)]
+    # a forbidden pair costs more than any admissible assignment, so the optimum has the most admissible pairs
+    big = 1.0 + d[ok].sum()
+    r, c = linear_sum_assignment(np.where(ok, d, big))
+    return [(int(i), int(j)) for i, j in zip(r, c) if ok[i, j]]
+
+
+def split_segment(peaks, speed_rpm, df_hz, f_min_hz):
+    """Split one segment's independent peaks into synchronous (1X) and sub-synchronous ones.
+
+    Parameters
+    ----------
+    peaks : list of Peak
+        Peaks without harmonics and mirrors (:func:`secondary_peaks` removed).
+    speed_rpm : float
+        Rotor speed of the segment [rpm].
+    df_hz : float
+        Bin spacing [Hz].
+    f_min_hz : float
+        Lowest frequency of a sub-synchronous component [Hz].
+
+    Returns
+    -------
+    sync, subs : list of Peak
+        Forward peaks within ``SYNC_TOL`` (plus half a bin) of the rotor frequency; peaks below
+        (1 − ``SYNC_TOL``) f_rot and above ``f_min_hz``.
+    """
+    frot = speed_rpm / 60.0
+    is_sync = [p.direction > 0 and abs(p.freq_hz / frot - 1.0) < SYNC_TOL + 0.5 * df_hz / frot for p in peaks]
+    sync = [p for p, s in zip(peaks, is_sync) if s]
+    subs = [p for p, s in zip(peaks, is_sync) if not s and f_min_hz < p.freq_hz < (1.0 - SYNC_TOL) * frot]
+    return sync, subs
+
+
+def track_peaks(freqs_hz, speeds_rpm, forward, backward, db_range=25.0, min_amplitude_m=1e-7, f_min_hz=0.0,
+                max_misses=3):
+    """Follow the spectral peaks through the segments of a spectrogram.
+
+    Parameters
+    ----------
+    freqs_hz : (f,) ndarray
+        Non-negative, equally spaced frequencies [Hz].
+    speeds_rpm : (k,) ndarray
+        Rotor speed of every segment [rpm].
+    forward, backward : (f, k) ndarray
+        Orbit amplitude [m] of forward and backward whirl.
+    db_range : float
+        A peak counts when it lies within this range [dB] of its segment's largest one ...
+    min_amplitude_m : float
+        ... and above this amplitude [m].
+    f_min_hz : float
+        Lowest frequency of a sub-synchronous component [Hz].
+    max_misses : int
+        A track ends after this many consecutive segments without a peak.
+
+    Returns
+    -------
+    sync : Track
+        The synchronous (1X) peaks.
+    tracks : list of Track
+        Sub-synchronous tracks, unmerged, by the segment of their end.
+    """
+    df = freqs_hz[1] - freqs_hz[0]
+    sync, done, active = Track(FORWARD), [], []
+    for k in range(forward.shape[1]):
+        thr = max(min_amplitude_m, max(forward[:, k].max(), backward[:, k].max()) * 10 ** (-db_range / 20))
+        peaks = segment_peaks(freqs_hz, forward[:, k], backward[:, k], thr)
+        skip = secondary_peaks(peaks, df)
+        s_peaks, subs = split_segment([p for i, p in enumerate(peaks) if i not in skip], speeds_rpm[k], df, f_min_hz)
+        for p in s_peaks:
+            sync.add(k, p, thr)
+        pairs = dict(assign(active, subs, df))
+        kept = []
+        for i, tr in enumerate(active):
+            if i in pairs:
+                tr.add(k, subs[pairs[i]], thr)
+            else:
+                tr.misses += 1
+            (kept if tr.misses <= max_misses else done).append(tr)
+        taken = set(pairs.values())
+        for j, p in enumerate(subs):
+            if j not in taken:
+                kept.append(Track(p.direction))
+                kept[-1].add(k, p, thr)
+        active = kept
+    return sync, done + active
+
+
+def merge_fragments(tracks, speeds_rpm, max_gap=4, ratio_tol=0.2):
+    """Join fragments of one component: same direction, the later starting at most ``max_gap`` segments after
+    the earlier ends, with f/f_rot within ``ratio_tol`` (relative).
+
+    Parameters
+    ----------
+    tracks : list of Track
+    speeds_rpm : (k,) ndarray
+        Rotor speed of every segment [rpm].
+    max_gap : int
+    ratio_tol : float
+
+    Returns
+    -------
+    list of Track
+        The joined tracks, by their first segment (the inputs are modified in place).
+    """
+    out = []
+    for t in sorted(tracks, key=lambda t: t.segments[0]):
+        r0 = t.freqs_hz[0] / (speeds_rpm[t.segments[0]] / 60.0)
+        host = None
+        for o in out:
+            gap = t.segments[0] - o.segments[-1]
+            r1 = o.freqs_hz[-1] / (speeds_rpm[o.segments[-1]] / 60.0)
+            if o.direction == t.direction and 0 < gap <= max_gap and abs(r0 - r1) <= ratio_tol * r1:
+                host = o
+        if host is None:
+            out.append(t)
+        else:
+            host.extend(t)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------- onsets
+def turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz):
+    """Onset at the turning point: trace a component backwards from its first detection (segment ``k0``, at
+    ``f0_hz``) at constant f/f_rot (largest amplitude within ±15 % + 1.5 bins) and return the speed [rpm] of its
+    smallest amplitude, where decay turned into growth (the growth rate crosses zero).
+
+    In a run-up the threshold crossing lags the loss of stability (slow passage through the Hopf point); the
+    turning point does not.
+
+    Parameters
+    ----------
+    spec : (f, k) ndarray
+        Orbit amplitude [m] in the component's whirl direction.
+    freqs_hz : (f,) ndarray
+        Frequencies [Hz].
+    speeds_rpm : (k,) ndarray
+        Rotor speed of every segment [rpm].
+    k0 : int
+        Segment of the first detection.
+    f0_hz : float
+        Frequency of the first detection [Hz].
+
+    Returns
+    -------
+    float
+        Speed [rpm]: vertex of a least-squares parabola in log amplitude over ±4 segments about the (3-point median
+        smoothed) first local minimum, else the speed of that segment.
+    """
+    ratio = f0_hz / (speeds_rpm[k0] / 60.0)
+    df = freqs_hz[1] - freqs_hz[0]
+    amps = []
+    for k in range(k0, -1, -1):
+        fc = ratio * speeds_rpm[k] / 60.0
+        sel = np.flatnonzero(np.abs(freqs_hz - fc) <= 0.15 * fc + 1.5 * df)
+        if sel.size == 0:
+            break
+        amps.append(spec[sel, k].max())
+    amps = np.log(np.maximum(np.array(amps[::-1]), 1e-300))
+    ks = np.arange(k0 - amps.size + 1, k0 + 1)
+    # walk back from the first detection while the smoothed amplitude keeps falling: the first local minimum
+    sm = amps.copy()
+    if amps.size >= 3:
+        sm[1:-1] = np.median(np.stack([amps[:-2], amps[1:-1], amps[2:]]), axis=0)
+    j = amps.size - 1
+    while j > 0 and sm[j - 1] < sm[j]:
+        j -= 1
+    if j == 0 or j == amps.size - 1:
+        return float(speeds_rpm[ks[j]])
+    # a flat minimum at the noise floor is located by its surroundings, not by one segment's dip
+    lo, hi = max(j - 4, 0), min(j + 5, amps.size)
+    sp = speeds_rpm[ks[lo:hi]]
+    s_ref = speeds_rpm[ks[j]]
+    if hi - lo >= 5:
+        c2, c1, _ = np.polyfit(sp - s_ref, amps[lo:hi], 2)
+        if c2 > 0:
+            vertex = s_ref - c1 / (2 * c2)
+            if sp[0] <= vertex <= sp[-1]:
+                return float(vertex)
+    return float(s_ref)
+
+
+def threshold_crossing_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz, threshold_m):
+    """Speed [rpm] where a component's amplitude crosses the detection threshold, interpolated in log amplitude
+    between the last segment without (``k0 − 1``) and the first with the component (``k0``, at ``f0_hz``).
+
+    Parameters
+    ----------
+    spec : (f, k) ndarray
+        Orbit amplitude [m] in the component's whirl direction.
+    freqs_hz : (f,) ndarray
+    speeds_rpm : (k,) ndarray
+    k0 : int
+    f0_hz : float
+    threshold_m : float
+        Detection threshold of segment ``k0`` [m].
+
+    Returns
+    -------
+    float
+        The interpolated speed, or the speed of segment ``k0`` if the amplitude does not cross there.
+
+    Examples
+    --------
+    Amplitude ×10 from one segment to the next, threshold ×√10 above the first: half way.
+
+    >>> spec = np.array([[1e-8, 1e-7]] * 5)
+    >>> threshold_crossing_rpm(spec, np.arange(5.0), np.array([1000.0, 2000.0]), 1, 2.0, 10 ** -7.5)
+    1500.0
+    """
+    if k0 == 0:
+        return float(speeds_rpm[0])
+    i = int(np.argmin(np.abs(freqs_hz - f0_hz)))
+    lo = max(i - 2, 0)
+    a_prev = spec[lo:i + 3, k0 - 1].max()
+    a_now = spec[lo:i + 3, k0].max()
+    if not (0 < a_prev < threshold_m <= a_now):
+        return float(speeds_rpm[k0])
+    w = math.log(threshold_m / a_prev) / math.log(a_now / a_prev)
+    return float(speeds_rpm[k0 - 1] + w * (speeds_rpm[k0] - speeds_rpm[k0 - 1]))
+
+
+# ---------------------------------------------------------------------------------------------------- components
+def to_component(label, track, freqs_hz, speeds_rpm, forward, backward):
+    """The :class:`Component` ``label`` of ``track``, with its onset estimates (turning point for sub-synchronous
+    components, threshold crossing for 1X and as ``onset_threshold_rpm``)."""
+    k = np.array(track.segments)
+    spec = forward if track.direction > 0 else backward
+    comp = Component(label, speeds_rpm[k], np.array(track.freqs_hz), np.array(track.amplitudes_m),
+                     track.direction_name)
+    k0, f0 = int(k[0]), track.freqs_hz[0]
+    comp.onset_threshold_rpm = threshold_crossing_rpm(spec, freqs_hz, speeds_rpm, k0, f0, track.thresholds_m[0])
+    comp.onset_interp_rpm = comp.onset_threshold_rpm if label == "1X" else \
+        turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0)
+    return comp
+
+
+def find_components(freqs_hz, speeds_rpm, forward, backward, db_range=25.0, min_amplitude_m=1e-7, f_min_hz=0.0,
+                    min_segments=6):
+    """Tracked, labelled components of a spectrogram: "1X" and the sub-synchronous "sub1", "sub2", ... in the
+    order of their first detection (ties by frequency).
+
+    Parameters
+    ----------
+    freqs_hz, speeds_rpm, forward, backward, db_range, min_amplitude_m, f_min_hz
+        As for :func:`track_peaks`.
+    min_segments : int
+        Tracks (after joining fragments) with fewer detections are dropped.
+
+    Returns
+    -------
+    list of Component
+    """
+    sync, tracks = track_peaks(freqs_hz, speeds_rpm, forward, backward, db_range, min_amplitude_m, f_min_hz)
+    tracks = [t for t in merge_fragments(tracks, speeds_rpm) if len(t) >= min_segments]
+    tracks.sort(key=lambda t: (t.segments[0], t.freqs_hz[0]))
+    labelled = ([("1X", sync)] if len(sync) >= min_segments else []) + \
+        [(f"sub{i + 1}", t) for i, t in enumerate(tracks)]
+    return [to_component(lab, t, freqs_hz, speeds_rpm, forward, backward) for lab, t in labelled]
+
+
+def internal_resonances(components):
+    """Speed ranges where two sub-synchronous components satisfy f_b ≈ 2 f_a or f_a + f_b ≈ f_rot (within
+    ``RESONANCE_TOL``): the signature of "total instability".
+
+    Parameters
+    ----------
+    components : list of Component
+
+    Returns
+    -------
+    list of dict
+        Keys "components" (two labels), "condition" ("2:1" or "f_a + f_b = 1X"), "from [rpm]", "to [rpm]".
+
+    Examples
+    --------
+    >>> s = np.array([60e3, 90e3])
+    >>> a = Component("sub1", s, np.array([200.0, 300.0]), np.ones(2), "forward")
+    >>> b = Component("sub2", s, np.array([400.0, 1000.0]), np.ones(2), "forward")
+    >>> internal_resonances([a, b])
+    [{'components': ('sub1', 'sub2'), 'condition': '2:1', 'from [rpm]': 60000.0, 'to [rpm]': 60000.0}]
+    """
+    comps = [c for c in components if c.label.startswith("sub")]
+    found = []
+    for i, a in enumerate(comps):
+        for b in comps[i + 1:]:
+            common = np.intersect1d(a.speeds_rpm, b.speeds_rpm)
+            if common.size == 0:
+                continue
+            fa = np.interp(common, a.speeds_rpm, a.freqs_hz)
+            fb = np.interp(common, b.speeds_rpm, b.freqs_hz)
+            lo, hi = np.minimum(fa, fb), np.maximum(fa, fb)
+            frot = common / 60.0
+            for kind, ok in (("2:1", np.abs(hi - 2 * lo) < RESONANCE_TOL * hi),
+                             ("f_a + f_b = 1X", np.abs(lo + hi - frot) < RESONANCE_TOL * frot)):
+                if ok.any():
+                    found.append({"components": (a.label, b.label), "condition": kind,
+                                  "from [rpm]": float(common[ok].min()), "to [rpm]": float(common[ok].max())})
+    return found
+
+
+def components_table(components):
+    """pandas DataFrame, one row per component: label, direction, onset/first detection/end speed [rpm],
+    frequency at onset and first detection [Hz], f/f_rot at the first detection [-], largest amplitude [m].
+
+    Parameters
+    ----------
+    components : list of Component
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    import pandas as pd
+
+    rows = [{"component": c.label, "direction": c.direction, "onset [rpm]": c.onset_rpm,
+             "first detection [rpm]": c.onset_threshold_rpm, "end [rpm]": c.end_rpm,
+             "f at onset [Hz]": c.onset_hz, "f at first detection [Hz]": c.first_detection_hz,
+             "f/f_rot at onset [-]": float(c.ratio[0]),
+             "max amplitude [m]": float(c.amplitude_m.max())} for c in components]
+    return pd.DataFrame(rows)
+
+
+__all__ = ["SYNC_TOL", "RESONANCE_TOL", "FORWARD", "BACKWARD", "Peak", "Track", "Component", "peak_frequency_hz",
+           "segment_peaks", "secondary_peaks", "assign", "split_segment", "track_peaks", "merge_fragments",
+           "turning_point_rpm", "threshold_crossing_rpm", "to_component", "find_components", "internal_resonances",
+           "components_table"]
