@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import FRBError, ParameterError, check_positive
+from .interrupt import Terminated
 
 
 class Progress:
@@ -212,10 +213,6 @@ def cmd_runup(args):
     _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear",
                 title="run-down" if prof.direction == "down" else "run-up")
     return code
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, turned into an exception so that long runs close their files as ``interrupted``."""
 
 
 def _on_sigterm(signum, frame):

@@ -20,6 +20,7 @@ from .dynamics import rhs as _rhs
 from .equilibrium import bearing_equilibrium
 from .errors import ParameterError, RunupStopped, check_positive
 from .film import check_model, correction_polys
+from .interrupt import deferred_signals
 from .recorder import Recorder, RunupResult, RunupSchema
 from .units import RPM
 
@@ -113,7 +114,7 @@ class SpeedProfile:
         rpm = np.array([float(fun(x)) for x in t])
         bad = np.flatnonzero(~(np.isfinite(rpm) & (rpm > 0) & (rpm <= MAX_SPEED_RPM)))
         if bad.size:
-            raise ParameterError(f"speed profile function: speed = {rpm[bad[0]]!r} rpm at t = {t[bad[0]]:g} s is "
+            raise ParameterError(f"speed profile function: speed = {float(rpm[bad[0]])!r} rpm at t = {t[bad[0]]:g} s is "
                                  f"invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm for 0 <= t <= duration")
         w = rpm * RPM
         return cls(t, w, np.gradient(w, t), "user function")
@@ -336,7 +337,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     solver.set_initial_value(y0, 0.0)
     rec.append(_sample(problem, rec.schema, 0.0, y0, f_buf))
     status, message = "finished", ""
-    with tqdm(total=float(t_out[-1]), disable=not progress, unit="s", desc="run-up", leave=False,
+    with deferred_signals() as signals, tqdm(total=float(t_out[-1]), disable=not progress, unit="s", desc="run-up", leave=False,
               bar_format="{desc}: {n:.4f}/{total:g} s simulated |{bar}| {elapsed}<{remaining} {postfix}") as bar:
         for k in range(1, t_out.size):
             y = solver.integrate(t_out[k])
@@ -352,6 +353,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
                 status = "stopped"
                 break
             message = ""
+            signals.check()  # Ctrl-C / SIGTERM between samples, never inside the compiled callbacks
             if k % 200 == 0:
                 bar.update(float(t_out[k]) - bar.n)
                 bar.set_postfix_str(f"{row[1]:.0f} rpm", refresh=False)

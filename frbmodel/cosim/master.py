@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from ..errors import CosimStopped, ParameterError
+from ..interrupt import deferred_signals
 from ..recorder import Recorder, RunupResult, RunupSchema
 from ..units import rad_s_to_rpm, rpm_to_rad_s
 from .fmu import FmiCallFailed, FmuInstance
@@ -308,12 +309,13 @@ class Master:
                 self.initialize()
                 rec.append(self.sample(0.0))
                 t = 0.0
-                with tqdm(total=T, disable=not progress, desc="cosim", leave=False,
+                with deferred_signals() as signals, tqdm(total=T, disable=not progress, desc="cosim", leave=False,
                           bar_format="{desc}: {n:.4f}/{total:g} s simulated |{bar}| {elapsed}<{remaining} {postfix}") as bar:
                     for k in range(1, n_steps + 1):
                         t = self.step(t, H)
                         if k % every == 0:
                             rec.append(self.sample(t))
+                            signals.check()
                         if k % 1000 == 0:
                             bar.update(t - bar.n)
                             bar.set_postfix_str(f"{rec.last[1]:.0f} rpm", refresh=False)
@@ -387,8 +389,12 @@ def operating_point_overrides(system, speed_rpm, end_rpm=None, ramp_time=1.0, me
     ov = {"rotor": {"speed_start": ("Real", w0), "speed_end": ("Real", w1), "ramp_time": ("Real", float(ramp_time))}}
     for b, e in zip(system.bearings, eq.bearings):
         name, prefix, ci, co = b.name, f"{b.name}_bearing", b.inner.clearance, b.outer.clearance
-        ov["rotor"][f"{prefix}.journal_x0"] = ("Real", float(e.journal[0] + perturbation * (ci + co)))
-        ov["rotor"][f"{prefix}.journal_y0"] = ("Real", float(e.journal[1]))
+        jx, jy = float(e.journal[0] + perturbation * (ci + co)), float(e.journal[1])
+        ov["rotor"][f"{prefix}.journal_x0"] = ("Real", jx)
+        ov["rotor"][f"{prefix}.journal_y0"] = ("Real", jy)
+        # the bearing's inputs start at the same operating point (the parameter set's start values belong to its
+        # own start speed: paired with this ring position they can put the journal through its wall)
         ov[name] = {"ring.x0": ("Real", float(e.ring[0] + perturbation * co)), "ring.y0": ("Real", float(e.ring[1])),
-                    "ring.speed0": ("Real", float(e.ring_speed))}
+                    "ring.speed0": ("Real", float(e.ring_speed)), "journal.x": ("Real", jx), "journal.y": ("Real", jy),
+                    "rotor_speed": ("Real", w0)}
     return ov
