@@ -1,7 +1,8 @@
 """Time ROSS's run_campbell on the Table 2 rotor with method-A bearings (k = 1e6 N/m, no damping).
 
-Usage: python _ross_campbell.py REPEAT N1 [N2 ...]. Run by benchmarks/linear.py in an interpreter that has ross-rotordynamics (Python >= 3.12). Prints one JSON
-line: {"version", "times_s": {n_speeds: best wall time}, "freq_hz_100krpm": [...]}.
+Usage: python _ross_campbell.py REPEAT N1 [N2 ...]. Run by benchmarks/linear.py in an interpreter that has
+ross-rotordynamics (Python >= 3.12); ``build_rotor`` is also used by tests/reference/make_ross_campbell.py.
+Prints one JSON line: {"version", "times_s": {n_speeds: best wall time}, "freq_hz_100krpm": [...]}.
 """
 import json
 import sys
@@ -13,14 +14,20 @@ import numpy as np
 warnings.filterwarnings("ignore")
 
 
-def build_rotor():
+def build_rotor(kx=1e6, ky=None):
+    """The Table 2 rotor in ROSS on undamped springs ``kx``, ``ky`` [N/m] at nodes 1 and 2 (``ky = kx`` if None).
+
+    3 Euler-Bernoulli shaft elements (33, 39, 33 mm, d = 11 mm) with rotary inertia and gyroscopic terms and
+    no shear, the turbine and compressor wheels as rigid discs at nodes 0 and 3 (physics.md §7.4, §10).
+    """
     import ross as rs
 
+    ky = kx if ky is None else ky
     steel = rs.Material(name="frb_steel", rho=7860.0, E=2e11, Poisson=0.3)
     shaft = [rs.ShaftElement(L=l, idl=0.0, odl=0.011, material=steel, shear_effects=False, rotary_inertia=True,
                              gyroscopic=True) for l in (0.033, 0.039, 0.033)]
     disks = [rs.DiskElement(n=0, m=0.326, Id=7.7e-5, Ip=8.1e-5), rs.DiskElement(n=3, m=0.118, Id=3.27e-5, Ip=4.4e-5)]
-    bearings = [rs.BearingElement(n=1, kxx=1e6, cxx=0.0), rs.BearingElement(n=2, kxx=1e6, cxx=0.0)]
+    bearings = [rs.BearingElement(n=n, kxx=kx, kyy=ky, cxx=0.0) for n in (1, 2)]
     return rs.Rotor(shaft, disks, bearings)
 
 

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from _reference import quadrature_film_force
 from scipy.integrate import solve_ivp
 
 import frbmodel as frb
@@ -71,15 +72,22 @@ def test_ring_integrator_is_second_order_and_accurate_at_the_default_substep():
 
 
 def test_force_end_is_the_film_force_at_the_end_of_the_path():
+    """``force_end`` must be the inner-film force on the journal at the end of the quadratic journal path, with the
+    ring where the step left it. Reference: the short-bearing Reynolds pressure of that end state integrated by
+    brute-force quadrature (tests/_reference.py), not the force kernel the component uses."""
     bc, journal, w, omega = _whirling_bearing()
+    assert bc.film_model == "short"  # the quadrature reference is the plain short π-film
     H = 1e-5
     j0 = journal(0.0)
     a = np.array([3.0, -2.0])
     bc.step(j0, omega, 0.0, H, accel=a)
     j1 = np.array([j0[0] + j0[2] * H + 0.5 * a[0] * H * H, j0[1] + j0[3] * H + 0.5 * a[1] * H * H,
                    j0[2] + a[0] * H, j0[3] + a[1] * H])
-    F1, _, _, _ = bc.outputs(j1, omega)  # independent evaluation through the public output path
-    np.testing.assert_allclose(bc.force_end, F1, rtol=1e-12)
+    ring = bc.ring  # x, y, vx, vy, ω_FR after the step
+    expected = quadrature_film_force(bc.bearing.inner, j1[:2] - ring[:2], j1[2:] - ring[2:4], omega + ring[4])
+    # quadrature to 1e-12 relative on smooth sub-intervals; 1e-9 leaves room for round-off, while any error in
+    # the path end point (O(a H²) = 1e-10 m against e ~ 1e-5 m) or in the ring state shifts the force by > 1e-6
+    np.testing.assert_allclose(bc.force_end, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
     np.testing.assert_array_equal(bc.path_accel, a)
 
 

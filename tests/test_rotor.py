@@ -3,6 +3,7 @@ import math
 
 import numpy as np
 import pytest
+from _reference import table2_bearing_loads
 from scipy.linalg import eigh
 
 import frbmodel as frb
@@ -29,35 +30,44 @@ def test_free_free_rotor_has_four_rigid_body_modes_and_correct_mass():
 
 def test_static_reactions_equal_hand_statics():
     tc = frb.turbocharger()
-    g = 9.81
-    rho_a = 7860 * math.pi / 4 * 0.011 ** 2
-    # moments about node 1 (z = 33 mm) and force balance, physics.md §10
-    pieces = [(0.326, 0.0), (0.118, 0.105), (rho_a * 0.033, 0.0165), (rho_a * 0.039, 0.0525), (rho_a * 0.033, 0.0885)]
-    total = sum(m for m, _ in pieces) * g
-    moment = sum(m * g * (z - 0.033) for m, z in pieces)  # weight moment about node 1 (downward loads)
-    w2 = moment / 0.039  # compressor reaction (upward positive) from moment balance
-    w1 = total - w2
-    np.testing.assert_allclose(tc.bearing_loads, [w1, w2], rtol=1e-10)
-    np.testing.assert_allclose(tc.bearing_loads, [5.3093, -0.1843], atol=1e-4)
+    # moment and force balance of the rigid rotor (tests/_reference.py, physics.md §10)
+    np.testing.assert_allclose(tc.bearing_loads, table2_bearing_loads(tc.gravity), rtol=1e-10)
+    np.testing.assert_allclose(tc.bearing_loads, [5.3093, -0.1843], atol=1e-4)  # physics.md §10 (4 decimals)
 
 
-def test_pinned_pinned_shaft_first_frequency():
-    # physics.md §7.4: a pinned-pinned 105 mm shaft (d = 11 mm) gives 1969.8 Hz with rotary inertia
-    # (1976.4 Hz Euler-Bernoulli without); 30 elements make the FE discretisation error negligible
-    n_el = 30
+def _pinned_pinned_frequencies_hz(n_el, plane, n_modes=3):
+    """Lowest natural frequencies [Hz] of the project's FE model of a pinned-pinned 105 mm shaft (d = 11 mm,
+    ``n_el`` equal elements) in one plane: ``plane`` = (displacement, rotation) DoF index within a node."""
     rot = Rotor([ShaftElement(0.105 / n_el, 0.011) for _ in range(n_el)])
-    keep = [i for i in range(rot.n_dof) if i % 4 in (0, 3)]  # x-z plane: v, θy
-    pinned = [0, 4 * n_el]
-    keep = [i for i in keep if i not in pinned]
+    pinned = {plane[0], 4 * n_el + plane[0]}  # displacement of the two end nodes
+    keep = [i for i in range(rot.n_dof) if i % 4 in plane and i not in pinned]
     w2 = eigh(rot.K[np.ix_(keep, keep)], rot.M[np.ix_(keep, keep)], eigvals_only=True)
-    f1 = math.sqrt(w2[0]) / (2 * math.pi)
-    assert f1 == pytest.approx(1969.8, abs=0.5)
-    # closed form without rotary inertia: (π/L)² sqrt(EI/ρA)/(2π)
-    ei = 2e11 * math.pi * 0.011 ** 4 / 64
-    ra = 7860 * math.pi * 0.011 ** 2 / 4
-    f_eb = (math.pi / 0.105) ** 2 * math.sqrt(ei / ra) / (2 * math.pi)
-    assert f_eb == pytest.approx(1976.4, abs=0.1)
-    assert f1 < f_eb  # rotary inertia lowers the frequency
+    return np.sqrt(w2[:n_modes]) / (2 * math.pi)
+
+
+def test_pinned_pinned_shaft_converges_to_the_rayleigh_beam():
+    """The FE shaft (Euler-Bernoulli Hermite element with rotary inertia, physics.md §7.4) against the exact
+    pinned-pinned Rayleigh beam, ω_n² = EI k⁴ / (ρA (1 + (I/A) k²)), k = nπ/L — 1969.76 Hz for n = 1, the
+    physics.md §7.4 value — in both planes (the y-z plane has θx = −w')."""
+    E, rho, d, length = 2e11, 7860.0, 0.011, 0.105
+    area, inertia = math.pi * d ** 2 / 4, math.pi * d ** 4 / 64
+    k = np.arange(1, 4) * math.pi / length
+    exact = np.sqrt(E * inertia * k ** 4 / (rho * area * (1 + inertia / area * k ** 2))) / (2 * math.pi)
+    assert exact[0] == pytest.approx(1969.8, abs=0.05)  # the reference itself: physics.md §7.4 (0.1 Hz digits)
+    errs = {}
+    for n_el in (10, 20):
+        fx = _pinned_pinned_frequencies_hz(n_el, (0, 3))  # x-z plane: v, θy
+        fy = _pinned_pinned_frequencies_hz(n_el, (1, 2))  # y-z plane: w, θx
+        # the y-z plane matrices are the x-z ones transformed by diag(1, −1): equal up to eigen-solver round-off
+        np.testing.assert_allclose(fy, fx, rtol=1e-12)
+        errs[n_el] = fx / exact - 1.0
+        # conforming elements with consistent mass (Rayleigh-Ritz): the FE frequencies bound the exact ones above
+        assert np.all(errs[n_el] > 0)
+    # cubic Hermite elements: frequency error O(h⁴), so halving the element length divides it by 16
+    # (14 ... 18 allows for the next term of the expansion; a lumped mass or a missing rotary inertia term
+    # converges at O(h²) or to another limit)
+    np.testing.assert_array_less(14.0, errs[10] / errs[20])
+    np.testing.assert_array_less(errs[10] / errs[20], 18.0)
 
 
 def test_invalid_rotor_parameters():
