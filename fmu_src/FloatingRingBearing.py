@@ -2,12 +2,9 @@
 
 Thin adapter over :class:`frbmodel.components.BearingComponent`; all physics is in frbmodel.
 """
-import math
-
 import numpy as np
-from pythonfmu import Fmi2Slave
-
 from _fmu_common import FrbSlaveMixin, finite
+from pythonfmu import Fmi2Slave
 
 
 class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
@@ -20,20 +17,26 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._init_state()
         self._cache = None
         self._lin = None
-        for film, (r, l, c, mu) in (("inner", (5.5e-3, 6.5e-3, 34e-6, 4.9e-3)), ("outer", (8e-3, 9e-3, 36e-6, 4.9e-3))):
-            self._param(f"{film}.radius", r, f"{film} film radius [m]")
-            self._param(f"{film}.length", l, f"{film} film length [m]")
-            self._param(f"{film}.clearance", c, f"{film} film radial clearance [m]")
-            self._param(f"{film}.viscosity", mu, f"{film} film dynamic viscosity [Pa s]")
-        self._param("ring.mass", 7.2e-3, "ring mass [kg]")
-        self._param("ring.inertia", 33.641e-8, "ring polar moment of inertia [kg m2]")
+        # defaults: the turbine bearing of the paper's Table 2 system (frbmodel.presets) and the component's own
+        from frbmodel.components import BEARING_SUBSTEP, CONTACT_EPS
+        from frbmodel.presets import turbocharger
+
+        tc = turbocharger()
+        bearing = tc.bearings[0]
+        for name, film in (("inner", bearing.inner), ("outer", bearing.outer)):
+            self._param(f"{name}.radius", film.radius, f"{name} film radius [m]")
+            self._param(f"{name}.length", film.length, f"{name} film length [m]")
+            self._param(f"{name}.clearance", film.clearance, f"{name} film radial clearance [m]")
+            self._param(f"{name}.viscosity", film.viscosity, f"{name} film dynamic viscosity [Pa s]")
+        self._param("ring.mass", bearing.ring_mass, "ring mass [kg]")
+        self._param("ring.inertia", bearing.ring_inertia, "ring polar moment of inertia [kg m2]")
         self._param("ring.x0", 0.0, "initial ring centre x [m]")
         self._param("ring.y0", 0.0, "initial ring centre y [m]")
         self._param("ring.speed0", 0.0, "initial ring speed [rad/s]")
-        self._param("gravity", 9.81, "gravitational acceleration along -y [m/s2]")
-        self._param("substep", 5e-6, "ring integration substep [s] (2-stage SDIRK, second order)")
-        self._param("contact_eps", 0.98, "eccentricity ratio treated as wall contact (Discard above) [-]")
-        self._param("film_model", "short", "film model: short | short_corrected", "str")
+        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]")
+        self._param("substep", BEARING_SUBSTEP, "ring integration substep [s] (2-stage SDIRK, second order)")
+        self._param("contact_eps", CONTACT_EPS, "eccentricity ratio treated as wall contact (Discard above) [-]")
+        self._param("film_model", tc.film_model, "film model: short | short_corrected", "str")
         self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str")
         self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
         for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
@@ -129,9 +132,11 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
             self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
             self._comp.step(self._ref_state, self._values["rotor_speed"], 0.0, step_size, t=current_time)
         except Exception as exc:  # noqa: BLE001
+            from frbmodel.units import rad_s_to_rpm
+
             self._ready = False
             return self._error(f"{self.instance_name} at t = {current_time:.6g} s, rotor speed "
-                               f"{self._values['rotor_speed'] * 30 / math.pi:.0f} rpm: {exc}")
+                               f"{rad_s_to_rpm(self._values['rotor_speed']):.0f} rpm: {exc}")
         self._dirty = True
         return True
 

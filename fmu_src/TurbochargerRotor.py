@@ -3,12 +3,9 @@
 Thin adapter over :class:`frbmodel.components.RotorComponent`; the bearing forces arrive linearized at the
 communication point (force, stiffness, damping per bearing) and are applied linear-implicitly over the step.
 """
-import math
-
 import numpy as np
-from pythonfmu import Fmi2Slave
-
 from _fmu_common import FrbSlaveMixin, finite
+from pythonfmu import Fmi2Slave
 
 BEARINGS = ("turbine_bearing", "compressor_bearing")
 WHEELS = ("turbine_wheel", "compressor_wheel")
@@ -23,23 +20,29 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._init_state()
         self._param("rotor_file", "", "frbmodel system description (.toml/.json, see frb system) whose rotor, bearing "
                     "nodes and gravity are used; empty = the bundled paper Table 2 rotor", "str")
-        self._param("speed_start", 20e3 * math.pi / 30, "rotor speed at t = 0 [rad/s]")
-        self._param("speed_end", 250e3 * math.pi / 30, "rotor speed after the ramp [rad/s]")
-        self._param("ramp_time", 1.0, "duration of the linear speed ramp [s]")
+        # defaults: the paper's Table 2 system and the default run-up of frbmodel.presets
+        from frbmodel.components import ROTOR_SUBSTEP
+        from frbmodel.presets import RUNUP_DURATION, RUNUP_SPEED_RPM, turbocharger
+        from frbmodel.units import rpm_to_rad_s
+
+        tc = turbocharger()
+        self._param("speed_start", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), "rotor speed at t = 0 [rad/s]")
+        self._param("speed_end", rpm_to_rad_s(RUNUP_SPEED_RPM[1]), "rotor speed after the ramp [rad/s]")
+        self._param("ramp_time", RUNUP_DURATION, "duration of the linear speed ramp [s]")
         for w in WHEELS:
             self._param(f"{w}.unbalance", 0.0, f"{w} unbalance (mass x eccentricity) [kg m]")
             self._param(f"{w}.unbalance_phase", 0.0, f"{w} unbalance phase from +x [rad]")
         for b in BEARINGS:
             self._param(f"{b}.journal_x0", 0.0, f"initial journal centre x at the {b} [m]")
             self._param(f"{b}.journal_y0", 0.0, f"initial journal centre y at the {b} [m]")
-        self._param("gravity", 9.81, "gravitational acceleration along -y [m/s2]")
-        self._param("substep", 5e-6, "trapezoidal substep [s]")
+        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]")
+        self._param("substep", ROTOR_SUBSTEP, "trapezoidal substep [s]")
         self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
         self._param("force_interpolation", False, "interpolate the bearing force between force and force_end over the "
                     "step (staggered masters that step the bearings first); false for Jacobi masters", "bool")
         for b in BEARINGS:
-            self._input(f"{b}.force.x", f"bearing force on the journal, x [N]")
-            self._input(f"{b}.force.y", f"bearing force on the journal, y [N]")
+            self._input(f"{b}.force.x", "bearing force on the journal, x [N]")
+            self._input(f"{b}.force.y", "bearing force on the journal, y [N]")
             self._input(f"{b}.force_end.x", "bearing force at the end of the step, x [N] (force_interpolation)")
             self._input(f"{b}.force_end.y", "bearing force at the end of the step, y [N] (force_interpolation)")
             self._input(f"{b}.journal_accel.x", "journal acceleration of the bearing's extrapolated path, x [m/s2] "
@@ -58,7 +61,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                 self._output(f"{b}.journal.{q}", f"journal {q} [{u}]", lambda bi=bi, qi=qi: self._comp.journal(bi)[qi])
         for w in WHEELS:
             for qi, q in enumerate("xy"):
-                self._output(f"{w}.{q}", f"{w} centre {q} [m]", lambda w=w, qi=qi: self._comp.node_xy(self._node[w])[qi])
+                self._output(f"{w}.{q}", f"{w} centre {q} [m]",
+                             lambda w=w, qi=qi: self._comp.node_xy(self._node[w])[qi])
         self._linearization_outputs(32, 4, 8, ("states: q, dq/dt", "inputs: bearing forces x, y per bearing",
                                                 "outputs: journal x, y, vx, vy per bearing"))
 
@@ -93,7 +97,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._require_version()
         import frbmodel as frb
         from frbmodel.components import RotorComponent, ramp_speed
-        from frbmodel.runup import Unbalance, static_rotor_state
+        from frbmodel.units import rad_s_to_rpm
 
         v = self._values
         try:
@@ -102,14 +106,15 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             w0 = finite("speed_start", v["speed_start"], 0.0, unit="rad/s")
             w1 = finite("speed_end", v["speed_end"], 0.0, unit="rad/s")
             ramp = finite("ramp_time", v["ramp_time"], 0.0, unit="s")
-            unb = [Unbalance(w, finite(f"{w}.unbalance", v[f"{w}.unbalance"], 0.0, unit="kg m"),
+            unb = [frb.Unbalance(w, finite(f"{w}.unbalance", v[f"{w}.unbalance"], 0.0, unit="kg m"),
                              finite(f"{w}.unbalance_phase", v[f"{w}.unbalance_phase"])) for w in WHEELS
                    if v[f"{w}.unbalance"] > 0]
-            self._comp = RotorComponent(tc, ramp_speed(w0 * 30 / math.pi, w1 * 30 / math.pi, ramp), unb,
+            self._comp = RotorComponent(tc, ramp_speed(rad_s_to_rpm(w0), rad_s_to_rpm(w1), ramp), unb,
                                         finite("substep", v["substep"], 1e-9, 1e-3, "s"))
-            journals = [(finite(f"{b}.journal_x0", v[f"{b}.journal_x0"]), finite(f"{b}.journal_y0", v[f"{b}.journal_y0"]))
-                        for b in BEARINGS]
-            self._comp.y[:self._comp.n] = static_rotor_state(tc, journals)
+            journals = [(finite(f"{b}.journal_x0", v[f"{b}.journal_x0"]),
+                         finite(f"{b}.journal_y0", v[f"{b}.journal_y0"])) for b in BEARINGS]
+            nodes = [b.node for b in tc.bearings]
+            self._comp.y[:self._comp.n] = tc.rotor.static_deflection(nodes, journals, tc.gravity)
             self._node = {d.name: d.node for d in tc.rotor.discs}
         except Exception as exc:  # noqa: BLE001
             self._error(f"{self.instance_name}: invalid parameters: {exc}")

@@ -5,10 +5,11 @@ sum of :func:`frbmodel.film.film_torques` of both films; the RSR formulas follow
 """
 from __future__ import annotations
 
-from .errors import ParameterError
 from numba import njit
 
+from .errors import ParameterError
 from .film import film_force_kernel, film_torques, film_torques_kernel, offset_torque_coefficient, petroff_coefficient
+
 
 @njit(cache=True)
 def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_y, fo_x, fo_y, omega_rotor,
@@ -88,24 +89,47 @@ def ring_speed_ratio(bearing, eps_inner: float = 0.0, eps_outer: float = 0.0, to
     for name, eps in (("eps_inner", eps_inner), ("eps_outer", eps_outer)):
         if not (0.0 <= eps < 1.0):
             raise ParameterError(f"{name} = {eps!r} is invalid: valid range 0 <= eps < 1")
-    a_i = petroff_coefficient(bearing.inner, eps_inner)
-    a_o = petroff_coefficient(bearing.outer, eps_outer)
+    if torque not in ("petroff", "full"):
+        raise ParameterError(f"torque = {torque!r} is unknown; valid values are 'petroff', 'full'")
+    a_i, a_o, k_i, k_o = static_torque_coefficients(bearing, eps_inner, eps_outer, model, torque == "full")
     if torque == "petroff":
         return float(a_i / (a_i + a_o))
-    if torque == "full":
-        k_i = offset_torque_coefficient(bearing.inner, eps_inner, model)
-        k_o = offset_torque_coefficient(bearing.outer, eps_outer, model)
-        return float((a_i - k_i) / (a_i + a_o + k_i + k_o))
-    raise ParameterError(f"torque = {torque!r} is unknown; valid values are 'petroff', 'full'")
+    return float((a_i - k_i) / (a_i + a_o + k_i + k_o))
+
+
+def static_torque_coefficients(bearing, eps_inner: float, eps_outer: float, model: str = "short",
+                               offset: bool = True):
+    """Coefficients of the steady ring torque (physics.md §6.2, §6.3).
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    eps_inner, eps_outer : float
+        Eccentricity ratios of the inner and outer film.
+    model : {"short", "short_corrected"}
+    offset : bool
+        Also compute the pressure-offset coefficients (else they are returned as 0).
+
+    Returns
+    -------
+    a_i, a_o, k_i, k_o : float
+        Petroff coefficients A = 2π μ R³ L / (c sqrt(1 − ε²)) and offset coefficients k with (e/2) F_t = k ω_s
+        [N m s], so that the torque on the ring is a_i (ω_R − ω_FR) − k_i (ω_R + ω_FR) − a_o ω_FR − k_o ω_FR.
+    """
+    a_i = petroff_coefficient(bearing.inner, eps_inner)
+    a_o = petroff_coefficient(bearing.outer, eps_outer)
+    if not offset:
+        return a_i, a_o, 0.0, 0.0
+    k_i = offset_torque_coefficient(bearing.inner, eps_inner, model)
+    k_o = offset_torque_coefficient(bearing.outer, eps_outer, model)
+    return a_i, a_o, k_i, k_o
 
 
 def static_ring_torque(bearing, eps_inner: float, eps_outer: float, omega_rotor: float, omega_ring: float,
                        model: str = "short") -> float:
-    """Steady torque [N m] on the ring at static film states (eq. 32 residual, full torques)."""
-    a_i = petroff_coefficient(bearing.inner, eps_inner)
-    a_o = petroff_coefficient(bearing.outer, eps_outer)
-    k_i = offset_torque_coefficient(bearing.inner, eps_inner, model)
-    k_o = offset_torque_coefficient(bearing.outer, eps_outer, model)
+    """Steady torque [N m] on the ring at static film states (eq. 32 residual, full torques,
+    :func:`static_torque_coefficients`) at rotor and ring speeds ``omega_rotor``, ``omega_ring`` [rad/s]."""
+    a_i, a_o, k_i, k_o = static_torque_coefficients(bearing, eps_inner, eps_outer, model)
     return float(a_i * (omega_rotor - omega_ring) - k_i * (omega_rotor + omega_ring) - a_o * omega_ring
                  - k_o * omega_ring)
 

@@ -9,12 +9,21 @@ from pathlib import Path
 
 import numpy as np
 
-from .equilibrium import RPM, bearing_equilibrium
+from .equilibrium import bearing_equilibrium
 from .errors import ParameterError
 from .linear import linear_system
 from .methods import get_method
-from .modal import (batch_modes, classify_precession, precession_index, ring_energy_fraction, shape_class,
-                    speed_modes, track)
+from .modal import (
+    batch_modes,
+    classify_precession,
+    precession_index,
+    ring_energy_fraction,
+    shape_class,
+    speed_modes,
+    track,
+)
+from .presets import PAPER_SPEED_RANGE_RPM
+from .units import rpm_to_rad_s
 from .whirl import FILM_NAMES, bearing_whirl
 
 #: a mode is called a ring mode when the rings carry more than this share of its kinetic energy
@@ -223,7 +232,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
     """
     m = get_method(method)
     if speeds_rpm is None:
-        speeds_rpm = np.linspace(10e3, 250e3, 100)
+        speeds_rpm = np.linspace(*PAPER_SPEED_RANGE_RPM, 100)
     speeds = np.atleast_1d(np.asarray(speeds_rpm, dtype=float))
     if speeds.ndim != 1 or speeds.size == 0 or not np.all(np.isfinite(speeds)):
         raise ParameterError(f"speeds_rpm = {speeds_rpm!r} is invalid: a non-empty 1-D list of finite speeds [rpm]")
@@ -233,7 +242,6 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
     m.options(**kw)  # validate early
     t0 = time.perf_counter()
     rotor = system.rotor
-    nn = rotor.n_nodes
     loads = system.bearing_loads
     rsr = np.full((speeds.size, 2), np.nan)
     ecc = np.full((speeds.size, 4), np.nan)
@@ -242,7 +250,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
     t_eq = 0.0
     systems = []
     for i, s in enumerate(speeds):
-        omega = s * RPM
+        omega = rpm_to_rad_s(s)
         eqs = None
         if m.needs_films:
             te = time.perf_counter()
@@ -255,11 +263,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
             weqs = eqs if m.letter == "J" else tuple(
                 bearing_equilibrium(b, loads[k], omega, "J", system.film_model, system.gravity)
                 for k, b in enumerate(system.bearings))
-            for k, (b, e) in enumerate(zip(system.bearings, weqs)):
-                wi, wo, mi, mo = bearing_whirl(b, e, system.film_model, system.gravity)
-                whirl_hz[i, 2 * k:2 * k + 2] = np.array([wi, wo]) / (2 * math.pi)
-                margin[i, 2 * k:2 * k + 2] = [mi, mo]
-                ecc[i, 2 * k:2 * k + 2] = [e.eps_inner, e.eps_outer]
+            whirl_hz[i], margin[i], ecc[i] = film_whirl_rows(system, weqs)
         if progress is not None and (m.needs_films or whirl):
             progress(i + 1, speeds.size)
     if m.needs_films:
@@ -270,7 +274,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
         ls0 = linear_system(system, m.letter, 0.0, **kw)
         G = np.zeros_like(ls0.M)
         G[:rotor.n_dof, :rotor.n_dof] = rotor.G
-        mode_sets = speed_modes(ls0.M, ls0.K, ls0.C, G, speeds * RPM, ls0.planes())
+        mode_sets = speed_modes(ls0.M, ls0.K, ls0.C, G, rpm_to_rad_s(speeds), ls0.planes())
         mass, ring_dofs = ls0.M, ls0.ring_dofs
     meta = {"system": system.name, "film_model": system.film_model, "method_title": m.title,
             "method_options": m.options(**kw), "cpu_time_s": None, "equilibrium_time_s": t_eq,
@@ -278,6 +282,30 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress=None, **k
     res = campbell_from_modes(m.letter, speeds, mode_sets, rotor, mass, ring_dofs, rsr, ecc, whirl_hz, margin, meta)
     res.meta["cpu_time_s"] = time.perf_counter() - t0
     return res
+
+
+def film_whirl_rows(system, equilibria):
+    """Per-film whirl data at one speed from the bearings' equilibria (physics.md §8).
+
+    Parameters
+    ----------
+    system : Turbocharger
+    equilibria : sequence of BearingEquilibrium
+        One per bearing of ``system``.
+
+    Returns
+    -------
+    whirl_hz, margin, eps : ndarray (2 · n_bearings,)
+        Whirl frequency [Hz], instability margin [-] (> 0: past onset) and eccentricity ratio of each film, in
+        the order (bearing 0 inner, outer, bearing 1 inner, outer).
+    """
+    whirl_hz, margin, eps = (np.empty(2 * len(system.bearings)) for _ in range(3))
+    for k, (b, e) in enumerate(zip(system.bearings, equilibria)):
+        wi, wo, mi, mo = bearing_whirl(b, e, system.film_model, system.gravity)
+        whirl_hz[2 * k:2 * k + 2] = np.array([wi, wo]) / (2 * math.pi)
+        margin[2 * k:2 * k + 2] = [mi, mo]
+        eps[2 * k:2 * k + 2] = [e.eps_inner, e.eps_outer]
+    return whirl_hz, margin, eps
 
 
 def campbell_from_modes(letter, speeds, mode_sets, rotor, mass, ring_dofs, rsr, ecc, whirl_hz, margin, meta):

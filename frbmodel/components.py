@@ -8,8 +8,9 @@ with the journal on a quadratic path x_p(τ) = x0 + v0 τ + a τ²/2, where a is
 journal velocity (:class:`JournalHistory`), and reports the force F1 at the end of that path. The rotor then
 integrates its step (trapezoidal rule, linear-implicitly) with the force interpolated along the path and corrected
 for the deviation from it, F(τ) = F0 + (F1 − F0) τ/H + K a τ (H − τ)/2 − K (x − x_p) − C (v − v_p)
-(:meth:`RotorComponent.step`). Both sides use :func:`frbmodel.bearing.ring_rhs_kernel` and :func:`frbmodel.film.film_force_kernel`,
-the same code as the monolithic run-up.
+(:meth:`RotorComponent.step`). Both sides use :func:`frbmodel.bearing.ring_rhs_kernel` and
+:func:`frbmodel.film.film_force_kernel`, the same code as the monolithic run-up; the rotor's accelerations are
+:func:`frbmodel.dynamics.rotor_acceleration` with the bearing interface terms added to its matrices.
 """
 from __future__ import annotations
 
@@ -19,10 +20,18 @@ import numpy as np
 from numba import njit
 
 from .bearing import ring_rhs_kernel
-from .equilibrium import RPM
+from .dynamics import add_unbalance_forces, rotor_acceleration, rotor_operators
 from .errors import FilmContactError, ParameterError
 from .film import check_model, correction_polys
-from .dynamics import add_unbalance_forces
+from .rotor import GRAVITY
+from .units import rpm_to_rad_s
+
+#: default ring integration substep [s] of :class:`BearingComponent` (and of the bearing FMU)
+BEARING_SUBSTEP = 5e-6
+#: default eccentricity ratio treated as wall contact by :class:`BearingComponent` (and the bearing FMU)
+CONTACT_EPS = 0.98
+#: default trapezoidal substep [s] of :class:`RotorComponent` (and of the rotor FMU)
+ROTOR_SUBSTEP = 5e-6
 
 
 # --------------------------------------------------------------------------------------------------
@@ -199,8 +208,8 @@ class BearingComponent:
         the limit cycle changes by < 0.1 % between 5e-6 and 1e-6; backward Euler needed < 5e-7 for that).
     """
 
-    def __init__(self, bearing, film_model="short", ring_speed_model="free", gravity=9.81, substep=5e-6,
-                 contact_eps=0.98):
+    def __init__(self, bearing, film_model="short", ring_speed_model="free", gravity=GRAVITY, substep=BEARING_SUBSTEP,
+                 contact_eps=CONTACT_EPS):
         from .bearing import ring_speed_ratio
 
         self.bearing = bearing
@@ -279,7 +288,8 @@ class BearingComponent:
             accel = self.history.acceleration(t, j, H) if t is not None else (0.0, 0.0)
         ax, ay = float(accel[0]), float(accel[1])
         if not (math.isfinite(ax) and math.isfinite(ay)):
-            raise ParameterError(f"{self.bearing.name} bearing: journal acceleration must be finite, got {accel!r} m/s2")
+            raise ParameterError(f"{self.bearing.name} bearing: journal acceleration must be finite, got {accel!r} "
+                                 "m/s2")
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
         free = self.ring_speed_model == "free"
         rsr = self.rsr6
@@ -314,7 +324,8 @@ class BearingComponent:
         d = np.empty(5)
 
         def ev(rg, jj):
-            fx, fy, _, _ = ring_rhs_kernel(*self._args(), jj[0], jj[1], jj[2], jj[3], rg, float(omega_rotor), math.inf, d)
+            fx, fy, _, _ = ring_rhs_kernel(*self._args(), jj[0], jj[1], jj[2], jj[3], rg, float(omega_rotor),
+                                           math.inf, d)
             return d[:4].copy(), np.array([fx, fy])
 
         c = self.bearing.inner.clearance
@@ -344,19 +355,10 @@ def _rotor_forcing(f_grav, jdofs, fb, fbr, tau, unb_node, unb_me, unb_phase, ph,
 
 
 @njit(cache=True)
-def _rotor_step(y, phi, t0, H, n_sub, minv, mk0, mg, f_grav, jdofs, kb, cb, f0, refs, f1, acc, use_path, w0, wd,
-                unb_node, unb_me, unb_phase):
-    """Trapezoidal rule for M q̈ + (ΩG + C_b) q̇ + (K + Ω̇G + K_b) q = f_g + f_unb + f_b over [t0, t0 + H].
-
-    ``jdofs`` (nb, 2) journal DoFs; ``kb``, ``cb`` (nb, 2, 2) interface Jacobians; ``f0`` (nb, 2) bearing forces
-    [N] at the journal states ``refs`` (nb, 4). With ``use_path``, ``f1`` (nb, 2) are the forces at the end of the
-    bearings' journal paths x_p = x_ref + v_ref τ + acc τ²/2 (see :meth:`RotorComponent.step`). ``mk0`` = M⁻¹K,
-    ``mg`` = M⁻¹G.
-    Ω(t) = w0 + wd (t − t0). Returns (y, rotation angle).
-    """
-    n = mk0.shape[0]
-    nb = jdofs.shape[0]
-    # bearing force model f_b = fb + fbr τ − K x − C v (see RotorComponent.step)
+def _bearing_force_model(kb, cb, f0, refs, f1, acc, use_path, H):
+    """Constant and linear-in-τ parts ``(fb, fbr)`` (nb, 2) of the bearing force model
+    f_b(τ) = fb + fbr τ − K_b x − C_b v (see :meth:`RotorComponent.step`)."""
+    nb = f0.shape[0]
     fb = np.zeros((nb, 2))
     fbr = np.zeros((nb, 2))
     for b in range(nb):
@@ -368,33 +370,57 @@ def _rotor_step(y, phi, t0, H, n_sub, minv, mk0, mg, f_grav, jdofs, kb, cb, f0, 
                     fbr[b, i] += kb[b, i, k] * (refs[b, 2 + k] + 0.5 * H * acc[b, k]) + cb[b, i, k] * acc[b, k]
             if use_path:
                 fbr[b, i] += (f1[b, i] - f0[b, i]) / H
-    h = H / n_sub
-    # M⁻¹(K + K_b) and M⁻¹C_b: the bearing terms only touch the journal columns
-    mk = mk0.copy()
+    return fb, fbr
+
+
+@njit(cache=True)
+def _with_supports(minv, minv_k, jdofs, kb, cb):
+    """M⁻¹(K + K_b) and M⁻¹C_b: the bearing interface terms added to the rotor's matrices (journal columns)."""
+    n = minv_k.shape[0]
+    mk = minv_k.copy()
     mc = np.zeros((n, n))
-    for b in range(nb):
+    for b in range(jdofs.shape[0]):
         for i in range(2):
             for k in range(2):
                 col = jdofs[b, k]
                 for r in range(n):
                     mk[r, col] += minv[r, jdofs[b, i]] * kb[b, i, k]
                     mc[r, col] += minv[r, jdofs[b, i]] * cb[b, i, k]
-    stiff = mk + wd * mg  # M⁻¹(K + K_b + Ω̇G)
+    return mk, mc
+
+
+@njit(cache=True)
+def _rotor_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, kb, cb, f0, refs, f1, acc, use_path, w0, wd,
+                unb_node, unb_me, unb_phase):
+    """Trapezoidal rule for M q̈ + (ΩG + C_b) q̇ + (K + Ω̇G + K_b) q = f_g + f_unb + f_b over one macro step H.
+
+    ``jdofs`` (nb, 2) journal DoFs; ``kb``, ``cb`` (nb, 2, 2) interface Jacobians; ``f0`` (nb, 2) bearing forces
+    [N] at the journal states ``refs`` (nb, 4). With ``use_path``, ``f1`` (nb, 2) are the forces at the end of the
+    bearings' journal paths x_p = x_ref + v_ref τ + acc τ²/2 (see :meth:`RotorComponent.step`). ``minv``,
+    ``minv_k``, ``minv_g``: :attr:`Rotor.acceleration_matrices`; the accelerations are those of
+    :func:`frbmodel.dynamics.rotor_acceleration` with the bearing terms added to its matrices.
+    Ω(τ) = w0 + wd τ. Returns (y, rotation angle).
+    """
+    n = minv_k.shape[0]
+    fb, fbr = _bearing_force_model(kb, cb, f0, refs, f1, acc, use_path, H)
+    mk, mc = _with_supports(minv, minv_k, jdofs, kb, cb)
+    h = H / n_sub
     eye = np.eye(n)
     q = y[:n].copy()
     v = y[n:].copy()
     ph = phi
     for s in range(n_sub):
-        # trapezoidal rule on q' = v, v' = −S q − D(Ω) v + f(t), with q1 eliminated:
-        # [I + h/2 D1 + h²/4 S] v1 = v0 + h/2 a0 + h/2 (f1 − S (q0 + h/2 v0)),  q1 = q0 + h/2 (v0 + v1)
+        # trapezoidal rule on q' = v, v' = a(t, q, v) = M⁻¹f(t) − S q − D(Ω) v, with q1 eliminated:
+        # [I + h/2 D1 + h²/4 S] v1 = v0 + h/2 a0 + h/2 (M⁻¹f1 − S (q0 + h/2 v0)),  q1 = q0 + h/2 (v0 + v1)
         wa = w0 + wd * s * h
         wb = w0 + wd * (s + 1) * h
-        fa = minv @ _rotor_forcing(f_grav, jdofs, fb, fbr, s * h, unb_node, unb_me, unb_phase, ph, wa, wd)
         phb = ph + 0.5 * h * (wa + wb)
+        fa = _rotor_forcing(f_grav, jdofs, fb, fbr, s * h, unb_node, unb_me, unb_phase, ph, wa, wd)
         fbv = minv @ _rotor_forcing(f_grav, jdofs, fb, fbr, (s + 1) * h, unb_node, unb_me, unb_phase, phb, wb, wd)
-        a0 = fa - stiff @ q - (mc + wa * mg) @ v
+        a0 = rotor_acceleration(minv, mk, minv_g, fa, q, v, wa, wd, mc)
+        stiff, damp = rotor_operators(mk, minv_g, wb, wd, mc)
         rhs = v + 0.5 * h * a0 + 0.5 * h * (fbv - stiff @ (q + 0.5 * h * v))
-        v1 = np.linalg.solve(eye + 0.5 * h * (mc + wb * mg) + 0.25 * h * h * stiff, rhs)
+        v1 = np.linalg.solve(eye + 0.5 * h * damp + 0.25 * h * h * stiff, rhs)
         q = q + 0.5 * h * (v + v1)
         v = v1
         ph = phb
@@ -417,14 +443,12 @@ class RotorComponent:
         Trapezoidal substep [s] (default: the macro step itself, at most 5e-6 s).
     """
 
-    def __init__(self, system, speed, unbalance=(), substep=5e-6):
+    def __init__(self, system, speed, unbalance=(), substep=ROTOR_SUBSTEP):
         rotor = system.rotor
         self.system = system
         self.speed = speed
         self.n = rotor.n_dof
-        self.minv = np.linalg.inv(rotor.M)
-        self.mk0 = self.minv @ rotor.K  # M⁻¹K
-        self.mg = self.minv @ rotor.G  # M⁻¹G (per rad/s)
+        self.eom = rotor.acceleration_matrices  # (M⁻¹, M⁻¹K, M⁻¹G)
         self.f_grav = rotor.gravity_load(system.gravity)
         self.jdofs = np.array([[4 * b.node, 4 * b.node + 1] for b in system.bearings], dtype=np.int64)
         self._jidx = [np.array([i, k, self.n + i, self.n + k]) for i, k in self.jdofs]
@@ -467,9 +491,9 @@ class RotorComponent:
             f1 = np.asarray(path[0], dtype=float).reshape(nb, 2)
             acc = np.asarray(path[1], dtype=float).reshape(nb, 2)
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
-        self.y, self.phi = _rotor_step(self.y, self.phi, self.t, H, n_sub, self.minv, self.mk0, self.mg, self.f_grav,
-                                       self.jdofs, kb, cb, f0, refs, f1, acc, path is not None, w0, wd, self.unb_node,
-                                       self.unb_me, self.unb_phase)
+        self.y, self.phi = _rotor_step(self.y, self.phi, H, n_sub, *self.eom, self.f_grav, self.jdofs, kb, cb, f0,
+                                       refs, f1, acc, path is not None, w0, wd, self.unb_node, self.unb_me,
+                                       self.unb_phase)
         self.t += H
         if not np.all(np.isfinite(self.y)):
             raise ParameterError("rotor state became non-finite: the macro step is too large for the coupling")
@@ -477,7 +501,7 @@ class RotorComponent:
 
 def ramp_speed(start_rpm, end_rpm, ramp_time):
     """Speed function t -> (Ω, Ω̇) of a linear ramp (constant after ``ramp_time``) [rad/s, rad/s²]."""
-    w0, w1 = start_rpm * RPM, end_rpm * RPM
+    w0, w1 = rpm_to_rad_s(start_rpm), rpm_to_rad_s(end_rpm)
     a = (w1 - w0) / ramp_time if ramp_time > 0 else 0.0
 
     def speed(t):
@@ -489,21 +513,30 @@ def ramp_speed(start_rpm, end_rpm, ramp_time):
 
 
 def rotor_state_space(rotor_comp):
-    """Local state space of the rotor at its current time: x = (q, q̇), u = bearing forces (Fx, Fy per bearing),
-    y = journal (x, y, vx, vy per bearing). Bearing coupling terms are *not* included (they come from the
-    bearings' own matrices when the system is assembled)."""
+    """Local state space of the rotor component at its current time (:meth:`Rotor.state_matrix`).
+
+    Parameters
+    ----------
+    rotor_comp : RotorComponent
+
+    Returns
+    -------
+    dict
+        ``A`` (2n, 2n), ``B`` (2n, 2 nb), ``C`` (4 nb, 2n), ``D`` (4 nb, 2 nb) for the state x = (q, q̇), the
+        inputs u = bearing forces (Fx, Fy per bearing) [N] and the outputs y = journal (x, y, vx, vy per bearing)
+        [m, m/s]. The bearing coupling terms are *not* included (they come from the bearings' own matrices when
+        the system is assembled).
+    """
     n = rotor_comp.n
     w, wd = rotor_comp.speed(rotor_comp.t)
-    A = np.zeros((2 * n, 2 * n))
-    A[:n, n:] = np.eye(n)
-    A[n:, :n] = -(rotor_comp.mk0 + wd * rotor_comp.mg)
-    A[n:, n:] = -w * rotor_comp.mg
+    A = rotor_comp.system.rotor.state_matrix(w, wd)
+    minv = rotor_comp.eom[0]
     nb = rotor_comp.jdofs.shape[0]
     B = np.zeros((2 * n, 2 * nb))
     C = np.zeros((4 * nb, 2 * n))
     for b in range(nb):
         for k in range(2):
-            B[n:, 2 * b + k] = rotor_comp.minv[:, rotor_comp.jdofs[b, k]]
+            B[n:, 2 * b + k] = minv[:, rotor_comp.jdofs[b, k]]
             C[4 * b + k, rotor_comp.jdofs[b, k]] = 1.0
             C[4 * b + 2 + k, n + rotor_comp.jdofs[b, k]] = 1.0
     return {"A": A, "B": B, "C": C, "D": np.zeros((4 * nb, 2 * nb))}

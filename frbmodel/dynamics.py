@@ -1,9 +1,12 @@
-"""Compiled equations of motion of the monolithic model (physics.md §7): the one place where the rotor, both
-rings and the nonlinear films are put together.
+"""Compiled equations of motion: the rotor acceleration kernel and the monolithic model (physics.md §7).
 
-``rhs`` is dy/dt of the full state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds, rotation angle]
-for a prescribed rotor speed; ``jac`` its finite-difference Jacobian; :func:`add_unbalance_forces` the rotating
-unbalance load, shared with the rotor co-simulation component.
+:func:`rotor_acceleration` is the one implementation of the rotor's equation of motion in compiled code,
+q̈ = M⁻¹f − (M⁻¹K + Ω̇ M⁻¹G) q − Ω M⁻¹G q̇, with the constant matrices of :attr:`Rotor.acceleration_matrices`;
+the monolithic run-up (:func:`monolithic_rhs`) and the co-simulation rotor step
+(:mod:`frbmodel.components`) both call it, the latter with its linearized bearing terms added to the same
+matrices. :func:`monolithic_rhs` is dy/dt of the full state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring
+speeds, rotation angle] for a prescribed rotor speed, :func:`monolithic_jac` its finite-difference Jacobian and
+:func:`add_unbalance_forces` the rotating unbalance load.
 """
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ from .bearing import ring_rhs_kernel
 
 @njit(cache=True)
 def interp_uniform(t, tg, yg):
+    """Linear interpolation of ``yg`` on the uniform grid ``tg`` at ``t`` (held constant outside the grid)."""
     if t <= tg[0]:
         return yg[0]
     if t >= tg[-1]:
@@ -42,18 +46,61 @@ def add_unbalance_forces(f, phi, w, wd, unb_node, unb_me, unb_phase):
 
 
 @njit(cache=True)
-def rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
-         unb_phase, tg, wg, wdg, springs, eps_cap, diag):
-    """dy/dt for the state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds, rotation angle].
+def rotor_operators(minv_k, minv_g, omega, omega_dot, minv_c=None):
+    """Stiffness and velocity operators ``(S, D)`` of the rotor acceleration q̈ = M⁻¹f − S q − D q̇.
 
-    ``geom`` (2, 2, 4): (bearing, film, [R, L, c, μ]); ``polys`` (2, 2, 2, 5): correction polynomials;
-    ``springs`` > 0: journals on isotropic linear springs of that stiffness [N/m] instead of films (rings idle).
-    ``diag`` (4,) receives the film eccentricity ratios (turbine inner, outer, compressor inner, outer).
+    Parameters
+    ----------
+    minv_k, minv_g : ndarray (n, n)
+        M⁻¹K and M⁻¹G (:attr:`Rotor.acceleration_matrices`); ``minv_k`` may include linear support stiffness
+        M⁻¹K_s (the co-simulation's bearing interface terms).
+    omega, omega_dot : float
+        Rotor speed Ω [rad/s] and acceleration Ω̇ [rad/s²].
+    minv_c : ndarray (n, n), optional
+        M⁻¹C_s of linear support damping (none by default).
+
+    Returns
+    -------
+    S, D : ndarray (n, n)
+        S = M⁻¹K + Ω̇ M⁻¹G, D = Ω M⁻¹G (+ M⁻¹C_s).
     """
-    w = interp_uniform(t, tg, wg)
-    wd = interp_uniform(t, tg, wdg)
-    f = f_grav.copy()
-    add_unbalance_forces(f, y[2 * n_r + 10], w, wd, unb_node, unb_me, unb_phase)
+    s = minv_k + omega_dot * minv_g
+    if minv_c is None:
+        d = omega * minv_g
+    else:
+        d = minv_c + omega * minv_g
+    return s, d
+
+
+@njit(cache=True)
+def rotor_acceleration(minv, minv_k, minv_g, f, q, qd, omega, omega_dot, minv_c=None):
+    """Rotor acceleration of M q̈ + Ω G q̇ + (K + Ω̇ G) q = f (physics.md §7.1): the one compiled kernel.
+
+    Parameters
+    ----------
+    minv, minv_k, minv_g : ndarray (n, n)
+        M⁻¹, M⁻¹K, M⁻¹G (:attr:`Rotor.acceleration_matrices`); see :func:`rotor_operators` for support terms.
+    f : ndarray (n,)
+        Nodal load [N, N m] (gravity, unbalance, bearing forces).
+    q, qd : ndarray (n,)
+        Displacements [m, rad] and velocities [m/s, rad/s].
+    omega, omega_dot : float
+        Rotor speed [rad/s] and acceleration [rad/s²].
+    minv_c : ndarray (n, n), optional
+        M⁻¹C_s of linear support damping.
+
+    Returns
+    -------
+    ndarray (n,)
+        q̈ = M⁻¹f − (M⁻¹K + Ω̇ M⁻¹G) q − (Ω M⁻¹G + M⁻¹C_s) q̇ [m/s², rad/s²].
+    """
+    s, d = rotor_operators(minv_k, minv_g, omega, omega_dot, minv_c)
+    return minv @ f - s @ q - d @ qd
+
+
+@njit(cache=True)
+def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag):
+    """Add the journal forces of both bearings to ``f`` and write the rings' derivatives into ``out``."""
     base = 2 * n_r
     ring = np.empty(5)
     dring = np.empty(5)
@@ -63,10 +110,8 @@ def rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, rin
         if springs > 0.0:
             f[j] -= springs * y[j]
             f[j + 1] -= springs * y[j + 1]
-            out[r0] = 0.0
-            out[r0 + 1] = 0.0
-            out[r0 + 2] = 0.0
-            out[r0 + 3] = 0.0
+            for k in range(4):
+                out[r0 + k] = 0.0
             out[base + 8 + b] = 0.0
             continue
         for k in range(4):
@@ -81,30 +126,72 @@ def rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, rin
         for k in range(4):
             out[r0 + k] = dring[k]
         out[base + 8 + b] = dring[4]
+
+
+@njit(cache=True)
+def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
+                   tg, wg, wdg, springs, eps_cap, diag):
+    """dy/dt of the monolithic model for the state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds,
+    rotation angle], written into ``out`` and returned.
+
+    ``eom`` = (M⁻¹, M⁻¹K, M⁻¹G) (:attr:`Rotor.acceleration_matrices`); ``f_grav`` the nodal gravity load [N];
+    ``jn`` the bearing nodes; ``geom`` (2, 2, 4): (bearing, film, [R, L, c, μ]); ``polys`` (2, 2, 2, 5):
+    correction polynomials; ``unb_*`` the unbalances (:func:`add_unbalance_forces`); ``tg, wg, wdg`` the speed
+    profile (uniform grid [s], Ω [rad/s], Ω̇ [rad/s²]); ``springs`` > 0: journals on isotropic linear springs of
+    that stiffness [N/m] instead of films (rings idle). ``diag`` (4,) receives the film eccentricity ratios
+    (turbine inner, outer, compressor inner, outer).
+    """
+    w = interp_uniform(t, tg, wg)
+    wd = interp_uniform(t, tg, wdg)
+    f = f_grav.copy()
+    add_unbalance_forces(f, y[2 * n_r + 10], w, wd, unb_node, unb_me, unb_phase)
+    _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag)
     q = y[:n_r]
     qd = y[n_r:2 * n_r]
-    for i in range(n_r):
-        out[i] = qd[i]
-    acc = f - k_mat @ q - (w * g_mat) @ qd - (wd * g_mat) @ q
-    out[n_r:2 * n_r] = minv @ acc
-    out[base + 10] = w
+    out[:n_r] = qd
+    out[n_r:2 * n_r] = rotor_acceleration(eom[0], eom[1], eom[2], f, q, qd, w, wd)
+    out[2 * n_r + 10] = w
     return out
 
 
 @njit(cache=True)
-def jac(t, y, jac, f0, work, scale, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
-         unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag):
-    """Forward-difference Jacobian of :func:`rhs` (all in compiled code: one RHS call per state)."""
+def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
+                   unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag):
+    """Forward-difference Jacobian of :func:`monolithic_rhs` into ``jac`` (all in compiled code: one RHS call per
+    state; step 1.5e-8 · max(|y_k|, scale_k))."""
     n = y.size
-    rhs(t, y, f0, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
-         unb_phase, tg, wg, wdg, springs, eps_cap, diag)
+    monolithic_rhs(t, y, f0, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
+                   tg, wg, wdg, springs, eps_cap, diag)
     yp = y.copy()
     for k in range(n):
         h = 1.5e-8 * max(abs(y[k]), scale[k])
         yp[k] = y[k] + h
-        rhs(t, yp, work, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
-             unb_phase, tg, wg, wdg, springs, eps_cap, diag)
+        monolithic_rhs(t, yp, work, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
+                       unb_phase, tg, wg, wdg, springs, eps_cap, diag)
         for i in range(n):
             jac[i, k] = (work[i] - f0[i]) / h
         yp[k] = y[k]
     return jac
+
+
+# --------------------------------------------------------------------------------------------------
+# Transitional: the argument list (M⁻¹, K, G, ...) that frbmodel/runup.py and benchmarks/runup.py still pass.
+# They form M⁻¹K and M⁻¹G on every call; remove both once the callers pass Rotor.acceleration_matrices to
+# monolithic_rhs / monolithic_jac.
+# --------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
+        unb_phase, tg, wg, wdg, springs, eps_cap, diag):
+    """Deprecated argument list of :func:`monolithic_rhs` (M⁻¹, K, G instead of ``eom``)."""
+    eom = (minv.copy(), minv @ k_mat, minv @ g_mat)
+    return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
+                          unb_phase, tg, wg, wdg, springs, eps_cap, diag)
+
+
+@njit(cache=True)
+def jac(t, y, jac, f0, work, scale, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
+        unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag):
+    """Deprecated argument list of :func:`monolithic_jac` (M⁻¹, K, G instead of ``eom``)."""
+    eom = (minv.copy(), minv @ k_mat, minv @ g_mat)
+    return monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav,
+                          unb_node, unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag)

@@ -18,12 +18,8 @@ from .bearing import ring_speed_ratio, static_ring_torque
 from .errors import ConvergenceError, ParameterError
 from .film import film_coefficients, film_force, static_position
 from .methods import get_method
-
-from .units import RPM  # noqa: E402  (rad/s per rpm; re-exported for old imports)
-
-
-def rpm_to_rad(speed_rpm):
-    return np.asarray(speed_rpm, dtype=float) * RPM
+from .rotor import GRAVITY
+from .units import rad_s_to_rpm, rpm_to_rad_s
 
 
 @dataclass
@@ -161,7 +157,8 @@ def _coupled(bearing, w, omega_r, model, g, rsr):
     sol = root(fun, np.zeros(4), jac=jac, method="hybr", options={"xtol": 1e-13})
     if not sol.success or np.max(np.abs(sol.fun)) > 1e-9:
         raise ConvergenceError(f"method G equilibrium of the {bearing.name} bearing did not converge at "
-                               f"{omega_r / RPM:.0f} rpm: {sol.message} (residual {np.max(np.abs(sol.fun)):.3g})")
+                               f"{rad_s_to_rpm(omega_r):.0f} rpm: {sol.message} "
+                               f"(residual {np.max(np.abs(sol.fun)):.3g})")
     r_i, r_o = unpack(sol.x)
     return BearingEquilibrium(bearing.name, r_i, r_o, float(np.hypot(*r_i) / c_i), float(np.hypot(*r_o) / c_o),
                               omega_fr, rsr, omega_r, int(sol.nfev), int(sol.nfev + sol.njev))
@@ -196,18 +193,37 @@ def _ring_speed_root(bearing, w, omega_r, model, g, residual_kind):
         if r_lo * r_hi > 0.0:
             raise ConvergenceError(
                 f"method {'I' if residual_kind == 'petroff' else 'J'} ring speed of the {bearing.name} bearing: "
-                f"no root in 0.001..0.999 x rotor speed at {omega_r / RPM:.0f} rpm")
+                f"no root in 0.001..0.999 x rotor speed at {rad_s_to_rpm(omega_r):.0f} rpm")
         omega_fr, res = brentq(residual, lo, hi, xtol=1e-12 * omega_r, rtol=1e-14, full_output=True)
     except ValueError as exc:  # a film solution failed inside (e.g. eps -> 1 at a tiny ring speed)
-        raise ConvergenceError(f"ring speed solve of the {bearing.name} bearing failed at {omega_r / RPM:.0f} rpm: "
+        raise ConvergenceError(f"ring speed solve of the {bearing.name} bearing failed at "
+                               f"{rad_s_to_rpm(omega_r):.0f} rpm: "
                                f"{exc}") from exc
     r_i, eps_i, r_o, eps_o = films(omega_fr)
     return BearingEquilibrium(bearing.name, r_i, r_o, eps_i, eps_o, omega_fr, omega_fr / omega_r, omega_r,
                               int(res.iterations), 2 * counter["n"])
 
 
-def bearing_equilibrium(bearing, load, speed, method, film_model="short", gravity=9.81):
-    """Equilibrium of one bearing carrying vertical ``load`` [N] at rotor ``speed`` [rad/s] for ``method``."""
+def bearing_equilibrium(bearing, load, speed, method, film_model="short", gravity=GRAVITY):
+    """Equilibrium of one bearing carrying a vertical load at one rotor speed (physics.md §6.4).
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    load : float
+        Static reaction W [N] the inner film carries (positive = upward force on the journal).
+    speed : float
+        Rotor speed [rad/s], > 0.
+    method : str
+        One of C, D, F, G, I, J.
+    film_model : {"short", "short_corrected"}
+    gravity : float
+        [m/s²] along −y (ring weight).
+
+    Returns
+    -------
+    BearingEquilibrium
+    """
     m = get_method(method)
     if m.equilibrium is None:
         raise ParameterError(f"method {m.letter} has no film equilibrium; equilibria exist for "
@@ -252,6 +268,6 @@ def equilibrium(system, method="J", speed_rpm=150e3) -> EquilibriumResult:
     m = get_method(method)
     t0 = time.perf_counter()
     loads = system.bearing_loads
-    res = tuple(bearing_equilibrium(b, loads[i], speed_rpm * RPM, m.letter, system.film_model, system.gravity)
+    res = tuple(bearing_equilibrium(b, loads[i], rpm_to_rad_s(speed_rpm), m.letter, system.film_model, system.gravity)
                 for i, b in enumerate(system.bearings))
     return EquilibriumResult(m.letter, speed_rpm, res, time.perf_counter() - t0)

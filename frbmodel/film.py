@@ -18,7 +18,7 @@ Two film models exist (``model=``):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, asdict
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from numba import njit

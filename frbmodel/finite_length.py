@@ -15,6 +15,7 @@ from functools import lru_cache
 import numpy as np
 
 from .errors import ParameterError
+from .film import static_force_rt
 
 #: ε values at which the ratios are computed for the fit (physics.md §5 uses 0.02 ... 0.9)
 CALIBRATION_EPS = np.array([0.02, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9])
@@ -38,7 +39,6 @@ def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 
     dth = 2.0 * math.pi / n_t
     dz = 1.0 / n_zz
     th = (np.arange(n_t) + 0.5) * dth  # cell centres
-    zeta = -0.5 + (np.arange(n_zz) + 0.5) * dz
     ratio2 = (1.0 / (2.0 * lam)) ** 2  # (R/L)^2 with R = D/2 = L/(2λ)
     h3_face = (1.0 - eps * np.cos(th + 0.5 * dth)) ** 3  # east faces θ_i + ½
     h3_c = (1.0 - eps * np.cos(th)) ** 3
@@ -57,14 +57,18 @@ def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 
         diag -= A
     # axial fluxes with Dirichlet P = 0 at ζ = ±½ (half cell to the boundary)
     az = ratio2 * h3_c[:, None] / dz ** 2 * np.ones((1, n_zz))
-    # north neighbour
-    rows.append(idx[:, :-1].ravel()); cols.append(idx[:, 1:].ravel()); vals.append(az[:, :-1].ravel())
-    rows.append(idx[:, 1:].ravel()); cols.append(idx[:, :-1].ravel()); vals.append(az[:, 1:].ravel())
+    # north and south neighbours
+    for r_, c_, a_ in ((idx[:, :-1], idx[:, 1:], az[:, :-1]), (idx[:, 1:], idx[:, :-1], az[:, 1:])):
+        rows.append(r_.ravel())
+        cols.append(c_.ravel())
+        vals.append(a_.ravel())
     diag[:, :-1] -= az[:, :-1]
     diag[:, 1:] -= az[:, 1:]
     diag[:, 0] -= 2.0 * az[:, 0]  # boundary half cell
     diag[:, -1] -= 2.0 * az[:, -1]
-    rows.append(idx.ravel()); cols.append(idx.ravel()); vals.append(diag.ravel())
+    rows.append(idx.ravel())
+    cols.append(idx.ravel())
+    vals.append(diag.ravel())
     A = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsc()
     # right side: 6 dH/dθ integrated over the cell = 6 (H_e − H_w)/dθ
     h_e = 1.0 - eps * np.cos(th + 0.5 * dth)
@@ -76,10 +80,8 @@ def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 
     integ = P.sum(axis=1) * dz
     f_r = -np.sum(integ * np.cos(th)) * dth
     f_t = -np.sum(integ * np.sin(th)) * dth
-    # short-bearing static forces per μ ω_s R L³/c²; convert units: R³ L = R L³ / (4 λ²)
-    s2 = 1.0 - eps * eps
-    fr_is = -eps * eps / s2 ** 2
-    ft_is = math.pi * eps / (4.0 * s2 ** 1.5)
+    # short-bearing static forces per μ ω_s R L³/c² (physics.md §2.6); convert units: R³ L = R L³ / (4 λ²)
+    fr_is, ft_is = static_force_rt(eps, "short")
     scale = 1.0 / (4.0 * lam * lam)  # R³L / (R L³)
     return f_r * scale / fr_is, f_t * scale / ft_is
 

@@ -2,7 +2,8 @@
 
 The global DoF vector is the rotor's ``[v, w, θx, θy]`` per node, followed — for methods with ring
 DoFs — by ``[x, y]`` of the turbine-side ring and then of the compressor-side ring.
-The linear equation of motion is ``M q̈ + (C_b + Ω G) q̇ + K q = 0``.
+The linear equation of motion is ``M q̈ + (C_b + Ω G) q̇ + (K + K_b) q = 0``, the rotor's part from
+:meth:`frbmodel.rotor.Rotor.eom_matrices`.
 """
 from __future__ import annotations
 
@@ -10,10 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .equilibrium import RPM, bearing_equilibrium
+from .equilibrium import bearing_equilibrium
 from .errors import ParameterError
 from .film import film_coefficients
 from .methods import get_method
+from .units import rpm_to_rad_s
 
 
 @dataclass
@@ -106,6 +108,59 @@ def bearing_matrices(bearing, eq, method, film_model="short", **kw):
     raise AssertionError(s)
 
 
+def mass_matrix(system, method="J"):
+    """Global mass matrix of the linear system of ``method`` (speed-independent).
+
+    Parameters
+    ----------
+    system : Turbocharger
+    method : str
+        One of A, B, C, D, E, F, G, I, J.
+
+    Returns
+    -------
+    M : ndarray
+        Rotor mass matrix, then ring masses [kg] on the rings' (x, y) DoFs for methods with ring DoFs, or lumped
+        onto the journal for the methods whose ring moves with the journal (D, C: outer film / series films).
+    ring_dofs : list of (int, int) or None
+        Global indices of (x, y) of each ring (None without ring DoFs).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> M, ring_dofs = mass_matrix(frb.turbocharger(), "J")
+    >>> M.shape, ring_dofs
+    ((20, 20), [(16, 17), (18, 19)])
+    """
+    m = get_method(method)
+    rotor = system.rotor
+    n_r = rotor.n_dof
+    n = n_r + (4 if m.ring_dofs else 0)
+    M = np.zeros((n, n))
+    M[:n_r, :n_r] = rotor.M
+    ring_dofs = [] if m.ring_dofs else None
+    for i, b in enumerate(system.bearings):
+        if m.ring_dofs:
+            rr = n_r + 2 * i
+            ring_dofs.append((rr, rr + 1))
+            M[rr, rr] = M[rr + 1, rr + 1] = b.ring_mass
+        elif m.support in ("outer_film", "series_films"):  # ring moves with the journal: lump its mass
+            j = 4 * b.node
+            M[j, j] += b.ring_mass
+            M[j + 1, j + 1] += b.ring_mass
+    return M, ring_dofs
+
+
+def _check_speed(m, speed_rpm):
+    speed_rpm = float(speed_rpm)
+    if m.needs_films and not speed_rpm > 0.0:
+        raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for method {m.letter}: linearized films "
+                             "need a rotor speed > 0")
+    if not np.isfinite(speed_rpm):
+        raise ParameterError(f"speed_rpm = {speed_rpm!r} is invalid: it must be finite")
+    return speed_rpm
+
+
 def linear_system(system, method="J", speed_rpm=150e3, equilibria=None, **kw) -> LinearSystem:
     """Assemble the global linear system of ``system`` for ``method`` at ``speed_rpm``.
 
@@ -121,6 +176,12 @@ def linear_system(system, method="J", speed_rpm=150e3, equilibria=None, **kw) ->
     **kw
         Spring stiffnesses of methods A, B, E: ``k``, ``kx``, ``ky`` [N/m].
 
+    Returns
+    -------
+    LinearSystem
+        M [kg ...], C = C_b + Ω G [N s/m ...] and K = K_rotor + K_b [N/m ...] on the rotor DoFs followed by the
+        rings' (x, y) for methods with ring DoFs.
+
     Examples
     --------
     >>> import frbmodel as frb
@@ -129,43 +190,27 @@ def linear_system(system, method="J", speed_rpm=150e3, equilibria=None, **kw) ->
     (20, 20)
     """
     m = get_method(method)
-    speed_rpm = float(speed_rpm)
-    if m.needs_films and not speed_rpm > 0.0:
-        raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for method {m.letter}: linearized films "
-                             "need a rotor speed > 0")
-    if not np.isfinite(speed_rpm):
-        raise ParameterError(f"speed_rpm = {speed_rpm!r} is invalid: it must be finite")
+    speed_rpm = _check_speed(m, speed_rpm)
     rotor = system.rotor
     n_r = rotor.n_dof
-    n = n_r + (4 if m.ring_dofs else 0)
-    omega = speed_rpm * RPM
-    M = np.zeros((n, n))
-    C = np.zeros((n, n))
-    K = np.zeros((n, n))
-    M[:n_r, :n_r] = rotor.M
-    K[:n_r, :n_r] = rotor.K
-    C[:n_r, :n_r] = omega * rotor.G
+    omega = rpm_to_rad_s(speed_rpm)
+    M, ring_dofs = mass_matrix(system, m.letter)
+    C = np.zeros_like(M)
+    K = np.zeros_like(M)
+    _, C[:n_r, :n_r], K[:n_r, :n_r] = rotor.eom_matrices(omega)
     labels = [f"node{i}.{d}" for i in range(rotor.n_nodes) for d in ("v", "w", "thx", "thy")]
     if m.needs_films and equilibria is None:
         loads = system.bearing_loads
         equilibria = tuple(bearing_equilibrium(b, loads[i], omega, m.letter, system.film_model, system.gravity)
                            for i, b in enumerate(system.bearings))
-    ring_dofs = [] if m.ring_dofs else None
     for i, b in enumerate(system.bearings):
         eq = equilibria[i] if m.needs_films else None
         kb, cb = bearing_matrices(b, eq, m.letter, system.film_model, **kw)
         j = 4 * b.node
+        idx = [j, j + 1]
         if m.ring_dofs:
-            rr = n_r + 2 * i
-            idx = [j, j + 1, rr, rr + 1]
-            ring_dofs.append((rr, rr + 1))
-            M[rr, rr] = M[rr + 1, rr + 1] = b.ring_mass
+            idx += list(ring_dofs[i])
             labels += [f"ring_{b.name}.x", f"ring_{b.name}.y"]
-        else:
-            idx = [j, j + 1]
-            if m.support in ("outer_film", "series_films"):  # ring moves with the journal: lump its mass
-                M[j, j] += b.ring_mass
-                M[j + 1, j + 1] += b.ring_mass
         K[np.ix_(idx, idx)] += kb
         C[np.ix_(idx, idx)] += cb
     return LinearSystem(M, C, K, labels, m.letter, speed_rpm, equilibria, ring_dofs, n_r)

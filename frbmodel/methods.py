@@ -1,7 +1,7 @@
 """The nine bearing-modelling methods A–J as data (the paper's Table 1).
 
 Each method is a :class:`Method` record naming its ingredients; :mod:`frbmodel.equilibrium` and
-:mod:`frbmodel.system` interpret the records, so there is one pipeline, not nine.
+:mod:`frbmodel.linear` interpret the records, so there is one pipeline, not nine.
 
 ======  =========  ==================  ==================  ======  ==========================================
 letter  ring DoFs  support             equilibrium         RSR     meaning
@@ -80,7 +80,22 @@ EQUILIBRIUM_METHODS = tuple(k for k, m in METHODS.items() if m.needs_films)
 
 
 def get_method(letter) -> Method:
-    """Look up a method by letter (case-insensitive)."""
+    """Look up a method by letter (case-insensitive).
+
+    Parameters
+    ----------
+    letter : str
+        One of A, B, C, D, E, F, G, I, J.
+
+    Returns
+    -------
+    Method
+
+    Examples
+    --------
+    >>> get_method("j").ring_dofs
+    True
+    """
     key = str(letter).strip().upper()
     if key not in METHODS:
         raise ParameterError(f"method = {letter!r} is unknown; valid methods are {', '.join(METHODS)} "

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from .rotor import first_order_state_matrix
+
 #: eigenvalues with |Im λ| / |λ| below this are treated as over-damped (real) and left out
 REAL_TOL = 1e-7
 #: nodes whose amplitude² is below this fraction of the largest one carry no precession vote
@@ -19,14 +21,16 @@ PSI_TOL = 1e-3
 
 
 def state_matrix(M, C, K):
-    """A = [[0, I], [−M⁻¹K, −M⁻¹C]] for ``M q̈ + C q̇ + K q = 0``."""
-    n = M.shape[0]
+    """A = [[0, I], [−M⁻¹K, −M⁻¹C]] for ``M q̈ + C q̇ + K q = 0`` (:func:`frbmodel.rotor.first_order_state_matrix`).
+
+    Examples
+    --------
+    >>> state_matrix(np.array([[2.0]]), np.array([[1.0]]), np.array([[8.0]]))
+    array([[ 0. ,  1. ],
+           [-4. , -0.5]])
+    """
     Minv = np.linalg.inv(M)
-    A = np.zeros((2 * n, 2 * n))
-    A[:n, n:] = np.eye(n)
-    A[n:, :n] = -Minv @ K
-    A[n:, n:] = -Minv @ C
-    return A
+    return first_order_state_matrix(Minv @ K, Minv @ C)
 
 
 @dataclass
@@ -104,14 +108,12 @@ def batch_modes(systems):
         return []
     n = systems[0].M.shape[0]
     Minv = np.linalg.inv(systems[0].M)
-    A = np.zeros((len(systems), 2 * n, 2 * n))
-    A[:, :n, n:] = np.eye(n)
+    mk, mc = np.empty((len(systems), n, n)), np.empty((len(systems), n, n))
     for k, s in enumerate(systems):
         if s.M is not systems[0].M and not np.array_equal(s.M, systems[0].M):
             Minv = np.linalg.inv(s.M)
-        A[k, n:, :n] = -Minv @ s.K
-        A[k, n:, n:] = -Minv @ s.C
-    lam, vec = np.linalg.eig(A)
+        mk[k], mc[k] = Minv @ s.K, Minv @ s.C
+    lam, vec = np.linalg.eig(first_order_state_matrix(mk, mc))
     return [_select(lam[k], vec[k], n) for k in range(len(systems))]
 
 
@@ -134,10 +136,7 @@ def speed_modes(M, K, C0, G, omegas, planes=None):
             except np.linalg.LinAlgError:  # K not positive definite (free rotor): general path below
                 pass
     Minv = np.linalg.inv(M)
-    A = np.zeros((omegas.size, 2 * n, 2 * n))
-    A[:, :n, n:] = np.eye(n)
-    A[:, n:, :n] = -Minv @ K
-    A[:, n:, n:] = -Minv @ C0 - omegas[:, None, None] * (Minv @ G)
+    A = first_order_state_matrix(Minv @ K, Minv @ C0 + omegas[:, None, None] * (Minv @ G))
     lam, vec = np.linalg.eig(A)
     return [_select(lam[k], vec[k], n) for k in range(omegas.size)]
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from .campbell import campbell
 from .equilibrium import equilibrium
+from .presets import PAPER_SPEED_RANGE_RPM
 
 #: figure number -> (method, extra options)
 CAMPBELL_FIGURES = {4: "A", 5: "B", 6: "C", 7: "D", 8: "E", 9: "F"}
@@ -43,7 +44,7 @@ def paper_figures(system, out_dir, n_speeds=100, progress=print):
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    speeds = np.linspace(10e3, 250e3, n_speeds)
+    speeds = np.linspace(*PAPER_SPEED_RANGE_RPM, n_speeds)
     paths = []
     for num, letter in CAMPBELL_FIGURES.items():
         progress(f"Fig. {num}: Campbell diagram, method {letter}")
@@ -59,7 +60,7 @@ def paper_figures(system, out_dir, n_speeds=100, progress=print):
             p.write_text(unstable_markdown(cd))
             paths.append(p)
     progress("Fig. 10 / 11: ring-speed ratio and equilibrium cost, methods F, G, I, J")
-    eq_speeds = np.linspace(10e3, 250e3, min(n_speeds, 50))
+    eq_speeds = np.linspace(*PAPER_SPEED_RANGE_RPM, min(n_speeds, 50))
     rsr_data, stats, rows = {}, {}, []
     for letter in "FGIJ":
         rsr, t_ms, its, evs = equilibrium_sweep(system, letter, eq_speeds)

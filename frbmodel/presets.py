@@ -7,6 +7,12 @@ from .rotor import Disc, Rotor, ShaftElement
 
 #: outer clearances [m] studied in the paper
 PAPER_OUTER_CLEARANCES = (36e-6, 40e-6, 42e-6, 46e-6)
+#: speed range [rpm] of the paper's Campbell diagrams (Figs. 4-9)
+PAPER_SPEED_RANGE_RPM = (10e3, 250e3)
+#: default run-up: linear ramp from / to these rotor speeds [rpm] (the rotor FMU's ramp defaults)
+RUNUP_SPEED_RPM = (20e3, 250e3)
+#: duration of the default run-up ramp [s]
+RUNUP_DURATION = 1.0
 
 
 def table2_rotor() -> Rotor:
@@ -18,8 +24,9 @@ def table2_rotor() -> Rotor:
     return Rotor(shaft, discs)
 
 
-def turbocharger(outer_clearance: float = 36e-6, film_model: str = "short", inner_clearance: float = 34e-6,
-                 viscosity_turbine: float = 4.9e-3, viscosity_compressor: float = 6.4e-3) -> Turbocharger:
+def turbocharger(outer_clearance: float = PAPER_OUTER_CLEARANCES[0], film_model: str = "short",
+                 inner_clearance: float = 34e-6, viscosity_turbine: float = 4.9e-3,
+                 viscosity_compressor: float = 6.4e-3) -> Turbocharger:
     """The paper's Table 2 turbocharger.
 
     Parameters

@@ -2,12 +2,19 @@
 
 Node DoFs are ``[v, w, θx, θy]`` (x-displacement, y-displacement, rotation about x, rotation about y), with
 θx = −∂w/∂z and θy = +∂v/∂z; x horizontal, y vertical up, z along the shaft, rotation CCW about +z.
-The equation of motion is ``M q̈ + Ω G q̇ + K q = f``; ``G`` is the gyroscopic matrix per rad/s.
+The equation of motion (physics.md §7.1, no rotor damping) is
+
+    M q̈ + Ω G q̇ + (K + Ω̇ G) q = f,
+
+with ``G`` the gyroscopic matrix per rad/s. :meth:`Rotor.eom_matrices` gives its three matrices at a speed,
+:meth:`Rotor.acceleration_matrices` the precomputed M⁻¹, M⁻¹K, M⁻¹G of the compiled acceleration kernel
+(:func:`frbmodel.dynamics.rotor_acceleration`) and :meth:`Rotor.state_matrix` the first-order form
+(:func:`first_order_state_matrix`). These are the only places the rotor's equation of motion is written.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, asdict
+from dataclasses import asdict, dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -16,6 +23,34 @@ from .errors import ParameterError, check_positive
 
 DOF_PER_NODE = 4
 GRAVITY = 9.81  # [m/s²], physics.md §1
+
+
+def first_order_state_matrix(minv_k, minv_c):
+    """State matrix of ``M q̈ + C q̇ + K q = f`` in the state s = [q; q̇] (physics.md §9).
+
+    Parameters
+    ----------
+    minv_k, minv_c : ndarray (..., n, n)
+        M⁻¹K and M⁻¹C; leading dimensions (stacks, e.g. one per speed) broadcast.
+
+    Returns
+    -------
+    ndarray (..., 2n, 2n)
+        A = [[0, I], [−M⁻¹K, −M⁻¹C]], so that ṡ = A s + [0; M⁻¹ f].
+
+    Examples
+    --------
+    >>> first_order_state_matrix(np.array([[4.0]]), np.array([[0.5]]))
+    array([[ 0. ,  1. ],
+           [-4. , -0.5]])
+    """
+    minv_k, minv_c = np.asarray(minv_k, dtype=float), np.asarray(minv_c, dtype=float)
+    n = minv_k.shape[-1]
+    A = np.zeros(np.broadcast_shapes(minv_k.shape[:-2], minv_c.shape[:-2]) + (2 * n, 2 * n))
+    A[..., :n, n:] = np.eye(n)
+    A[..., n:, :n] = -minv_k
+    A[..., n:, n:] = -minv_c
+    return A
 
 
 @dataclass(frozen=True)
@@ -232,25 +267,112 @@ class Rotor:
         """Gyroscopic matrix per unit rotor speed (multiply by Ω [rad/s])."""
         return self._assembled[2]
 
+    @cached_property
+    def acceleration_matrices(self) -> tuple:
+        """``(M⁻¹, M⁻¹K, M⁻¹G)`` (read-only, computed once): the constant matrices of the acceleration
+        q̈ = M⁻¹f − (M⁻¹K + Ω̇ M⁻¹G) q − Ω M⁻¹G q̇ (:func:`frbmodel.dynamics.rotor_acceleration`)."""
+        minv = np.linalg.inv(self.M)
+        out = (minv, minv @ self.K, minv @ self.G)
+        for a in out:
+            a.setflags(write=False)
+        return out
+
+    def eom_matrices(self, omega: float = 0.0, omega_dot: float = 0.0):
+        """Matrices of the equation of motion M q̈ + C q̇ + K q = f at one rotor speed (physics.md §7.1).
+
+        Parameters
+        ----------
+        omega : float
+            Rotor speed Ω [rad/s].
+        omega_dot : float
+            Rotor acceleration Ω̇ [rad/s²] (the spin-up term of d(I_p Ω θ)/dt).
+
+        Returns
+        -------
+        M, C, K : ndarray (n_dof, n_dof)
+            M; C = Ω G [N s/m ...]; K = K_shaft + Ω̇ G [N/m ...] (new arrays).
+
+        Examples
+        --------
+        >>> r = Rotor([ShaftElement(0.1, 0.01)], [Disc(1, 1.0, 1e-3, 5e-4)])
+        >>> M, C, K = r.eom_matrices(omega=100.0)
+        >>> bool(np.allclose(C, 100.0 * r.G)), bool(np.array_equal(K, r.K))
+        (True, True)
+        """
+        K = self.K + omega_dot * self.G if omega_dot else self.K.copy()
+        return self.M.copy(), omega * self.G, K
+
+    def state_matrix(self, omega: float = 0.0, omega_dot: float = 0.0) -> np.ndarray:
+        """First-order state matrix of the free rotor at speed ``omega`` [rad/s] and acceleration ``omega_dot``
+        [rad/s²]: A = [[0, I], [−M⁻¹(K + Ω̇G), −Ω M⁻¹G]] in the state [q; q̇] (2 n_dof square).
+
+        Examples
+        --------
+        >>> r = Rotor([ShaftElement(0.1, 0.01)])
+        >>> r.state_matrix(1000.0).shape
+        (16, 16)
+        """
+        _, mk, mg = self.acceleration_matrices
+        return first_order_state_matrix(mk + omega_dot * mg, omega * mg)
+
     def gravity_load(self, g: float = GRAVITY) -> np.ndarray:
         """Consistent nodal gravity load f_g = M a_g [N, N m] with a_g = −g on every w DoF."""
         a = np.zeros(self.n_dof)
         a[1::4] = -g
         return self.M @ a
 
+    def static_deflection(self, support_nodes, support_positions=None, g: float = GRAVITY) -> np.ndarray:
+        """Static rotor DoFs q [m, rad] under the consistent gravity load with the lateral displacements (v, w)
+        of the ``support_nodes`` prescribed.
+
+        Parameters
+        ----------
+        support_nodes : sequence of int
+            Nodes whose (v, w) are held (the journals).
+        support_positions : sequence of (float, float), optional
+            Prescribed (v, w) [m] per support node; default all zero.
+        g : float
+            Gravitational acceleration [m/s²] along −y.
+
+        Returns
+        -------
+        ndarray (n_dof,)
+            q, solving K q = f_g on the free DoFs. On two supports the rotor is statically determinate, so
+            the support reactions K q − f_g do not depend on the prescribed positions.
+
+        Examples
+        --------
+        >>> r = Rotor([ShaftElement(0.1, 0.01)])
+        >>> q = r.static_deflection([0, 1], [(0.0, -1e-6), (0.0, -1e-6)], g=0.0)
+        >>> bool(np.allclose(q[1::4], -1e-6)), bool(np.allclose(q[2::4], 0.0))   # weightless: rigid drop
+        (True, True)
+        """
+        f = self.gravity_load(g)
+        cons = np.array([4 * n + k for n in support_nodes for k in (0, 1)], dtype=int)
+        free = np.setdiff1d(np.arange(self.n_dof), cons)
+        q = np.zeros(self.n_dof)
+        if support_positions is not None:
+            q[cons] = np.asarray(support_positions, dtype=float).ravel()
+        q[free] = np.linalg.solve(self.K[np.ix_(free, free)], f[free] - self.K[np.ix_(free, cons)] @ q[cons])
+        return q
+
     def static_reactions(self, support_nodes, g: float = GRAVITY) -> np.ndarray:
         """Vertical support reactions [N] (positive = upward force on the shaft) at ``support_nodes``.
 
         The rotor on two point supports is statically determinate, so the reactions follow from the
-        consistent gravity load with the support deflections held at zero.
+        consistent gravity load with the support deflections held at zero (:meth:`static_deflection`).
+
+        Examples
+        --------
+        >>> r = Rotor([ShaftElement(0.1, 0.01)], [Disc(1, 1.0, 1e-3, 5e-4)])
+        >>> w = r.static_reactions([0, 1])
+        >>> round(float(w.sum()), 6) == round(r.mass * GRAVITY, 6)   # the supports carry the weight
+        True
         """
         f = self.gravity_load(g)
-        yz = np.sort(np.concatenate([np.arange(1, self.n_dof, 4), np.arange(2, self.n_dof, 4)]))
+        q = self.static_deflection(support_nodes, None, g)
         cons = np.array([4 * n + 1 for n in support_nodes])
-        free = np.setdiff1d(yz, cons)
-        q = np.zeros(self.n_dof)
-        q[free] = np.linalg.solve(self.K[np.ix_(free, free)], f[free])
-        return self.K[np.ix_(cons, yz)] @ q[yz] - f[cons]
+        return self.K[cons] @ q - f[cons]
 
     def to_dict(self) -> dict:
         return {"shaft": [e.to_dict() for e in self.shaft], "discs": [d.to_dict() for d in self.discs]}

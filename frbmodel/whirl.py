@@ -10,8 +10,10 @@ import math
 
 import numpy as np
 
-from .equilibrium import RPM, bearing_equilibrium
+from .equilibrium import bearing_equilibrium
 from .film import rt_coefficients, static_load
+from .rotor import GRAVITY
+from .units import rpm_to_rad_s
 
 FILM_NAMES = ("turbine inner", "turbine outer", "compressor inner", "compressor outer")
 
@@ -23,18 +25,26 @@ def lund_threshold(K, C):
     ``γ² ω_s² = ((K_eq − K_xx)(K_eq − K_yy) − K_xy K_yx) / (C_xx C_yy − C_xy C_yx)`` — with K in units of
     ω_s·(C units) the second value is γ² itself.
     """
-    k_eq = (K[0, 0] * C[1, 1] + K[1, 1] * C[0, 0] - K[0, 1] * C[1, 0] - K[1, 0] * C[0, 1]) / (C[0, 0] + C[1, 1])
+    _, a3, _, a1, _ = characteristic_polynomial(1.0, K, C)
+    k_eq = a1 / a3
     g2 = ((k_eq - K[0, 0]) * (k_eq - K[1, 1]) - K[0, 1] * K[1, 0]) / (C[0, 0] * C[1, 1] - C[0, 1] * C[1, 0])
     return k_eq, g2
 
 
-def routh_hurwitz_stable(m, K, C) -> bool:
-    """Routh–Hurwitz stability of a rigid mass ``m`` [kg] on a 2x2 film ``K`` [N/m], ``C`` [N s/m]."""
+def characteristic_polynomial(m, K, C):
+    """Coefficients ``(a4, a3, a2, a1, a0)`` of det(m s² I + C s + K) for a rigid mass ``m`` [kg] on a 2x2
+    film ``K`` [N/m], ``C`` [N s/m] (physics.md §8)."""
     a4 = m * m
     a3 = m * (C[0, 0] + C[1, 1])
     a2 = m * (K[0, 0] + K[1, 1]) + C[0, 0] * C[1, 1] - C[0, 1] * C[1, 0]
     a1 = K[0, 0] * C[1, 1] + K[1, 1] * C[0, 0] - K[0, 1] * C[1, 0] - K[1, 0] * C[0, 1]
     a0 = K[0, 0] * K[1, 1] - K[0, 1] * K[1, 0]
+    return a4, a3, a2, a1, a0
+
+
+def routh_hurwitz_stable(m, K, C) -> bool:
+    """Routh–Hurwitz stability of a rigid mass ``m`` [kg] on a 2x2 film ``K`` [N/m], ``C`` [N s/m]."""
+    a4, a3, a2, a1, a0 = characteristic_polynomial(m, K, C)
     return bool(min(a4, a3, a2, a1, a0) > 0 and a3 * a2 > a4 * a1 and a1 * a2 * a3 - a0 * a3 ** 2 - a4 * a1 ** 2 > 0)
 
 
@@ -53,11 +63,23 @@ def film_whirl_ratio(eps: float, model: str = "short", lam: float | None = None)
     return math.sqrt(g2), kbar / g2
 
 
-def bearing_whirl(bearing, eq, model="short", gravity=9.81):
+def bearing_whirl(bearing, eq, model="short", gravity=GRAVITY):
     """Whirl frequencies [rad/s] and instability margins of the inner and outer film of one bearing.
 
-    Returns ``(omega_w_inner, omega_w_outer, margin_inner, margin_outer)``; a margin > 0 means the film is
-    past its onset (c ω_s²/g − K̄_eq/γ²).
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    eq : BearingEquilibrium
+        Static state (ε and film speeds) of the bearing.
+    model : {"short", "short_corrected"}
+    gravity : float
+        [m/s²]
+
+    Returns
+    -------
+    tuple of float
+        ``(omega_w_inner, omega_w_outer, margin_inner, margin_outer)``; a margin > 0 means the film is past
+        its onset (c ω_s²/g − K̄_eq/γ²).
     """
     out = []
     for film, eps, ws in ((bearing.inner, eq.eps_inner, eq.omega_inner), (bearing.outer, eq.eps_outer, eq.omega_outer)):
@@ -85,7 +107,7 @@ def film_onset_speeds(system, method="J", speed_range_rpm=(500.0, 400e3)):
     res = []
     for i, b in enumerate(system.bearings):
         def margins(rpm, i=i, b=b):
-            eq = bearing_equilibrium(b, loads[i], rpm * RPM, method, system.film_model, system.gravity)
+            eq = bearing_equilibrium(b, loads[i], rpm_to_rad_s(rpm), method, system.film_model, system.gravity)
             return bearing_whirl(b, eq, system.film_model, system.gravity)[2:]
 
         grid = np.geomspace(speed_range_rpm[0], speed_range_rpm[1], 40)
@@ -96,5 +118,5 @@ def film_onset_speeds(system, method="J", speed_range_rpm=(500.0, 400e3)):
                 res.append(math.nan)
                 continue
             j = idx[0]
-            res.append(brentq(lambda s: margins(s)[k], grid[j], grid[j + 1], xtol=1e-6))
+            res.append(brentq(lambda s, k=k: margins(s)[k], grid[j], grid[j + 1], xtol=1e-6))
     return np.array(res)

@@ -3,12 +3,12 @@ import math
 
 import numpy as np
 import pytest
+from _reference import short_pressure_theta
 from scipy.optimize import brentq
 
 import frbmodel as frb
 from frbmodel.bearing import ring_torque
-from frbmodel.film import film_force, film_torques, static_position
-from _reference import short_pressure_theta
+from frbmodel.film import film_force, film_torques
 
 
 def eq6(b):

@@ -1,5 +1,4 @@
 """Equilibria of methods C, D, F, G, I, J: physics.md §11 reference values and consistency between methods."""
-import math
 
 import numpy as np
 import pytest

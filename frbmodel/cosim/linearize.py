@@ -7,8 +7,6 @@ With u_b = C_r,b x_r:  ẋ_r = (A_r + Σ B_r,b D_b C_r,b) x_r + Σ B_r,b C_b x_b
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..errors import ParameterError
@@ -75,10 +73,11 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
 
 def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progress=None):
     """Holistic Campbell diagram from the FMUs alone (same result type as :func:`frbmodel.campbell`)."""
-    from ..campbell import campbell_from_modes
-    from ..equilibrium import RPM, bearing_equilibrium
+    from ..campbell import campbell_from_modes, film_whirl_rows
+    from ..equilibrium import bearing_equilibrium
+    from ..linear import mass_matrix
     from ..modal import modes_from_state
-    from ..whirl import bearing_whirl
+    from ..units import rpm_to_rad_s
 
     speeds = np.atleast_1d(np.asarray(speeds_rpm, dtype=float))
     mode_sets = []
@@ -91,21 +90,13 @@ def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progres
         A, system = linearize(ssp, s, method, parameter_set)
         mode_sets.append(modes_from_state(A, A.shape[0] // 2))
         loads = system.bearing_loads
-        for k, b in enumerate(system.bearings):
-            e = bearing_equilibrium(b, loads[k], s * RPM, method, system.film_model, system.gravity)
-            rsr[i, k] = e.ring_speed_ratio
-            wi, wo, mi, mo = bearing_whirl(b, e, system.film_model, system.gravity)
-            whirl_hz[i, 2 * k:2 * k + 2] = np.array([wi, wo]) / (2 * math.pi)
-            margin[i, 2 * k:2 * k + 2] = [mi, mo]
-            ecc[i, 2 * k:2 * k + 2] = [e.eps_inner, e.eps_outer]
+        eqs = [bearing_equilibrium(b, loads[k], rpm_to_rad_s(s), method, system.film_model, system.gravity)
+               for k, b in enumerate(system.bearings)]
+        rsr[i] = [e.ring_speed_ratio for e in eqs]
+        whirl_hz[i], margin[i], ecc[i] = film_whirl_rows(system, eqs)
         if progress:
             progress(i + 1, speeds.size)
-    n_r = system.rotor.n_dof
-    M = np.zeros((n_r + 4, n_r + 4))
-    M[:n_r, :n_r] = system.rotor.M
-    for k, b in enumerate(system.bearings):
-        M[n_r + 2 * k, n_r + 2 * k] = M[n_r + 2 * k + 1, n_r + 2 * k + 1] = b.ring_mass
-    ring_dofs = [(n_r, n_r + 1), (n_r + 2, n_r + 3)]
+    M, ring_dofs = mass_matrix(system, method)
     meta = {"system": f"{system.name} (from FMUs: {ssp}, set {parameter_set})", "film_model": system.film_model,
             "source": "FMU linearization"}
     return campbell_from_modes(method.upper(), speeds, mode_sets, system.rotor, M, ring_dofs, rsr, ecc, whirl_hz,
