@@ -7,30 +7,52 @@ Quick start::
     eq = frb.equilibrium(tc, method="J", speed_rpm=150e3)  # static equilibrium of both bearings
     cd = frb.campbell(tc, method="J", speeds_rpm=np.linspace(10e3, 250e3, 100))
     cd.plot().savefig("campbell.png")
+
+Every name below is importable from the top level; plotting libraries are imported only when a figure is made.
 """
 __version__ = "0.1.0"
 
-from .errors import ConvergenceError, FilmContactError, FRBError, ParameterError
-from .film import (FILM_MODELS, Film, film_coefficients, film_force, film_torques, static_eccentricity,
-                   static_position)
-from .rotor import Disc, Rotor, ShaftElement
+from .bearing import ring_speed_ratio, ring_torque
+from .campbell import CampbellResult, campbell
+from .equilibrium import BearingEquilibrium, EquilibriumResult, equilibrium
+from .errors import (
+    ConvergenceError,
+    CosimStopped,
+    FilmContactError,
+    FRBError,
+    ParameterError,
+    RunStopped,
+    RunupStopped,
+)
+from .film import (
+    FILM_MODELS,
+    Film,
+    film_coefficients,
+    film_force,
+    film_torques,
+    static_eccentricity,
+    static_position,
+)
+from .linear import LinearSystem, linear_system
+from .methods import METHODS, Method, get_method
+from .modal import Modes, modes
 from .parameters import FloatingRingBearing, Turbocharger, load_system
 from .presets import PAPER_OUTER_CLEARANCES, turbocharger
-from .bearing import ring_speed_ratio, ring_torque
-from .methods import METHODS, get_method
-from .equilibrium import equilibrium, EquilibriumResult
-from .linear import linear_system
-from .modal import modes
+from .recorder import Recorder, RunupResult, RunupSchema
+from .rotor import Disc, Rotor, ShaftElement
+from .runup import SpeedProfile, Unbalance, runup
+from .spectral import SpectrogramResult, spectrogram
+from .tracking import Component
+from .units import rad_s_to_rpm, rpm_to_rad_s
 from .whirl import film_onset_speeds
-from .campbell import campbell, CampbellResult
-from .runup import RunupResult, RunupStopped, SpeedProfile, Unbalance, runup
-from .spectral import spectrogram
 
 __all__ = [
-    "__version__", "ConvergenceError", "FilmContactError", "FRBError", "ParameterError", "FILM_MODELS", "Film",
-    "film_coefficients", "film_force", "film_torques", "static_eccentricity", "static_position", "Disc", "Rotor",
-    "ShaftElement", "FloatingRingBearing", "Turbocharger", "load_system", "PAPER_OUTER_CLEARANCES", "turbocharger",
-    "ring_speed_ratio", "ring_torque", "METHODS", "get_method", "equilibrium", "EquilibriumResult", "linear_system",
-    "modes", "film_onset_speeds", "campbell", "CampbellResult", "RunupResult", "RunupStopped", "SpeedProfile",
-    "Unbalance", "runup", "spectrogram",
+    "__version__", "BearingEquilibrium", "CampbellResult", "Component", "ConvergenceError", "CosimStopped", "Disc",
+    "EquilibriumResult", "FILM_MODELS", "FRBError", "Film", "FilmContactError", "FloatingRingBearing",
+    "LinearSystem", "METHODS", "Method", "Modes", "PAPER_OUTER_CLEARANCES", "ParameterError", "Recorder", "Rotor",
+    "RunStopped", "RunupResult", "RunupSchema", "RunupStopped", "ShaftElement", "SpectrogramResult", "SpeedProfile",
+    "Turbocharger", "Unbalance", "campbell", "equilibrium", "film_coefficients", "film_force",
+    "film_onset_speeds", "film_torques", "get_method", "linear_system", "load_system", "modes",
+    "rad_s_to_rpm", "ring_speed_ratio", "ring_torque", "rpm_to_rad_s", "runup", "spectrogram",
+    "static_eccentricity", "static_position", "turbocharger",
 ]

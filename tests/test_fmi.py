@@ -19,18 +19,10 @@ from fmpy.fmi1 import FMICallException  # noqa: E402
 from fmpy.fmi2 import FMU2Slave  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-from frbmodel.cosim.build import build_fmus  # noqa: E402
 from frbmodel.cosim.master import CosimStopped, cosimulate, operating_point_overrides  # noqa: E402
 from frbmodel.cosim.ssp import read_ssp, write_ssp  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-@pytest.fixture(scope="session")
-def built(tmp_path_factory):
-    out = tmp_path_factory.mktemp("build")
-    build_fmus(out, ROOT, progress=lambda m: None)
-    return out
 
 
 def _slave(fmu_path, name, tmp):
