@@ -1,5 +1,5 @@
-"""What ships: the wheel (installed outside the checkout, it builds FMUs that step) and the SSP folder (its
-parameter sets are bound by the SSDs, one SSP variant per set)."""
+"""What ships: the wheel (installed outside the checkout, it builds FMUs that step) and where `frb build-fmus`
+finds the FMU sources (the SSP reader: tests/test_ssp.py)."""
 import json
 import os
 import shutil
@@ -139,84 +139,43 @@ def test_wheel_installed_outside_the_checkout_builds_fmus_that_step(tmp_path):
     print(f"wheel test: {time.perf_counter() - t0:.1f} s")
 
 
-# ----------------------------------------------------------------- the SSP: parameter sets bound by the SSDs
-def _copy_ssp(tmp_path):
-    d = tmp_path / "ssp"
-    shutil.copytree(ROOT / "ssp", d)
-    return d
-
-
-def _edit(path, old, new):
-    text = path.read_text()
-    assert old in text, old
-    path.write_text(text.replace(old, new))
-
-
-def test_ssp_parameter_sets_come_from_the_ssd_bindings_not_file_names(tmp_path):
-    d = _copy_ssp(tmp_path)
-    # move one bound file and bind it from its new place; add a stray .ssv that no SSD binds
-    (d / "resources" / "by_clearance").mkdir()
-    moved = d / "resources" / "by_clearance" / "turbine_40um.ssv"
-    (d / "resources" / "co40_turbine.ssv").rename(moved)
-    _edit(d / "co40.ssd", 'source="resources/co40_turbine.ssv"', 'source="resources/by_clearance/turbine_40um.ssv"')
-    shutil.copy(d / "resources" / "co36_rotor.ssv", d / "resources" / "co99_rotor.ssv")
-    s = read_ssp(d)
-    assert sorted(s.parameter_sets) == SETS and s.default_set == "co36"
-    assert s.parameter_files["co40"]["turbine"] == (moved,)
-    # the set named co<N> has outer clearance N µm in both bearings; the inner one is Table 2's 34 µm
-    for name, c in (("co36", 36e-6), ("co40", 40e-6), ("co46", 46e-6)):
-        p = s.parameters(name)
-        assert p["turbine"]["outer.clearance"] == ("Real", c) and p["compressor"]["outer.clearance"] == ("Real", c)
-        assert p["turbine"]["inner.clearance"] == ("Real", 34e-6)
-    assert s.parameters() == s.parameters("co36")
-
-
-def test_ssp_bindings_merge_in_order_with_inline_values(tmp_path):
-    d = _copy_ssp(tmp_path)
-    inline = ('<ssd:ParameterBinding><ssd:ParameterValues><ssv:ParameterSet version="1.0" name="co36" '
-              'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"><ssv:Parameters>'
-              '<ssv:Parameter name="ring.mass"><ssv:Real value="0.008" /></ssv:Parameter>'
-              '</ssv:Parameters></ssv:ParameterSet></ssd:ParameterValues></ssd:ParameterBinding>')
-    bound = '<ssd:ParameterBinding source="resources/co36_compressor.ssv" />'
-    _edit(d / "SystemStructure.ssd", bound, bound + inline)
-    p = read_ssp(d).parameters("co36")
-    # SSP 1.0: a later binding overrides an earlier one; the other values stay those of the file
-    assert p["compressor"]["ring.mass"] == ("Real", 0.008) and p["turbine"]["ring.mass"] == ("Real", 7.2e-3)
-    assert p["compressor"]["outer.clearance"] == ("Real", 36e-6)
-
-
-def test_ssp_missing_set_or_bad_variant_is_a_parameter_error(tmp_path):
-    with pytest.raises(frb.ParameterError) as e:
-        read_ssp(ROOT / "ssp").parameters("co50")
-    assert str(ROOT / "ssp") in str(e.value) and "'co50'" in str(e.value) and str(SETS) in str(e.value)
-    d = _copy_ssp(tmp_path)
-    shutil.copy(d / "co42.ssd", d / "co42_copy.ssd")
-    with pytest.raises(frb.ParameterError, match="co42_copy.ssd binds parameter set 'co42', which another SSD"):
-        read_ssp(d)
-    (d / "co42_copy.ssd").unlink()
-    _edit(d / "co42.ssd", 'endElement="compressor" endConnector="journal.x"',
-          'endElement="compressor" endConnector="journal.y"')
-    with pytest.raises(frb.ParameterError, match="co42.ssd has other components or connections"):
-        read_ssp(d)
-
-
-def test_committed_ssp_variants_validate_against_the_ssp_schema():
-    pytest.importorskip("fmpy")
-    from fmpy.ssp.ssd import validate_tree
-    from lxml import etree
-
-    files = sorted((ROOT / "ssp").glob("*.ssd"))
-    assert [f.name for f in files] == ["SystemStructure.ssd"] + [f"{s}.ssd" for s in SETS[1:]]
-    for f in files:
-        validate_tree(etree.parse(str(f)).getroot(), "SystemStructureDescription.xsd")
-    for f in sorted((ROOT / "ssp" / "resources").glob("*.ssv")):
-        validate_tree(etree.parse(str(f)).getroot(), "SystemStructureParameterValues.xsd")
-
-
+# ----------------------------------------------------------------- finding the FMU sources
 def test_find_source_takes_the_checkout_and_rejects_a_bad_src(tmp_path):
     from frbmodel.cosim.build import find_source
 
     if Path(frb.__file__).resolve().parents[1] == ROOT:  # an editable install (the README's test command)
         assert find_source() == ROOT  # the wheel case: test_wheel_installed_outside_the_checkout_...
-    with pytest.raises(frb.ParameterError, match="fmu_src/ and ssp/"):
+    with pytest.raises(frb.ParameterError, match="lacks fmu_src/ and ssp/SystemStructure.ssd; pass the root of"):
         find_source(tmp_path)
+    (tmp_path / "fmu_src").mkdir()
+    with pytest.raises(frb.ParameterError, match="lacks ssp/SystemStructure.ssd; pass the root of a frbmodel"):
+        find_source(tmp_path)
+
+
+def test_build_fmus_without_sources_names_what_is_missing_and_the_fix(tmp_path, monkeypatch, capsys):
+    """A broken install (no package data) used outside a checkout: `frb build-fmus` exits 2 naming the missing
+    folders, where it looked, and the two fixes (reinstall, --src)."""
+    import frbmodel.cosim.build as build
+    from frbmodel.cli import main
+
+    package = tmp_path / "site-packages" / "frbmodel"  # an installed package: no pyproject.toml above it
+    (package / "_data" / "fmu_src").mkdir(parents=True)  # the FMU sources there, the SSP folder lost
+    monkeypatch.setattr(build, "PACKAGE", package)
+    monkeypatch.setattr(build, "PACKAGE_DATA", package / "_data")
+    assert main(["build-fmus", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert f"the installed package lacks ssp/SystemStructure.ssd (in '{package / '_data'}')" in err
+    assert f"'{package}' is not inside a checkout" in err
+    assert "pip install --force-reinstall" in err and "--src with the root of a frbmodel checkout" in err
+    assert not (tmp_path / "out").exists()  # nothing built or created before the check
+    # a checkout that lost its fmu_src/ (pyproject.toml next to the package) is named as such
+    checkout = tmp_path / "checkout"
+    (checkout / "frbmodel" / "_data").mkdir(parents=True)
+    (checkout / "pyproject.toml").write_text("")
+    (checkout / "ssp").mkdir()
+    (checkout / "ssp" / "SystemStructure.ssd").write_text("")
+    monkeypatch.setattr(build, "PACKAGE", checkout / "frbmodel")
+    monkeypatch.setattr(build, "PACKAGE_DATA", checkout / "frbmodel" / "_data")
+    with pytest.raises(frb.FRBError, match=f"the checkout '{checkout}' lacks fmu_src/"):
+        build.find_source()

@@ -124,3 +124,124 @@ def test_cli_paper_figures(tmp_path, capsys):
     g = eq[eq["method"] == "G"]["RSR turbine [-]"].to_numpy()
     assert abs(f - g).max() < 1e-12
     assert (eq[eq["method"] == "J"]["RSR turbine [-]"] < f.max()).all()
+
+
+# ----------------------------------------------------------------- broken system files: what the user sees
+def _nth(text, old, new, n):
+    """``text`` with the n-th (0-based) occurrence of ``old`` replaced."""
+    parts = text.split(old)
+    assert len(parts) > n + 1, (old, n)
+    return old.join(parts[:n + 1]) + new + old.join(parts[n + 1:])
+
+
+FILM_KEYS = "valid keys: clearance, length, radius, viscosity"
+TOP_KEYS = "valid keys: bearings, film_model, gravity, name, rotor, units"
+# (what goes wrong, edit of the saved Table 2 system (old, new, which occurrence), what the message must say);
+# the saved file has 3 [[rotor.shaft]], 2 [[rotor.discs]] and 2 [[bearings]] tables with [bearings.inner] and
+# [bearings.outer] each, in this order
+BAD_FILES = [
+    ("misspelt film key", ("viscosity", "viscosty", 0),
+     f"unknown key 'viscosty' in bearings[0].inner (film), did you mean 'viscosity'? {FILM_KEYS}"),
+    ("misspelt key, second bearing's outer film", ("viscosity", "viscosty", 3),
+     f"unknown key 'viscosty' in bearings[1].outer (film), did you mean 'viscosity'? {FILM_KEYS}"),
+    ("misspelt bearing key", ("ring_mass", "ring_mas", 1),
+     "unknown key 'ring_mas' in bearings[1] (bearing), did you mean 'ring_mass'? valid keys: inner, name, node, "
+     "outer, ring_inertia, ring_mass"),
+    ("misspelt shaft element key", ("density", "densty", 2),
+     "unknown key 'densty' in rotor.shaft[2] (shaft element), did you mean 'density'? valid keys: density, "
+     "inner_diameter, length, outer_diameter, youngs_modulus"),
+    ("misspelt disc key", ("polar_inertia", "polar_inerta", 1),
+     "unknown key 'polar_inerta' in rotor.discs[1] (disc), did you mean 'polar_inertia'? valid keys: "
+     "diametral_inertia, mass, name, node, polar_inertia"),
+    ("misspelt top-level key", ("gravity = ", "gravty = ", 0),
+     f"unknown key 'gravty' at the top level, did you mean 'gravity'? {TOP_KEYS}"),
+    ("unknown top-level key", ("gravity = 9.81", "gravity = 9.81\ncolour = 1", 0),
+     f"unknown key 'colour' at the top level; {TOP_KEYS}"),
+    ("number as a string", ("clearance = 3.6e-05", 'clearance = "36e-6"', 0),
+     "bearings[0].outer.clearance = '36e-6' is a string; expected a real number [m] (write numbers without quotes)"),
+    ("list for a number", ("gravity = 9.81", "gravity = [9.81]", 0),
+     "gravity = [9.81] is a list; expected a real number [m/s^2]"),
+    ("boolean for a number", ("ring_mass = 0.0072", "ring_mass = true", 0),
+     "bearings[0].ring_mass = True is a boolean; expected a real number [kg]"),
+    ("fraction for a node", ("node = 1\n", "node = 1.0\n", 0),
+     "bearings[0].node = 1.0 is a real number; expected an integer"),
+    ("missing key", ("viscosity = 0.0049\n", "", 0),
+     "bearings[0].inner (film) lacks the required key 'viscosity'; required: radius, length, clearance, viscosity"),
+    ("value out of range", ("clearance = 3.6e-05", "clearance = -3.6e-05", 1),
+     "bearings[1].outer: film clearance = -3.6e-05 m is invalid: valid range is finite and > 0 m"),
+    ("shaft value out of range", ("length = 0.039", "length = 0.0", 0),
+     "rotor.shaft[1]: shaft element length = 0.0 m is invalid"),
+]
+
+
+@pytest.mark.parametrize("what, edit, message", BAD_FILES, ids=[b[0] for b in BAD_FILES])
+def test_bad_system_file_is_refused_naming_file_key_and_place(tmp_path, what, edit, message):
+    text = frb.turbocharger().save(tmp_path / "ok.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(_nth(text, *edit))
+    with pytest.raises(frb.ParameterError) as e:
+        frb.load_system(bad)
+    assert str(e.value).startswith(f"system file {str(bad)!r}: ") and message in str(e.value), str(e.value)
+
+
+def test_misspelt_key_in_json_and_in_from_dict():
+    d = frb.turbocharger().to_dict()
+    d["bearings"][0]["outer"]["viscosty"] = d["bearings"][0]["outer"].pop("viscosity")
+    with pytest.raises(frb.ParameterError, match=r"unknown key 'viscosty' in bearings\[0\].outer \(film\), did "
+                                                 r"you mean 'viscosity'\?"):
+        frb.Turbocharger.from_dict(d)
+    b = frb.turbocharger().bearings[0].to_dict()
+    b["ring_mas"] = b.pop("ring_mass")
+    with pytest.raises(frb.ParameterError, match="unknown key 'ring_mas' in bearing .*did you mean 'ring_mass'"):
+        frb.FloatingRingBearing.from_dict(b)
+    with pytest.raises(frb.ParameterError, match="the system description = 'x' is a string; expected a table"):
+        frb.Turbocharger.from_dict("x")
+
+
+def test_schema_lists_exactly_the_fields_of_the_classes():
+    """The file schema and the dataclasses it builds must not drift apart: the keys of each table are the
+    fields of its class, the required keys the fields without a default."""
+    from dataclasses import MISSING, fields
+
+    from frbmodel.parameters import BEARING, DISC, FILM, ROTOR, SHAFT_ELEMENT, SYSTEM
+
+    for section, cls in ((FILM, frb.Film), (SHAFT_ELEMENT, frb.ShaftElement), (DISC, frb.Disc),
+                         (BEARING, frb.FloatingRingBearing), (ROTOR, frb.Rotor), (SYSTEM, frb.Turbocharger)):
+        names = {f.name for f in fields(cls)}
+        assert set(section.keys) == names | ({"units"} if cls is frb.Turbocharger else set()), cls
+        assert set(section.required) == {f.name for f in fields(cls)
+                                         if f.default is MISSING and f.default_factory is MISSING}, cls
+
+
+def test_syntax_errors_name_file_line_and_column(tmp_path):
+    p = tmp_path / "s.toml"
+    p.write_text("gravity = 9.81\nfilm_model = short\n")  # an unquoted string: line 2, column 14 ('s')
+    with pytest.raises(frb.ParameterError) as e:
+        frb.load_system(p)
+    assert str(e.value) == (f"system file {str(p)!r}, line 2, column 14: not valid TOML: Invalid value\n"
+                            "    film_model = short\n" + " " * 17 + "^")
+    p = tmp_path / "s.json"
+    p.write_text('{\n  "gravity": 9.81,\n  "rotor": ,\n}')  # a missing value: line 3, column 12 (',')
+    with pytest.raises(frb.ParameterError, match=r"s.json', line 3, column 12: not valid JSON: Expecting value"):
+        frb.load_system(p)
+    # a file cut off inside a string: TOML reports the end of the document, the message its line and column
+    text = frb.turbocharger().save(tmp_path / "ok.toml").read_text()
+    cut = text[:text.index('name = "turbine"') + len('name = "turb')]
+    p = tmp_path / "cut.toml"
+    p.write_text(cut)
+    with pytest.raises(frb.ParameterError) as e:
+        frb.load_system(p)
+    line = cut.count("\n") + 1
+    assert f"cut.toml', line {line}, column 13: not valid TOML: Unterminated string\n" in str(e.value)
+    # cut off at a line boundary the file parses, and its content is incomplete
+    p.write_text(text[:text.index("[[bearings]]")])
+    with pytest.raises(frb.ParameterError, match="the system description lacks the required key 'bearings'"):
+        frb.load_system(p)
+
+
+def test_cli_bad_system_file_exits_2_without_traceback(tmp_path, capsys):
+    p = tmp_path / "my.toml"
+    p.write_text(frb.turbocharger().save(tmp_path / "ok.toml").read_text().replace("gravity", "gravty"))
+    assert main(["equilibrium", "--method", "J", "--speed-rpm", "30000", "--system", str(p)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "my.toml" in err and "unknown key 'gravty' at the top level" in err

@@ -22,8 +22,10 @@ PACKAGE = Path(frbmodel.__file__).resolve().parent
 PACKAGE_DATA = PACKAGE / "_data"
 
 
-def _has_sources(folder: Path) -> bool:
-    return (folder / "fmu_src").is_dir() and (folder / "ssp").is_dir()
+def _missing(folder: Path) -> list:
+    """The subfolders ``fmu_src/`` and ``ssp/`` (with its SystemStructure.ssd) that ``folder`` lacks."""
+    out = [] if (folder / "fmu_src").is_dir() else ["fmu_src/"]
+    return out + ([] if (folder / "ssp" / "SystemStructure.ssd").is_file() else ["ssp/SystemStructure.ssd"])
 
 
 def find_source(root=None) -> Path:
@@ -43,23 +45,28 @@ def find_source(root=None) -> Path:
     Raises
     ------
     ParameterError
-        ``root`` lacks one of the two subfolders.
+        ``root`` lacks one of the two subfolders (the message names which).
     FRBError
-        No ``root`` given and neither a checkout nor the package data has them (a broken install).
+        No ``root`` given and neither a checkout nor the package data has them (a broken install); the
+        message names what each place lacks and how to fix it.
     """
     if root is not None:
         root = Path(root)
-        if not _has_sources(root):
-            raise ParameterError(f"--src = {str(root)!r} is invalid: it must hold the folders fmu_src/ and ssp/ "
-                                 "(the root of a frbmodel checkout)")
+        if _missing(root):
+            raise ParameterError(f"--src = {str(root)!r} is invalid: it lacks {' and '.join(_missing(root))}; "
+                                 "pass the root of a frbmodel checkout (it holds fmu_src/ and ssp/)")
         return root
     checkout = PACKAGE.parent
-    if (checkout / "pyproject.toml").is_file() and _has_sources(checkout):
+    if (checkout / "pyproject.toml").is_file() and not _missing(checkout):
         return checkout
-    if _has_sources(PACKAGE_DATA):
+    if not _missing(PACKAGE_DATA):
         return PACKAGE_DATA
-    raise FRBError(f"fmu_src/ and ssp/ are neither in a checkout ({checkout}) nor in the installed package "
-                   f"({PACKAGE_DATA}): reinstall frbmodel or pass --src CHECKOUT")
+    in_checkout = (f"the checkout {str(checkout)!r} lacks {' and '.join(_missing(checkout))}"
+                   if (checkout / "pyproject.toml").is_file() else f"{str(PACKAGE)!r} is not inside a checkout")
+    raise FRBError(f"the FMU sources are missing: the installed package lacks {' and '.join(_missing(PACKAGE_DATA))} "
+                   f"(in {str(PACKAGE_DATA)!r}) and {in_checkout}. Reinstall frbmodel (`pip install --force-reinstall` "
+                   "of its wheel or source tree, which ships them as frbmodel/_data) or pass --src with the root of a "
+                   "frbmodel checkout")
 
 
 def _bundle_ignore(dirname, names):
@@ -99,9 +106,9 @@ def build_fmus(out_dir="build", src=None, progress=print):
     list of Path
         The two FMUs and the SSP archive.
     """
+    src = find_source(src)  # before importing pythonfmu: a missing source is named even without the fmi extra
     from pythonfmu import FmuBuilder
 
-    src = find_source(src)
     out = Path(out_dir)
     (out / "fmus").mkdir(parents=True, exist_ok=True)
     paths = []

@@ -12,10 +12,16 @@ variants are the standard's way (an SSP may hold several .ssd files at its root,
 default one), any SSP tool runs the default, and libcosim can load a variant by its SSD file name. The reader
 takes every binding from the SSDs (file names carry no meaning) and names a set by the ``name`` of the
 ``ssv:ParameterSet`` its SSD binds.
+
+An ``.ssp`` archive is extracted to a temporary folder owned by the :class:`SSPSystem` that :func:`read_ssp`
+returns: :meth:`SSPSystem.close` (or leaving its ``with`` block) deletes it, and so does garbage collection of
+the object or the end of the interpreter, whichever comes first.
 """
 from __future__ import annotations
 
+import shutil
 import tempfile
+import weakref
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -256,10 +262,15 @@ def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, **kw):
 class SSPSystem:
     """A parsed SSP: components, connections, parameter sets (one per SSD variant), step and stop time.
 
+    Read from an ``.ssp`` archive, the object owns the temporary folder the archive was extracted to
+    (:attr:`root`, holding the FMUs of :attr:`components`): :meth:`close` or the end of a ``with`` block deletes
+    it; without either, garbage collection of the object (or the end of the interpreter) does. Keep the object
+    while the FMU paths are in use.
+
     Attributes
     ----------
     root : Path
-        Folder holding the SSDs (an archive is extracted to a temporary folder).
+        Folder holding the SSDs (an archive is extracted to a temporary folder, see :meth:`close`).
     components : dict
         ``{component name: FMU path}``.
     connections : list of tuple
@@ -288,6 +299,31 @@ class SSPSystem:
     parameter_sets: dict = field(default_factory=dict)
     default_set: str | None = None
     source: Path | None = None
+    _finalizer: weakref.finalize | None = field(default=None, init=False, repr=False, compare=False)
+
+    def _own(self, folder):
+        """Take ownership of the temporary folder ``folder``: delete it on :meth:`close` or collection."""
+        self._finalizer = weakref.finalize(self, shutil.rmtree, str(folder), ignore_errors=True)
+
+    @property
+    def temporary(self) -> bool:
+        """True while :attr:`root` is a temporary extraction of an archive that :meth:`close` will delete."""
+        return self._finalizer is not None and self._finalizer.alive
+
+    def close(self):
+        """Delete the temporary folder of an extracted archive (no effect for an SSP folder; idempotent).
+
+        The paths in :attr:`components` and :attr:`parameter_files` of an archive no longer exist afterwards.
+        """
+        if self._finalizer is not None:
+            self._finalizer()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
 
     def parameters(self, set_name=None):
         """Parameter values of one set.
@@ -314,24 +350,29 @@ class SSPSystem:
         return {c: dict(p) for c, p in self.parameter_sets[name].items()}
 
 
-def _value(typ, text):
-    """Python value of an SSV value attribute of SSP type ``typ``."""
-    if typ == "Real":
-        return float(text)
-    if typ == "Integer":
-        return int(text)
-    if typ == "Boolean":
-        return text.lower() == "true"
+def _value(typ, text, where):
+    """Python value of an SSV value attribute of SSP type ``typ``; ``where`` names it in errors."""
+    try:
+        if typ == "Real":
+            return float(text)
+        if typ == "Integer":
+            return int(text)
+        if typ == "Boolean":
+            if text.lower() not in ("true", "false", "1", "0"):
+                raise ValueError(text)
+            return text.lower() in ("true", "1")
+    except (TypeError, ValueError, AttributeError):
+        raise ParameterError(f"{where} = {text!r} is invalid: expected an SSP {typ} value") from None
     return text
 
 
-def _parameter_set(element):
-    """(name, {parameter: (type, value)}) of an ``ssv:ParameterSet`` element."""
+def _parameter_set(element, what):
+    """(name, {parameter: (type, value)}) of an ``ssv:ParameterSet`` element; ``what`` names it in errors."""
     out = {}
     for p in element.iter(_q("ssv", "Parameter")):
         for child in p:
             typ = child.tag.split("}")[1]
-            out[p.get("name")] = (typ, _value(typ, child.get("value")))
+            out[p.get("name")] = (typ, _value(typ, child.get("value"), f"{what}: parameter {p.get('name')!r}"))
     return element.get("name"), out
 
 
@@ -357,7 +398,7 @@ def read_ssv(path):
         ``{parameter: (type, value)}``: type ``"Real"`` (float), ``"Integer"`` (int), ``"Boolean"`` (bool) or
         ``"String"``.
     """
-    return _parameter_set(_parse(path, "parameter set"))[1]
+    return _parameter_set(_parse(path, "parameter set"), f"parameter set {str(path)!r}")[1]
 
 
 def _binding_values(binding, ssd_path, where):
@@ -372,13 +413,13 @@ def _binding_values(binding, ssd_path, where):
         path = ssd_path.parent / source
         if not path.is_file():
             raise ParameterError(f"{where} binds {source!r}, which is not in the SSP")
-        name, values = _parameter_set(_parse(path, "parameter set"))
+        name, values = _parameter_set(_parse(path, "parameter set"), f"{where} binds {source!r}")
     else:
         inline = binding.find("ssd:ParameterValues/ssv:ParameterSet", NS)
         if inline is None:
             raise ParameterError(f"{where}: a ParameterBinding has neither a source nor inline ParameterValues")
         path = None
-        name, values = _parameter_set(inline)
+        name, values = _parameter_set(inline, f"{where} inline values")
     prefix = binding.get("prefix", "")
     return name, {prefix + k: v for k, v in values.items()}, path
 
@@ -404,10 +445,13 @@ def _bound_set(ssd_root, ssd_path):
     return set_name, values, files
 
 
-def _structure(ssd_root, folder):
+def _structure(ssd_root, folder, ssd_name):
     """({component: FMU path}, [(start element, start connector, end element, end connector)])."""
-    comps = {c.get("name"): folder / c.get("source")
-             for c in ssd_root.iterfind("ssd:System/ssd:Elements/ssd:Component", NS)}
+    comps = {}
+    for c in ssd_root.iterfind("ssd:System/ssd:Elements/ssd:Component", NS):
+        if not c.get("source"):
+            raise ParameterError(f"{ssd_name}: component {c.get('name')!r} has no source (its FMU file)")
+        comps[c.get("name")] = folder / c.get("source")
     cons = [(c.get("startElement"), c.get("startConnector"), c.get("endElement"), c.get("endConnector"))
             for c in ssd_root.iterfind("ssd:System/ssd:Connections/ssd:Connection", NS)]
     for s_el, s_c, e_el, e_c in cons:
@@ -418,22 +462,32 @@ def _structure(ssd_root, folder):
     return comps, cons
 
 
-def _ssp_folder(path):
-    """Folder of an SSP: ``path`` itself, or a temporary folder with the extracted archive."""
-    if not path.exists():
-        raise ParameterError(f"SSP = {str(path)!r} does not exist")
-    if path.is_dir():
-        return path
+def _extract(path):
+    """Temporary folder with the extracted archive ``path`` (deleted again if the extraction fails)."""
     tmp = Path(tempfile.mkdtemp(prefix="frb_ssp_"))
     try:
         with zipfile.ZipFile(path) as z:
             z.extractall(tmp)
     except zipfile.BadZipFile:
-        raise ParameterError(f"SSP = {str(path)!r} is not a valid .ssp (zip) archive") from None
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise ParameterError(f"SSP = {str(path)!r} is not a valid .ssp (zip) archive; pass an .ssp archive or "
+                             "an SSP folder (SystemStructure.ssd + resources/)") from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
     return tmp
 
 
-def read_ssp(path) -> SSPSystem:
+def _check_fmus(comps, folder, source):
+    """ParameterError naming the SSP, the component and the file if a component's FMU is not in the SSP."""
+    for name, fmu in comps.items():
+        if not fmu.is_file():
+            rel = fmu.relative_to(folder).as_posix() if fmu.is_relative_to(folder) else str(fmu)
+            raise ParameterError(f"SSP {str(source)!r}: component {name!r} needs the FMU {rel!r}, which is not in "
+                                 "the SSP; `frb build-fmus` packs build/turbocharger.ssp with both FMUs")
+
+
+def read_ssp(path, require_fmus=True) -> SSPSystem:
     """Parse an SSP folder or ``.ssp`` archive, its parameter sets from the SSDs' ParameterBindings.
 
     ``SystemStructure.ssd`` gives the components, connections, step and stop time and the default set; every
@@ -442,7 +496,11 @@ def read_ssp(path) -> SSPSystem:
     Parameters
     ----------
     path : str or Path
-        Folder or ``.ssp`` archive (extracted to a temporary folder).
+        Folder or ``.ssp`` archive (extracted to a temporary folder that the returned object owns: use it in a
+        ``with`` block or call :meth:`SSPSystem.close` to delete it; garbage collection deletes it otherwise).
+    require_fmus : bool
+        Check that the FMU file of every component is in the SSP (False: read the SSDs and parameter sets of
+        a folder without FMUs, such as the repository's ``ssp/``).
 
     Returns
     -------
@@ -451,20 +509,39 @@ def read_ssp(path) -> SSPSystem:
     Raises
     ------
     ParameterError
-        Missing or malformed files, a connection to an unknown component, a variant that differs in
-        structure, two variants binding sets of the same name, or an unsupported kind of binding.
+        A missing path, a file that is not a zip archive, a missing SystemStructure.ssd, malformed XML or
+        parameter values, a component whose FMU is not in the SSP (the message names the SSP, the component
+        and the file), a connection to an unknown component, a variant that differs in structure, two
+        variants binding sets of the same name, or an unsupported kind of binding.
     """
     source = Path(path)
-    folder = _ssp_folder(source)
+    if not source.exists():
+        raise ParameterError(f"SSP = {str(source)!r} does not exist")
+    if source.is_dir():
+        return _read_folder(source, source, require_fmus)
+    tmp = _extract(source)
+    try:
+        system = _read_folder(tmp, source, require_fmus)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    system._own(tmp)
+    return system
+
+
+def _read_folder(folder, source, require_fmus):
+    """SSPSystem of the SSP folder ``folder`` (read from ``source``, named in messages)."""
     ssd = folder / DEFAULT_SSD
-    if not ssd.exists():
-        raise ParameterError(f"SSP {str(source)!r} has no {DEFAULT_SSD}")
+    if not ssd.is_file():
+        raise ParameterError(f"SSP {str(source)!r} has no {DEFAULT_SSD} at its root")
     root = _parse(ssd, DEFAULT_SSD + " of SSP")
-    comps, cons = _structure(root, folder)
+    comps, cons = _structure(root, folder, DEFAULT_SSD)
+    if require_fmus:
+        _check_fmus(comps, folder, source)
     sets, files = {}, {}
     for f in [ssd] + sorted(p for p in folder.glob("*.ssd") if p.name != DEFAULT_SSD):
         r = root if f == ssd else _parse(f, "SSD variant")
-        if f != ssd and _structure(r, folder) != (comps, cons):
+        if f != ssd and _structure(r, folder, f.name) != (comps, cons):
             raise ParameterError(f"SSP {str(source)!r}: variant {f.name} has other components or connections "
                                  f"than {DEFAULT_SSD}; only parameter variants are supported")
         name, values, paths = _bound_set(r, f)
@@ -475,10 +552,10 @@ def read_ssp(path) -> SSPSystem:
     step = stop = None
     fsa = root.find(".//osp:FixedStepAlgorithm", NS)
     if fsa is not None:
-        step = float(fsa.get("baseStepSize"))
+        step = _value("Real", fsa.get("baseStepSize"), f"{DEFAULT_SSD} FixedStepAlgorithm baseStepSize")
     de = root.find("ssd:DefaultExperiment", NS)
     if de is not None and de.get("stopTime"):
-        stop = float(de.get("stopTime"))
+        stop = _value("Real", de.get("stopTime"), f"{DEFAULT_SSD} DefaultExperiment stopTime")
     return SSPSystem(folder, comps, cons, files, step, stop, sets, next(iter(sets)), source)
 
 
