@@ -53,7 +53,7 @@ def analyse(out):
     print("| run | component | onset default [rpm] | x0.1 [rpm] | moved | first detection default | x0.1 | moved |"
           " f default [Hz] | x0.1 [Hz] |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for name, (c, kind, lo, hi, dur, seg) in CASES.items():
+    for name, (_c, _kind, _lo, _hi, dur, seg) in CASES.items():
         if not (out / name / "default").exists() or not (out / name / "x0.1").exists():
             continue
         seg = seg or min(max(dur / 40.0, 0.01), 0.05)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 
 import frbmodel as frb
 from frbmodel.cosim.build import built_ssp

@@ -19,8 +19,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 import frbmodel as frb
 from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.master import cosimulate, operating_point_overrides

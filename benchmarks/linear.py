@@ -50,8 +50,8 @@ def ross_times(counts, python, repeat):
               "FRB_ROSS_PYTHON given: ROSS comparison skipped")
         return None
     try:
-        out = subprocess.run([python, str(script), str(repeat), *map(str, counts)], capture_output=True, text=True, timeout=900,
-                             cwd=HERE)
+        out = subprocess.run([python, str(script), str(repeat), *map(str, counts)], capture_output=True, text=True,
+                             timeout=900, cwd=HERE)
     except (OSError, subprocess.TimeoutExpired) as exc:
         print(f"ROSS: could not run {python}: {exc}; comparison skipped")
         return None
@@ -77,7 +77,8 @@ def main(argv=None):
         for whirl in (True, False):
             for n in (26, 200):
                 s = np.linspace(10e3, 250e3, n)
-                row.append(best_time(lambda: frb.campbell(tc, m, s, whirl=whirl), args.repeat if n == 26 else 2) * 1e3)
+                run = lambda m=m, s=s, whirl=whirl: frb.campbell(tc, m, s, whirl=whirl)  # noqa: E731
+                row.append(best_time(run, args.repeat if n == 26 else 2) * 1e3)
         campbell_ms[m] = row
         print(f"{m:>6} {row[0]:10.2f} {row[1]:11.1f} {row[2]:12.2f} {row[3]:13.1f}")
 
@@ -88,7 +89,7 @@ def main(argv=None):
     for m in "CDFGIJ":
         times, its, evs = [], [], []
         for s in speeds:
-            t = best_time(lambda: frb.equilibrium(tc, m, s), args.repeat)
+            t = best_time(lambda m=m, s=s: frb.equilibrium(tc, m, s), args.repeat)
             eq = frb.equilibrium(tc, m, s)
             times.append(t * 1e3)
             its.append(eq.iterations)

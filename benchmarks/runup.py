@@ -19,8 +19,8 @@ import numpy as np
 from numba import njit
 
 import frbmodel as frb
+from frbmodel.dynamics import monolithic_rhs as _rhs
 from frbmodel.film import NO_CORRECTION, film_force_kernel
-from frbmodel.dynamics import rhs as _rhs
 from frbmodel.runup import runup
 
 
@@ -61,8 +61,8 @@ def main(argv=None):
     from frbmodel import runup as runup_mod  # noqa: F401  (the module, for the argument tuple below)
 
     rotor = tc.rotor
-    args_rhs = (np.linalg.inv(rotor.M), np.ascontiguousarray(rotor.K), np.ascontiguousarray(rotor.G),
-                rotor.gravity_load(), rotor.n_dof, np.array([1, 2]), geom, np.tile(np.r_[0, 0, 0, 0, 1.0], (2, 2, 2, 1)),
+    args_rhs = (rotor.acceleration_matrices, rotor.gravity_load(), rotor.n_dof,
+                np.array([1, 2]), geom, np.tile(np.r_[0, 0, 0, 0, 1.0], (2, 2, 2, 1)),
                 np.full(2, 7.2e-3), np.full(2, 33.641e-8), 9.81, np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0),
                 np.array([0.0, 1.0]), np.array([2e3, 2e4]), np.array([1.8e4, 1.8e4]), 0.0, 0.999, np.zeros(4))
     ys = np.zeros(n_state)

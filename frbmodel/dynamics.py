@@ -172,26 +172,3 @@ def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys
             jac[i, k] = (work[i] - f0[i]) / h
         yp[k] = y[k]
     return jac
-
-
-# --------------------------------------------------------------------------------------------------
-# Transitional: the argument list (M⁻¹, K, G, ...) that frbmodel/runup.py and benchmarks/runup.py still pass.
-# They form M⁻¹K and M⁻¹G on every call; remove both once the callers pass Rotor.acceleration_matrices to
-# monolithic_rhs / monolithic_jac.
-# --------------------------------------------------------------------------------------------------
-@njit(cache=True)
-def rhs(t, y, out, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
-        unb_phase, tg, wg, wdg, springs, eps_cap, diag):
-    """Deprecated argument list of :func:`monolithic_rhs` (M⁻¹, K, G instead of ``eom``)."""
-    eom = (minv.copy(), minv @ k_mat, minv @ g_mat)
-    return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
-                          unb_phase, tg, wg, wdg, springs, eps_cap, diag)
-
-
-@njit(cache=True)
-def jac(t, y, jac, f0, work, scale, minv, k_mat, g_mat, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
-        unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag):
-    """Deprecated argument list of :func:`monolithic_jac` (M⁻¹, K, G instead of ``eom``)."""
-    eom = (minv.copy(), minv @ k_mat, minv @ g_mat)
-    return monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav,
-                          unb_node, unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag)

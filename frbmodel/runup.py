@@ -15,12 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dynamics import jac as _jac
-from .dynamics import rhs as _rhs
+from .dynamics import monolithic_jac as _jac
+from .dynamics import monolithic_rhs as _rhs
 from .equilibrium import bearing_equilibrium
 from .errors import ParameterError, RunupStopped, check_positive
 from .film import check_model, correction_polys
 from .interrupt import deferred_signals
+from .progress import simulation_bar
 from .recorder import Recorder, RunupResult, RunupSchema
 from .units import RPM
 
@@ -114,8 +115,8 @@ class SpeedProfile:
         rpm = np.array([float(fun(x)) for x in t])
         bad = np.flatnonzero(~(np.isfinite(rpm) & (rpm > 0) & (rpm <= MAX_SPEED_RPM)))
         if bad.size:
-            raise ParameterError(f"speed profile function: speed = {float(rpm[bad[0]])!r} rpm at t = {t[bad[0]]:g} s is "
-                                 f"invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm for 0 <= t <= duration")
+            raise ParameterError(f"speed profile function: speed = {float(rpm[bad[0]])!r} rpm at t = {t[bad[0]]:g} s "
+                                 f"is invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm for 0 <= t <= duration")
         w = rpm * RPM
         return cls(t, w, np.gradient(w, t), "user function")
 
@@ -143,7 +144,7 @@ class Problem:
     system: object
     profile: SpeedProfile
     film_model: str
-    args: tuple  # trailing arguments of frbmodel.dynamics.rhs / jac
+    args: tuple  # trailing arguments of frbmodel.dynamics.monolithic_rhs / monolithic_jac
     n_rotor: int
     springs: float
     diag: np.ndarray  # filled by each RHS call with the films' eccentricity ratios
@@ -199,8 +200,7 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     if tg.size > 2 and not np.allclose(np.diff(tg), tg[1] - tg[0]):
         raise ParameterError("speed profile: the time grid must be uniform (SpeedProfile builds it so)")
     diag = np.zeros(4)
-    args = (np.linalg.inv(rotor.M), np.ascontiguousarray(rotor.K), np.ascontiguousarray(rotor.G),
-            rotor.gravity_load(system.gravity), rotor.n_dof,
+    args = (rotor.acceleration_matrices, rotor.gravity_load(system.gravity), rotor.n_dof,
             np.array([b.node for b in system.bearings], dtype=np.int64), geom, polys,
             np.array([b.ring_mass for b in system.bearings]), np.array([b.ring_inertia for b in system.bearings]),
             system.gravity, unb_node, unb_me, unb_phase, tg, profile.omega, profile.omega_dot, springs, EPS_CAP, diag)
@@ -274,19 +274,7 @@ def static_rotor_state(system, journal_positions):
     The rotor on two supports is statically determinate, so prescribing both journals fixes q and the
     gravity load is carried by exactly the bearing reactions of :attr:`Turbocharger.bearing_loads`.
     """
-    rotor = system.rotor
-    f = rotor.gravity_load(system.gravity)
-    cons = []
-    vals = []
-    for b, pos in zip(system.bearings, journal_positions):
-        cons += [4 * b.node, 4 * b.node + 1]
-        vals += [pos[0], pos[1]]
-    cons = np.array(cons)
-    free = np.setdiff1d(np.arange(rotor.n_dof), cons)
-    q = np.zeros(rotor.n_dof)
-    q[cons] = vals
-    q[free] = np.linalg.solve(rotor.K[np.ix_(free, free)], f[free] - rotor.K[np.ix_(free, cons)] @ q[cons])
-    return q
+    return system.rotor.static_deflection([b.node for b in system.bearings], journal_positions, system.gravity)
 
 
 def _sample(problem, schema, t, y, buf):
@@ -318,7 +306,6 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     """The integration loop: LSODA from sample to sample, each sample recorded, wall contact checked.
     Returns (status, message, RHS evaluations, Jacobian evaluations)."""
     from scipy.integrate import ode
-    from tqdm.auto import tqdm
 
     n = problem.n_states
     atol, scale = solver_opts.pop("atol")
@@ -337,8 +324,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     solver.set_initial_value(y0, 0.0)
     rec.append(_sample(problem, rec.schema, 0.0, y0, f_buf))
     status, message = "finished", ""
-    with deferred_signals() as signals, tqdm(total=float(t_out[-1]), disable=not progress, unit="s", desc="run-up", leave=False,
-              bar_format="{desc}: {n:.4f}/{total:g} s simulated |{bar}| {elapsed}<{remaining} {postfix}") as bar:
+    with deferred_signals() as signals, simulation_bar(t_out[-1], "run-up", progress) as bar:
         for k in range(1, t_out.size):
             y = solver.integrate(t_out[k])
             if not solver.successful() or not np.all(np.isfinite(y)):

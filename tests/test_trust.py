@@ -7,7 +7,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -69,9 +68,9 @@ def test_cli_negative_fmax_is_refused(capsys, tmp_path):
     assert code == 2 and "--fmax = -5.0 Hz is invalid" in err
 
 
-def test_cli_names_the_extra_of_a_missing_optional_package(capsys, tmp_path, monkeypatch):
+def test_cli_names_the_extra_of_a_missing_optional_package(capsys, tmp_path, monkeypatch, built):
     monkeypatch.setitem(sys.modules, "fmpy", None)  # as if installed without the [fmi] extra
-    ssp = Path(__file__).resolve().parents[1] / "ssp"
+    ssp = built / "turbocharger.ssp"
     code, err = run_cli(capsys, "cosim", str(ssp), "--stop-time", "0.001", "--out", str(tmp_path))
     assert code == 2 and "optional package 'fmpy'" in err and "frbmodel[fmi]" in err
 
@@ -97,10 +96,10 @@ def test_interrupted_runup_keeps_its_data_marks_it_and_draws_its_figures(tmp_pat
     assert (out / "composite_turbine_wheel.png").exists()
 
 
-def test_cosim_refuses_a_macro_step_outside_the_validated_range(tmp_path):
+def test_cosim_refuses_a_macro_step_outside_the_validated_range(built):
     from frbmodel.cosim.master import Master
 
-    ssp = Path(__file__).resolve().parents[1] / "ssp"
+    ssp = built / "turbocharger.ssp"
     with pytest.raises(ParameterError, match=r"macro step = 0\.001 s is outside the validated range"):
         Master(ssp, "co36", stop_time=0.05, step_size=1e-3)
 

@@ -77,7 +77,8 @@ class FmuInstance:
         try:
             return [self.vars[n].valueReference for n in names]
         except KeyError as exc:
-            raise ParameterError(f"FMU {self.name!r} ({self.model_identifier}) has no variable {exc.args[0]!r}") from None
+            raise ParameterError(f"FMU {self.name!r} ({self.model_identifier}) has no variable "
+                                 f"{exc.args[0]!r}") from None
 
     def has(self, name):
         return name in self.vars

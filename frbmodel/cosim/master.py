@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import CosimStopped, ParameterError
 from ..interrupt import deferred_signals
+from ..progress import simulation_bar
 from ..recorder import Recorder, RunupResult, RunupSchema
 from ..units import rad_s_to_rpm, rpm_to_rad_s
 from .fmu import FmiCallFailed, FmuInstance
@@ -88,7 +89,17 @@ class Master:
         if coupling not in ("jacobian", "force"):
             raise ParameterError(f"coupling = {coupling!r} is unknown; valid: 'jacobian', 'force'")
         self.ssp_path, self.parameter_set, self.coupling = ssp, parameter_set, coupling
+        self.fmus, self._tmp = {}, None
         self.ssp = read_ssp(ssp)
+        try:
+            self._configure(parameter_set, stop_time, step_size, overrides, rollback, max_halvings, trace,
+                            unvalidated_step)
+        except BaseException:
+            self.ssp.close()
+            raise
+
+    def _configure(self, parameter_set, stop_time, step_size, overrides, rollback, max_halvings, trace,
+                   unvalidated_step):
         self.params = self.ssp.parameters(parameter_set)
         for comp, ov in (overrides or {}).items():
             self.params.setdefault(comp, {}).update(ov)
@@ -104,8 +115,6 @@ class Master:
                                  "Use --unvalidated-step (unvalidated_step=True) to run it anyway")
         self.rollback, self.max_halvings, self.trace = bool(rollback), int(max_halvings), trace
         self.system = system_from_parameters(self.params)
-        self.fmus = {}
-        self._tmp = None
         self.fmi_time_s = 0.0
         self.rejected_steps = 0
 
@@ -159,7 +168,7 @@ class Master:
 
     def _phase(self, links):
         gets, dests, pos = {}, {}, 0
-        for src, dst, conns in links:
+        for src, _dst, conns in links:
             gets.setdefault(src, []).extend(self.fmus[src].vr([a for a, _ in conns]))
         offsets = {}
         for src in gets:
@@ -255,7 +264,8 @@ class Master:
                 continue
             if failure is not None:
                 msg, retryable, who = failure
-                tried = f" (after {self.max_halvings} step halvings with rollback)" if retryable and self.rollback else ""
+                tried = (f" (after {self.max_halvings} step halvings with rollback)"
+                         if retryable and self.rollback else "")
                 raise CosimStopped(f"{msg} in the interval t = {t:.6g} s + {h:.3g} s{tried}" +
                                    ("; see the FMU log above" if who else ""))
             t += h
@@ -294,8 +304,6 @@ class Master:
         """Set up, initialize and step to the stop time, recording every n-th communication point
         (n = round(1 / (H · output_rate_hz)), at least 1). Returns a :class:`RunupResult`; raises
         :class:`CosimStopped` (with ``.result``) when an FMU fails."""
-        from tqdm.auto import tqdm
-
         H, T = self.step_size, self.stop_time
         every = max(1, int(round(1.0 / (H * output_rate_hz))))
         n_steps = int(round(T / H))
@@ -309,8 +317,7 @@ class Master:
                 self.initialize()
                 rec.append(self.sample(0.0))
                 t = 0.0
-                with deferred_signals() as signals, tqdm(total=T, disable=not progress, desc="cosim", leave=False,
-                          bar_format="{desc}: {n:.4f}/{total:g} s simulated |{bar}| {elapsed}<{remaining} {postfix}") as bar:
+                with deferred_signals() as signals, simulation_bar(T, "cosim", progress) as bar:
                     for k in range(1, n_steps + 1):
                         t = self.step(t, H)
                         if k % every == 0:
@@ -341,6 +348,7 @@ class Master:
         if self._tmp is not None:
             self._tmp.cleanup()
             self._tmp = None
+        self.ssp.close()
 
     def __enter__(self):
         return self.setup()
