@@ -1,5 +1,8 @@
 """Figures: holistic Campbell diagram (matplotlib PNG and plotly HTML), RSR and equilibrium-cost figures, the
-run-up composite (spectrogram with Campbell overlay and RSR).
+run-up / run-down composite (spectrogram with Campbell overlay and RSR).
+
+Bearing and film names come from the results (``RunupResult.bearing_names``, the system in the run's metadata,
+the Campbell result's films), never from the Table 2 preset.
 
 matplotlib and plotly are imported inside the functions that draw, so ``import frbmodel`` needs neither; the
 matplotlib backend is the caller's choice (the CLI and the tests select Agg), never switched here.
@@ -16,6 +19,23 @@ D_MIN, D_MAX = -1.0, 0.7
 WHIRL_STYLES = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a")
 
 
+def film_names(cd):
+    """Names of the films of a Campbell result, in the order of its whirl columns: its ``film_labels`` if it has
+    them, else the ``"films"`` of its metadata, else the module's default order; "film k" for any further column.
+
+    Parameters
+    ----------
+    cd : CampbellResult
+
+    Returns
+    -------
+    tuple of str
+    """
+    n = cd.whirl_hz.shape[1]
+    names = tuple(getattr(cd, "film_labels", None) or cd.meta.get("films") or FILM_NAMES)
+    return tuple(names[k] if k < len(names) else f"film {k}" for k in range(n))
+
+
 def whirl_curves(cd):
     """Film whirl curves of a Campbell sweep, for the films that are past their onset somewhere in it.
 
@@ -29,17 +49,22 @@ def whirl_curves(cd):
         ``(film index, film name, speeds [rpm], whirl frequency [Hz] — NaN below the film's onset)``.
     """
     out = []
-    for k, name in enumerate(FILM_NAMES):
+    for k, name in enumerate(film_names(cd)):
         w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
         if np.isfinite(w).any():
             out.append((k, name, cd.speeds_rpm, w))
     return out
 
 
+def _whirl_style(k):
+    """Colour and line style of film ``k`` (films come in inner/outer pairs per bearing)."""
+    return WHIRL_STYLES[k % len(WHIRL_STYLES)], "--" if (k // 2) % 2 == 0 else (0, (6, 2, 1, 2))
+
+
 def _plot_whirl(ax, cd, lw=1.3):
     for k, name, s, w in whirl_curves(cd):
-        ax.plot(s / 1e3, w, ls="--" if k < 2 else (0, (6, 2, 1, 2)), lw=lw, color=WHIRL_STYLES[k],
-                label=f"whirl {name}")
+        color, ls = _whirl_style(k)
+        ax.plot(s / 1e3, w, ls=ls, lw=lw, color=color, label=f"whirl {name}")
 
 
 def _default_fmax(cd):
@@ -147,7 +172,8 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
     if whirl:
         for k, name, sp_, w in whirl_curves(cd):
             fig.add_trace(go.Scatter(x=sp_, y=w, mode="lines", name=f"whirl {name}",
-                                     line=dict(dash="dash" if k < 2 else "dashdot", color=WHIRL_STYLES[k]),
+                                     line=dict(dash="dash" if (k // 2) % 2 == 0 else "dashdot",
+                                               color=_whirl_style(k)[0]),
                                      hovertemplate="speed %{x:.0f} rpm<br>whirl %{y:.1f} Hz<extra>" + name +
                                      "</extra>"))
     if one_x:
@@ -159,15 +185,16 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
     return fig
 
 
-def rsr_figure(results, title="Ring-speed ratio"):
-    """Ring-speed ratio vs speed for several Campbell/equilibrium sweeps, turbine and compressor bearing side by
-    side.
+def rsr_figure(results, title="Ring-speed ratio", bearing_names=None):
+    """Ring-speed ratio vs speed for several Campbell/equilibrium sweeps, one panel per bearing side by side.
 
     Parameters
     ----------
     results : dict
-        Label (method letter) -> ``(speeds [rpm] (n,), RSR [-] (n, 2))``.
+        Label (method letter) -> ``(speeds [rpm] (n,), RSR [-] (n, nb))``, bearings in the system's order.
     title : str
+    bearing_names : sequence of str, optional
+        Panel titles, e.g. ``[b.name for b in system.bearings]`` (default "bearing 1", "bearing 2", ...).
 
     Returns
     -------
@@ -175,13 +202,16 @@ def rsr_figure(results, title="Ring-speed ratio"):
     """
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    nb = np.asarray(next(iter(results.values()))[1]).shape[1]
+    names = list(bearing_names) if bearing_names is not None else [f"bearing {j + 1}" for j in range(nb)]
+    fig, axes = plt.subplots(1, nb, figsize=(5 * nb, 4), sharey=True, squeeze=False)
+    axes = axes[0]
     styles = ["-", "--", "-.", ":"]
     for k, (label, (s, r)) in enumerate(results.items()):
         for j, ax in enumerate(axes):
-            ax.plot(np.asarray(s) / 1e3, r[:, j], ls=styles[k % 4], lw=1.6, label=f"method {label}")
+            ax.plot(np.asarray(s) / 1e3, np.asarray(r)[:, j], ls=styles[k % 4], lw=1.6, label=f"method {label}")
     for j, ax in enumerate(axes):
-        ax.set_title(("turbine", "compressor")[j] + " bearing", fontsize=10)
+        ax.set_title(f"{names[j]} bearing", fontsize=10)
         ax.set_xlabel("rotor speed [krpm]")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("RSR = ω_FR / ω_R [-]")
@@ -245,7 +275,7 @@ def linear_rsr(system, speeds_rpm, methods="FIJ"):
     Returns
     -------
     dict
-        Method letter -> RSR [-] (n, 2) (turbine, compressor bearing).
+        Method letter -> RSR [-] (n, nb), bearings in the system's order.
     """
     from .equilibrium import equilibrium
 
@@ -253,12 +283,20 @@ def linear_rsr(system, speeds_rpm, methods="FIJ"):
             for m in methods}
 
 
+def _bearing_names(run):
+    """Bearing names of a run-up result, in the column order of its ring-speed ratio."""
+    names = getattr(run, "bearing_names", None)
+    return tuple(names) if names is not None else tuple(run.journal)
+
+
 def _rsr_panel(ax, run, xscale):
-    """Ring-speed ratios of the run-up and, with the system in ``run.meta``, of the linear methods F, I, J."""
-    names = ("turbine", "compressor")
+    """Ring-speed ratios of the run and, with the system in ``run.meta``, of the linear methods F, I, J; one line
+    per bearing, named as in the run."""
+    names = _bearing_names(run)
     rr = run.ring_speed_ratio
-    for j in range(2):
-        ax.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"run-up, {names[j]}")
+    kind = "run-down" if run.speed_rpm[-1] < run.speed_rpm[0] else "run-up"
+    for j, name in enumerate(names):
+        ax.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"{kind}, {name}")
     sys_d = (run.meta or {}).get("system")
     if sys_d:
         from .parameters import Turbocharger
@@ -266,22 +304,62 @@ def _rsr_panel(ax, run, xscale):
         tc = Turbocharger.from_dict(sys_d)
         speeds = np.linspace(max(run.speed_rpm.min(), 1e3), run.speed_rpm.max(), 25)
         styles = {"F": "-", "I": "-.", "J": "--"}
+        greys = ("k", "0.55", "0.3", "0.75")
         for m, arr in linear_rsr(tc, speeds).items():
-            for j in range(2):
-                ax.plot(speeds / 1e3, arr[:, j], styles[m], color="k" if j == 0 else "0.55", lw=1.2,
-                        label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {names[j]}")
+            for j, b in enumerate(tc.bearings):
+                ax.plot(speeds / 1e3, arr[:, j], styles[m], color=greys[j % len(greys)], lw=1.2,
+                        label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {b.name}")
     ax.set_xscale(xscale)
-    ax.set_xlabel("rotor speed [krpm]")
+    ax.set_xlabel(_speed_label(kind))
     ax.set_ylabel("RSR = ω_FR / ω_R [-]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title("ring-speed ratio", fontsize=10)
 
 
+def _speed_label(kind, unit="krpm"):
+    """Speed-axis label; a run-down's axis still increases to the right, so the label says time runs leftwards."""
+    return f"rotor speed [{unit}]" + (" (run-down: time runs right to left)" if kind == "run-down" else "")
+
+
+def _kind(sp):
+    """The kind of run of a spectrogram: "run-down", else "run-up" (also at constant speed)."""
+    return "run-down" if sp.speeds_rpm[-1] < sp.speeds_rpm[0] else "run-up"
+
+
+def _speed_order(sp):
+    """Segment order by increasing speed (a run-down's segments reversed), stable for equal speeds: the
+    spectrogram drawn against an increasing speed axis whatever the direction of the run."""
+    return np.argsort(sp.speeds_rpm, kind="stable")
+
+
+def _label_components(ax, sp):
+    """Component labels at their onset, or at their first detection marked "(from start)" if they have none;
+    a cross where a component vanishes before the end of the run."""
+    first = True
+    down = _kind(sp) == "run-down"
+    for c in sp.components():
+        if np.isfinite(c.onset_rpm):
+            xy, text = (c.onset_rpm / 1e3, c.onset_hz), c.label
+        else:
+            xy, text = (c.detected_from_rpm / 1e3, c.first_detection_hz), f"{c.label} (from start)"
+        # a run-down starts at the right edge: its labels extend to the left, into the axes
+        ax.annotate(text, xy, color="w", fontsize=9, fontweight="bold", xytext=(-3 if down else 3, 4),
+                    textcoords="offset points", ha="right" if down else "left")
+        if np.isfinite(c.end_rpm):
+            ax.plot(c.end_rpm / 1e3, c.end_hz, "x", color="w", ms=7, mew=1.5,
+                    label="component vanishes" if first else None)
+            first = False
+
+
 def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None,
                      xscale="linear"):
     """The paper's Figs. 12–14: spectrogram (25 dB, log) with unstable Campbell modes (solid), film whirl
-    curves (dashed), 1X (dotted), component labels; RSR of the run-up vs the linear methods beside it.
+    curves (dashed), 1X (dotted), component labels; RSR of the run vs the linear methods beside it.
+
+    The speed axis increases to the right for run-ups and run-downs alike (so the Campbell overlay reads as
+    usual); a run-down is titled and labelled as one, its components are labelled at their onset (or "(from
+    start)" at their first detection) and a cross marks where one vanishes.
 
     Parameters
     ----------
@@ -295,7 +373,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     fmax_hz : float, optional
         Upper frequency limit [Hz] (default: 1.1 × the highest rotor frequency, at most the Nyquist frequency).
     components : bool
-        Label the tracked components at their onset.
+        Label the tracked components.
     title : str, optional
     xscale : {"linear", "log"}
 
@@ -306,6 +384,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     import matplotlib.pyplot as plt
 
     run = sp.run
+    kind = _kind(sp)
     fmax = fmax_hz or float(min(sp.freqs_hz[-1], 1.1 * sp.speeds_rpm.max() / 60.0))
     if rsr and run is not None:
         fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6), gridspec_kw={"width_ratios": [2.3, 1]})
@@ -313,11 +392,12 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
         fig, ax = plt.subplots(figsize=(10, 6))
         ax2 = None
     sel = sp.freqs_hz <= fmax
-    mesh = ax.pcolormesh(sp.speeds_rpm / 1e3, sp.freqs_hz[sel], sp.db()[sel], shading="nearest", cmap="magma",
+    order = _speed_order(sp)
+    s_all = sp.speeds_rpm[order]
+    mesh = ax.pcolormesh(s_all / 1e3, sp.freqs_hz[sel], sp.db()[sel][:, order], shading="nearest", cmap="magma",
                          vmin=-sp.db_range, vmax=0.0, rasterized=True)
     cb = fig.colorbar(mesh, ax=ax, pad=0.01)
     cb.set_label(f"orbit amplitude [dB re max], {sp.db_range:g} dB range")
-    s_all = sp.speeds_rpm
     ax.plot(s_all / 1e3, s_all / 60.0, ":", color="w", lw=1, label="1X")
     if campbell is not None:
         first = True
@@ -328,16 +408,14 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
         if whirl:
             _plot_whirl(ax, campbell, lw=1.2)
     if components:
-        for c in sp.components():
-            ax.annotate(c.label, (c.onset_rpm / 1e3, c.onset_hz), color="w", fontsize=9, fontweight="bold",
-                        xytext=(3, 4), textcoords="offset points")
+        _label_components(ax, sp)
     ax.set_xlim(s_all.min() / 1e3, s_all.max() / 1e3)
     ax.set_ylim(0, fmax)
     ax.set_xscale(xscale)
-    ax.set_xlabel("rotor speed [krpm]")
+    ax.set_xlabel(_speed_label(kind))
     ax.set_ylabel("frequency [Hz]")
     ax.legend(fontsize=7, loc="upper left", framealpha=0.6)
-    ax.set_title(title or f"Run-up spectrogram, {sp.node} (orbit x + iy)", fontsize=10)
+    ax.set_title(title or f"{kind.capitalize()} spectrogram, {sp.node} (orbit x + iy)", fontsize=10)
     if ax2 is not None:
         _rsr_panel(ax2, run, xscale)
     fig.tight_layout()
@@ -345,7 +423,8 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
 
 
 def composite_plotly(sp, campbell=None, fmax_hz=None):
-    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and 1X.
+    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and 1X; the speed axis increases
+    to the right for run-ups and run-downs alike (a run-down is titled as one).
 
     Parameters
     ----------
@@ -358,20 +437,22 @@ def composite_plotly(sp, campbell=None, fmax_hz=None):
     """
     import plotly.graph_objects as go
 
+    kind = _kind(sp)
     fmax = fmax_hz or float(min(sp.freqs_hz[-1], 1.1 * sp.speeds_rpm.max() / 60.0))
     sel = sp.freqs_hz <= fmax
-    fig = go.Figure(go.Heatmap(x=sp.speeds_rpm, y=sp.freqs_hz[sel], z=sp.db()[sel], zmin=-sp.db_range, zmax=0,
+    order = _speed_order(sp)
+    s_all = sp.speeds_rpm[order]
+    fig = go.Figure(go.Heatmap(x=s_all, y=sp.freqs_hz[sel], z=sp.db()[sel][:, order], zmin=-sp.db_range, zmax=0,
                                colorscale="Magma", colorbar=dict(title="dB"),
                                hovertemplate="speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>%{z:.1f} dB<extra></extra>"))
-    fig.add_trace(go.Scatter(x=sp.speeds_rpm, y=sp.speeds_rpm / 60, mode="lines", name="1X",
-                             line=dict(dash="dot", color="white")))
+    fig.add_trace(go.Scatter(x=s_all, y=s_all / 60, mode="lines", name="1X", line=dict(dash="dot", color="white")))
     if campbell is not None:
         for sk, f, j in _unstable_lines(campbell, fmax):
             fig.add_trace(go.Scatter(x=sk * 1e3, y=f, mode="lines", name=f"unstable mode {j}",
                                      line=dict(color="#00e5ff")))
         for k, name, sp_, w in whirl_curves(campbell):
             fig.add_trace(go.Scatter(x=sp_, y=w, mode="lines", name=f"whirl {name}",
-                                     line=dict(dash="dash", color=WHIRL_STYLES[k])))
-    fig.update_layout(xaxis_title="rotor speed [rpm]", yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
-                      title=f"Run-up spectrogram, {sp.node}")
+                                     line=dict(dash="dash", color=_whirl_style(k)[0])))
+    fig.update_layout(xaxis_title=_speed_label(kind, "rpm"), yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
+                      title=f"{kind.capitalize()} spectrogram, {sp.node}")
     return fig

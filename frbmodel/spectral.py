@@ -1,10 +1,11 @@
-"""Spectral post-processing of run-ups: spectrogram of a node's orbit against rotor speed.
+"""Spectral post-processing of run-ups and run-downs: spectrogram of a node's orbit against rotor speed.
 
 The orbit of a node, z = x + i y, is cut into overlapping segments; each is linearly detrended (the static
 deflection and its slow drift with speed), Hann-windowed and Fourier transformed
 (:class:`scipy.signal.ShortTimeFFT`). The two-sided spectrum separates forward (f > 0) from backward (f < 0)
 whirl. Amplitudes are the orbit radius of each component [m]; the figure shows them in dB relative to the
 largest, over a 25 dB range, as in the paper. Components are tracked and labelled by :mod:`frbmodel.tracking`.
+Segments stay in time order, so the speed of a run-down falls from segment to segment.
 """
 from __future__ import annotations
 
@@ -19,14 +20,14 @@ from .tracking import RESONANCE_TOL, SYNC_TOL, Component, components_table, find
 
 @dataclass
 class SpectrogramResult:
-    """Spectrogram of a node's orbit during a run-up.
+    """Spectrogram of a node's orbit during a run-up or run-down.
 
     Parameters
     ----------
     times : (k,) ndarray
         Segment centres [s].
     speeds_rpm : (k,) ndarray
-        Rotor speed at the segment centres [rpm].
+        Rotor speed at the segment centres [rpm] (time order: falling in a run-down).
     freqs_hz : (f,) ndarray
         Non-negative frequencies [Hz].
     forward, backward : (f, k) ndarray
@@ -53,6 +54,13 @@ class SpectrogramResult:
     run: object = None
 
     @property
+    def direction(self) -> str:
+        """``"up"`` (run-up), ``"down"`` (run-down) or ``"constant"``: the sign of the last minus the first
+        segment's speed (as :attr:`frbmodel.runup.SpeedProfile.direction`)."""
+        d = float(self.speeds_rpm[-1] - self.speeds_rpm[0])
+        return "up" if d > 0 else "down" if d < 0 else "constant"
+
+    @property
     def amplitude(self):
         """max(forward, backward) orbit amplitude [m], (f, k)."""
         return np.maximum(self.forward, self.backward)
@@ -69,9 +77,11 @@ class SpectrogramResult:
 
         A spectral peak counts when it lies within ``db_range`` of its segment's largest peak and above
         ``min_amplitude`` — so components well below the dominant one of the whole run are still found.
-        Each component carries two onset estimates: ``onset_threshold_rpm`` (first detection, interpolated
-        threshold crossing) and ``onset_rpm`` — the turning point, where the amplitude traced backwards at constant
-        f/f_rot is smallest (:func:`frbmodel.tracking.turning_point_rpm`).
+        Each component carries ``onset_rpm`` — the turning point, where the amplitude traced backwards in time at
+        constant f/f_rot is smallest (:func:`frbmodel.tracking.turning_point_rpm`) — and the interpolated
+        threshold crossings where it appears (``onset_threshold_rpm``) and vanishes (``end_rpm``). A component that
+        is there from the start of the run (detected in the first segment, or growing since then) has no onset
+        (NaN), in a run-up and a run-down alike; one that lasts to the end has no ``end_rpm``.
 
         Parameters
         ----------
@@ -110,8 +120,8 @@ class SpectrogramResult:
         return internal_resonances(components or self.components())
 
     def components_table(self):
-        """pandas DataFrame of :meth:`components`: label, direction, onset/end speed [rpm], onset frequency [Hz],
-        ratio at onset (see :func:`frbmodel.tracking.components_table`)."""
+        """pandas DataFrame of :meth:`components`: label, whirl direction, onset and what it is, threshold crossings
+        on appearing and vanishing [rpm], frequencies [Hz] (columns: :data:`frbmodel.tracking.COMPONENT_COLUMNS`)."""
         return components_table(self.components())
 
     # ---------------------------------------------------------------- figures
@@ -201,14 +211,14 @@ def orbit_spectra(z, fs_hz, nperseg, hop, nfft):
     return sft.f[:half], forward, backward, np.arange(n_seg) * hop
 
 
-def spectrogram(run, node="turbine_wheel", segment_s=None, overlap=0.75, db_range=25.0, zero_pad=4):
+def spectrogram(run, node=None, segment_s=None, overlap=0.75, db_range=25.0, zero_pad=4):
     """Spectrogram of ``run.displacement[node]`` (orbit x + i y) against rotor speed.
 
     Parameters
     ----------
     run : RunupResult
-    node : str
-        "turbine_wheel", "compressor_wheel" (or any key of ``run.displacement``).
+    node : str, optional
+        A disc of the run (a key of ``run.displacement``); default: the first disc of the system.
     segment_s : float, optional
         FFT segment length [s] (default: duration / 40, within 0.01 ... 0.05 s and at most duration / 4).
     overlap : float
@@ -226,7 +236,8 @@ def spectrogram(run, node="turbine_wheel", segment_s=None, overlap=0.75, db_rang
     Examples
     --------
     Any object with ``time``, ``speed_rpm``, ``displacement`` and ``meta`` as a :class:`RunupResult` has them
-    will do; here a forward whirl at 200 Hz of radius 1 um at a constant 30 krpm:
+    will do; here a forward whirl at 200 Hz of radius 1 um at a constant 30 krpm, present from the start (so it
+    has no onset):
 
     >>> from types import SimpleNamespace
     >>> t = np.arange(0, 0.5, 1e-4)
@@ -234,9 +245,14 @@ def spectrogram(run, node="turbine_wheel", segment_s=None, overlap=0.75, db_rang
     >>> run = SimpleNamespace(time=t, speed_rpm=np.full(t.size, 30e3), meta={},
     ...                       displacement={"turbine_wheel": np.column_stack([z.real, z.imag])})
     >>> sp = spectrogram(run, segment_s=0.05)
-    >>> round(float(sp.forward.max()) * 1e6, 2), sp.components_table()["f at onset [Hz]"].round(1).tolist()
+    >>> tab = sp.components_table()
+    >>> round(float(sp.forward.max()) * 1e6, 2), tab["f at first detection [Hz]"].round(1).tolist()
     (1.0, [200.0])
+    >>> tab["onset [rpm]"].tolist(), tab["onset estimate"].tolist()
+    ([nan], ['none: present from the start'])
     """
+    if node is None:
+        node = next(iter(run.displacement))
     if node not in run.displacement:
         raise ParameterError(f"node = {node!r} is unknown; valid: {sorted(run.displacement)}")
     t = run.time

@@ -1,12 +1,15 @@
 """Parameter studies on Dask: grids or lists of cases × an analysis, resumable, with a stability map.
 
 A *case* is a set of system parameters (outer clearance, viscosities, unbalance, ring mass, ...) and an analysis:
-``campbell`` (linear, given methods), ``runup`` (monolithic nonlinear run-up) or ``cosim`` (co-simulated
-run-up through the FMUs). Cases run as Dask tasks — on a ``distributed.LocalCluster`` (one worker process per
-core) by default, or on an existing cluster (``scheduler="tcp://host:port"``), or in-process
+``campbell`` (linear, given methods), ``runup`` (monolithic nonlinear run-up or run-down) or ``cosim``
+(co-simulated run through the FMUs). Cases run as Dask tasks — on a ``distributed.LocalCluster`` (one worker
+process per core) by default, or on an existing cluster (``scheduler="tcp://host:port"``), or in-process
 (``scheduler="serial"``). Every finished case is written at once to ``<out>/cases/<id>.json`` (atomic rename), a
 failing case too (with its error); ``<out>/index.csv`` lists all cases. Rerunning a study skips the finished
 ones, so a killed study loses no finished case.
+
+Dask and distributed (the ``[dist]`` extra) are imported only when a study runs on a cluster, so the serial
+scheduler and everything else work without them; a missing package raises :class:`ModuleNotFoundError` naming it.
 """
 from __future__ import annotations
 
@@ -23,18 +26,30 @@ import numpy as np
 
 from .errors import ParameterError
 
-#: parameters a study can vary (name -> (unit, description))
+#: parameters a study can vary (name -> (unit, description)); "<bearing>" and "<disc>" are the names in the system
+#: (the Table 2 system has the bearings "turbine", "compressor" and the discs "turbine_wheel", "compressor_wheel")
 PARAMETERS = {
     "outer_clearance": ("m", "radial clearance of both outer films"),
     "inner_clearance": ("m", "radial clearance of both inner films"),
-    "viscosity_turbine": ("Pa s", "oil viscosity of both films of the turbine bearing"),
-    "viscosity_compressor": ("Pa s", "oil viscosity of both films of the compressor bearing"),
+    "viscosity_turbine": ("Pa s", "oil viscosity of both films of the bearing named 'turbine'"),
+    "viscosity_compressor": ("Pa s", "oil viscosity of both films of the bearing named 'compressor'"),
     "viscosity_scale": ("-", "factor on all film viscosities (oil temperature)"),
     "ring_mass": ("kg", "mass of both rings"),
-    "unbalance_turbine": ("kg m", "unbalance of the turbine wheel"),
-    "unbalance_compressor": ("kg m", "unbalance of the compressor wheel"),
+    "unbalance_turbine": ("kg m", "unbalance of the disc named 'turbine_wheel' (or 'turbine')"),
+    "unbalance_compressor": ("kg m", "unbalance of the disc named 'compressor_wheel' (or 'compressor')"),
 }
 ANALYSES = ("campbell", "runup", "cosim")
+#: seconds to wait for an existing Dask scheduler before giving up
+SCHEDULER_TIMEOUT_S = 5.0
+
+
+def _distributed():
+    """The ``distributed`` package (imported here, not at module import: it belongs to the ``[dist]`` extra).
+    ``dask`` is imported first so that a missing ``[dist]`` extra is reported as the missing package ``dask``."""
+    import dask  # noqa: F401
+    import distributed
+
+    return distributed
 
 
 @dataclass
@@ -52,19 +67,120 @@ class Case:
         return f"{self.analysis}_{readable}_{hashlib.sha1(key.encode()).hexdigest()[:8]}".replace("/", "-")
 
 
+def check_options(analysis, options):
+    """Validate the options of an analysis before any case runs (a bad option would fail every case).
+
+    Parameters
+    ----------
+    analysis : str
+        One of :data:`ANALYSES`.
+    options : dict
+        ``campbell``: ``methods`` (letters, default ["J"]) and ``speeds_rpm`` (START, STOP, COUNT) in any order of
+        START and STOP; run-ups: ``speed_rpm`` (START, END) — a run-down if END < START — and ``duration`` [s].
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, its value and the valid values.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_options("campbell", {"methods": ["J", "Q"]})
+    ... except ParameterError as exc:
+    ...     print(exc)
+    method = 'Q' is unknown; valid methods are A, B, C, D, E, F, G, I, J (the paper has no H)
+    """
+    from .errors import check_positive
+    from .methods import get_method
+    from .runup import check_speed
+
+    if analysis == "campbell":
+        for m in options.get("methods", ["J"]):
+            get_method(m)
+        if "speeds_rpm" in options:
+            a, b, n = options["speeds_rpm"]
+            check_speed("campbell start speed", a)
+            check_speed("campbell stop speed", b)
+            if int(n) != n or n < 2:
+                raise ParameterError(f"campbell speed count = {n!r} is invalid: valid range integer >= 2")
+    else:
+        if "speed_rpm" in options:
+            a, b = options["speed_rpm"]
+            check_speed("start speed", a)
+            check_speed("end speed", b)
+        if "duration" in options:
+            check_positive("duration", options["duration"], "s")
+
+
 def grid(params: dict, analysis="campbell", **options):
-    """Cases for the Cartesian product of ``params`` {name: list of values}."""
+    """Cases for the Cartesian product of ``params`` {name: list of values}; the options are checked first
+    (:func:`check_options`).
+
+    Parameters
+    ----------
+    params : dict
+        Study parameter (a key of :data:`PARAMETERS`) -> values (SI).
+    analysis : str
+        One of :data:`ANALYSES`.
+    **options
+        Options of the analysis (see :func:`check_options`).
+
+    Returns
+    -------
+    list of Case
+    """
     names = list(params)
     for n in names:
         if n not in PARAMETERS:
             raise ParameterError(f"study parameter = {n!r} is unknown; valid: {', '.join(PARAMETERS)}")
     if analysis not in ANALYSES:
         raise ParameterError(f"analysis = {analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
-    return [Case(dict(zip(names, map(float, vals))), analysis, options) for vals in product(*(params[n] for n in names))]
+    check_options(analysis, options)
+    return [Case(dict(zip(names, map(float, vals))), analysis, options)
+            for vals in product(*(params[n] for n in names))]
+
+
+def _named_bearing(bearings, key):
+    """Index of the bearing that study parameter ``key`` ("viscosity_<bearing>") refers to."""
+    name = key[len("viscosity_"):]
+    names = [b.name for b in bearings]
+    if name not in names:
+        raise ParameterError(f"study parameter {key!r} needs a bearing named {name!r}; the system's bearings are "
+                             f"{names}")
+    return names.index(name)
+
+
+def _named_disc(system, key):
+    """Name of the disc that study parameter ``key`` ("unbalance_<x>") refers to: "<x>_wheel" or "<x>"."""
+    stem = key[len("unbalance_"):]
+    names = [d.name for d in system.rotor.discs]
+    for cand in (f"{stem}_wheel", stem):
+        if cand in names:
+            return cand
+    raise ParameterError(f"study parameter {key!r} needs a disc named {stem + '_wheel'!r} or {stem!r}; the "
+                         f"system's discs are {names}")
 
 
 def build_case_system(params, base=None):
-    """System and unbalance list of a case (SI parameters applied to ``base``, default the Table 2 system)."""
+    """System and unbalance list of a case: SI ``params`` (keys of :data:`PARAMETERS`) applied to ``base``.
+
+    Parameters
+    ----------
+    params : dict
+    base : Turbocharger, optional
+        Default: the Table 2 system. Bearing and disc parameters refer to its bearing and disc names.
+
+    Returns
+    -------
+    system : Turbocharger
+    unbalance : list of Unbalance
+
+    Raises
+    ------
+    ParameterError
+        An unknown parameter, or one that names a bearing or disc the system does not have.
+    """
     from dataclasses import replace
 
     from .presets import turbocharger
@@ -78,10 +194,9 @@ def build_case_system(params, base=None):
     if "inner_clearance" in p:
         c = p.pop("inner_clearance")
         bs = [replace(b, inner=replace(b.inner, clearance=c)) for b in bs]
-    for i, key in enumerate(("viscosity_turbine", "viscosity_compressor")):
-        if key in p:
-            mu = p.pop(key)
-            bs[i] = replace(bs[i], inner=replace(bs[i].inner, viscosity=mu), outer=replace(bs[i].outer, viscosity=mu))
+    for key in [k for k in p if k.startswith("viscosity_") and k != "viscosity_scale"]:
+        i, mu = _named_bearing(bs, key), p.pop(key)
+        bs[i] = replace(bs[i], inner=replace(bs[i].inner, viscosity=mu), outer=replace(bs[i].outer, viscosity=mu))
     if "viscosity_scale" in p:
         s = p.pop("viscosity_scale")
         bs = [replace(b, inner=replace(b.inner, viscosity=b.inner.viscosity * s),
@@ -90,11 +205,10 @@ def build_case_system(params, base=None):
         m = p.pop("ring_mass")
         bs = [replace(b, ring_mass=m) for b in bs]
     unb = []
-    for wheel, key in (("turbine_wheel", "unbalance_turbine"), ("compressor_wheel", "unbalance_compressor")):
-        if key in p:
-            amount = p.pop(key)
-            if amount > 0:
-                unb.append(Unbalance(wheel, amount, 0.0))
+    for key in [k for k in p if k.startswith("unbalance_")]:
+        disc, amount = _named_disc(tc, key), p.pop(key)
+        if amount > 0:
+            unb.append(Unbalance(disc, amount, 0.0))
     if p:
         raise ParameterError(f"study parameters {sorted(p)} are unknown; valid: {', '.join(PARAMETERS)}")
     return tc.with_(bearings=tuple(bs)), unb
@@ -105,20 +219,25 @@ def build_case_system(params, base=None):
 # --------------------------------------------------------------------------------------------------
 def _onset_rows_campbell(cd):
     """Onset rows of a Campbell result; modes are named by precession and shape, numbered by frequency among
-    modes of the same name (mode track indices are not comparable between cases)."""
+    modes of the same name (mode track indices are not comparable between cases). The onset is the lowest speed
+    of an unstable range, whatever the order of the speed grid."""
     rows = []
     ur = cd.unstable_ranges()
     ur = ur.assign(name=ur["precession"] + " " + ur["kind"]).sort_values("f at start [Hz]")
     ur["rank"] = ur.groupby("name").cumcount() + 1
+    s_min = float(np.min(cd.speeds_rpm))
     for _, r in ur.iterrows():
+        lo, hi = sorted((float(r["from [rpm]"]), float(r["to [rpm]"])))
+        f_lo = r["f at start [Hz]"] if r["from [rpm]"] <= r["to [rpm]"] else r["f at end [Hz]"]
         rows.append({"kind": "linear", "method": cd.method, "item": f"{r['name']} #{r['rank']}",
-                     "onset [rpm]": float(r["from [rpm]"]), "end [rpm]": float(r["to [rpm]"]),
-                     "f at onset [Hz]": float(r["f at start [Hz]"]),
-                     "onset at sweep start": bool(r["from [rpm]"] <= cd.speeds_rpm[0])})
+                     "onset [rpm]": lo, "end [rpm]": hi, "f at onset [Hz]": float(f_lo),
+                     "onset at sweep start": bool(lo <= s_min)})
     return rows
 
 
-def _onset_rows_run(run, label, node="turbine_wheel"):
+def _onset_rows_run(run, label, node=None):
+    """Onset rows of the sub-synchronous components of a run at ``node`` (default: the first disc). A component
+    there from the start of the run has no onset ("onset [rpm]" NaN, "onset at sweep start" True)."""
     from .spectral import spectrogram
 
     seg = min(0.1, max(0.01, (run.time[-1] - run.time[0]) / 40))
@@ -126,55 +245,84 @@ def _onset_rows_run(run, label, node="turbine_wheel"):
     for c in spectrogram(run, node, segment_s=seg).components():
         if c.label.startswith("sub"):
             rows.append({"kind": "nonlinear", "method": label, "item": f"{c.label} ({c.direction})",
-                         "onset [rpm]": c.onset_rpm, "end [rpm]": c.end_rpm, "f at onset [Hz]": c.onset_hz,
-                         "first detection [rpm]": c.onset_threshold_rpm,
-                         "onset at sweep start": bool(c.onset_rpm <= run.speed_rpm[0] * 1.001)})
+                         "onset [rpm]": c.onset_rpm, "onset estimate": c.onset_estimate,
+                         "f at onset [Hz]": c.onset_hz, "first detection [rpm]": c.onset_threshold_rpm,
+                         "vanishes at [rpm]": c.end_rpm, "onset at sweep start": c.from_start})
     return rows
 
 
+def _campbell_rows(tc, o):
+    from .campbell import campbell
+
+    # ascending grid whatever the order the user gave: the onsets are the lower ends of the unstable ranges
+    a, b, n = o.get("speeds_rpm", (10e3, 250e3, 100))
+    speeds = np.linspace(min(a, b), max(a, b), int(n))
+    rows = []
+    for m in o.get("methods", ["J"]):
+        rows += _onset_rows_campbell(campbell(tc, m, speeds))
+    return rows
+
+
+def _runup_rows(tc, unb, o):
+    from .runup import SpeedProfile, runup
+
+    start, end = o.get("speed_rpm", (1e3, 250e3))
+    dur = float(o.get("duration", 2.0))
+    prof = SpeedProfile.exponential(start, end, dur) if o.get("profile", "exponential") == "exponential" \
+        else SpeedProfile.ramp(start, end, dur)
+    run = runup(tc, profile=prof, duration=dur, unbalance=unb, progress=False,
+                output_rate_hz=float(o.get("output_rate_hz", 10e3)))
+    return _onset_rows_run(run, "run-down" if end < start else "run-up")
+
+
+def _cosim_rows(tc, unb, o):
+    from .cosim.master import cosimulate, operating_point_overrides
+
+    start, end = o.get("speed_rpm", (20e3, 250e3))
+    dur = float(o.get("duration", 1.0))
+    ov = operating_point_overrides(tc, start, end_rpm=end, ramp_time=dur, perturbation=0.05)
+    for b in tc.bearings:  # the SSP names each bearing FMU instance after its bearing
+        for fname, film in (("inner", b.inner), ("outer", b.outer)):
+            ov[b.name][f"{fname}.clearance"] = ("Real", film.clearance)
+            ov[b.name][f"{fname}.viscosity"] = ("Real", film.viscosity)
+        ov[b.name]["ring.mass"] = ("Real", b.ring_mass)
+    for u in unb:
+        ov["rotor"][f"{u.disc}.unbalance"] = ("Real", u.amount)
+    run = cosimulate(o["ssp"], o.get("parameter_set", "co36"), stop_time=dur, overrides=ov, progress=False)
+    return _onset_rows_run(run, "co-sim run-down" if end < start else "co-sim")
+
+
 def run_case(case: Case, out_dir) -> dict:
-    """Run one case and write ``<out>/cases/<id>.json`` (status, parameters, onset rows, timing; or the error)."""
+    """Run one case and write ``<out>/cases/<id>.json`` (status, parameters, onset rows, timing; or the error).
+
+    The case's system is the Table 2 system, or ``case.options["system"]`` (a dict as
+    :meth:`Turbocharger.to_dict` writes it), with the case's parameters applied (:func:`build_case_system`).
+
+    Returns
+    -------
+    dict
+        ``case_id``, ``status`` ("finished" or "failed"), ``error``, ``wall_time_s``.
+    """
     out = Path(out_dir)
     (out / "cases").mkdir(parents=True, exist_ok=True)
     rec = {"case_id": case.case_id, "params": case.params, "analysis": case.analysis, "options": case.options,
            "host": os.uname().nodename, "pid": os.getpid(), "started": time.time()}
     try:
-        tc, unb = build_case_system(case.params)
         o = dict(case.options)
-        rows = []
+        base = None
+        if "system" in o:
+            from .parameters import Turbocharger
+
+            base = Turbocharger.from_dict(o["system"])
+        tc, unb = build_case_system(case.params, base)
         if case.analysis == "campbell":
-            from .campbell import campbell
-
-            speeds = np.linspace(*o.get("speeds_rpm", (10e3, 250e3, 100)))
-            for m in o.get("methods", ["J"]):
-                rows += _onset_rows_campbell(campbell(tc, m, speeds))
+            rows = _campbell_rows(tc, o)
         elif case.analysis == "runup":
-            from .runup import SpeedProfile, runup
-
-            lo, hi = o.get("speed_rpm", (1e3, 250e3))
-            dur = float(o.get("duration", 2.0))
-            prof = SpeedProfile.exponential(lo, hi, dur) if o.get("profile", "exponential") == "exponential" \
-                else SpeedProfile.ramp(lo, hi, dur)
-            run = runup(tc, profile=prof, duration=dur, unbalance=unb, progress=False,
-                        output_rate_hz=float(o.get("output_rate_hz", 10e3)))
-            rows += _onset_rows_run(run, "run-up")
+            rows = _runup_rows(tc, unb, o)
         elif case.analysis == "cosim":
-            from .cosim.master import cosimulate, operating_point_overrides
-
-            lo, hi = o.get("speed_rpm", (20e3, 250e3))
-            dur = float(o.get("duration", 1.0))
-            ov = operating_point_overrides(tc, lo, end_rpm=hi, ramp_time=dur, perturbation=0.05)
-            for name, b in zip(("turbine", "compressor"), tc.bearings):
-                for fname, film in (("inner", b.inner), ("outer", b.outer)):
-                    ov[name][f"{fname}.clearance"] = ("Real", film.clearance)
-                    ov[name][f"{fname}.viscosity"] = ("Real", film.viscosity)
-                ov[name]["ring.mass"] = ("Real", b.ring_mass)
-            for u in unb:
-                ov["rotor"][f"{u.disc}.unbalance"] = ("Real", u.amount)
-            run = cosimulate(o["ssp"], o.get("parameter_set", "co36"), stop_time=dur, overrides=ov, progress=False)
-            rows += _onset_rows_run(run, "co-sim")
+            rows = _cosim_rows(tc, unb, o)
         else:
-            raise ParameterError(f"analysis = {case.analysis!r} is unknown")
+            raise ParameterError(f"analysis = {case.analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
         rec.update({"status": "finished", "rows": rows})
     except Exception as exc:  # noqa: BLE001  (a failing case is recorded, the study goes on)
         rec.update({"status": "failed", "error": f"{type(exc).__name__}: {exc}",
@@ -201,6 +349,8 @@ def _load(out):
 
 
 def write_index(cases, out):
+    """Write ``<out>/index.csv`` (one row per case: parameters, status, error, wall time, file) and
+    ``<out>/study.json`` (the cases); returns the index as a pandas DataFrame."""
     import pandas as pd
 
     recs = _load(out)
@@ -219,7 +369,22 @@ def write_index(cases, out):
     return df
 
 
-def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=print, retry_failed=False):
+def _client(scheduler, n_workers):
+    """(client, cluster or None): a new LocalCluster with ``n_workers`` processes, or a client of the scheduler
+    at address ``scheduler`` — which must answer within :data:`SCHEDULER_TIMEOUT_S`."""
+    dist = _distributed()
+    if scheduler is None:
+        cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
+                                    processes=True, dashboard_address=":0")
+        return dist.Client(cluster), cluster
+    try:
+        return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S), None
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ParameterError(f"scheduler = {scheduler!r} is unreachable: {exc} (expected the address of a running "
+                             f"Dask scheduler, tcp://host:port; waited {SCHEDULER_TIMEOUT_S:g} s)") from None
+
+
+def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, retry_failed=False):
     """Run all unfinished cases of a study; returns the index DataFrame.
 
     Parameters
@@ -228,63 +393,81 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=print, re
     out_dir : path
     scheduler : None | "serial" | str
         None: a new dask.distributed LocalCluster with ``n_workers`` processes (default: one per core);
-        "serial": in this process, no Dask; otherwise the address of an existing Dask scheduler.
+        "serial": in this process, no Dask; otherwise the address of an existing Dask scheduler
+        (``tcp://host:port``), which must answer within :data:`SCHEDULER_TIMEOUT_S`.
+    n_workers : int, optional
+        Worker processes of the LocalCluster (>= 1).
+    progress : bool
+        Show a progress bar over the cases to run (done / total, elapsed, ETA; :mod:`frbmodel.progress`) and the
+        study's messages (cases finished before and to run, Dask dashboard address, failed cases); default off,
+        on in the CLI.
     retry_failed : bool
         Also rerun cases that failed before.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The study's index (also ``<out_dir>/index.csv``).
+
+    Raises
+    ------
+    ParameterError
+        Duplicate cases, ``n_workers`` < 1, or an unreachable ``scheduler``.
+    ModuleNotFoundError
+        ``dask`` / ``distributed`` missing (the ``[dist]`` extra) for a scheduler other than "serial".
     """
+    from .progress import counter_bar, note
+
+    if n_workers is not None and (int(n_workers) != n_workers or n_workers < 1):
+        raise ParameterError(f"workers = {n_workers!r} is invalid: valid range integer >= 1 (worker processes)")
     out = Path(out_dir)
-    (out / "cases").mkdir(parents=True, exist_ok=True)
     ids = [c.case_id for c in cases]
     if len(set(ids)) != len(ids):
         raise ParameterError("the study has duplicate cases")
+    if scheduler != "serial":
+        _distributed()  # a missing [dist] extra is reported before anything is written
+    (out / "cases").mkdir(parents=True, exist_ok=True)
     done = _load(out)
     todo = [c for c in cases if c.case_id not in done or (retry_failed and done[c.case_id].get("status") == "failed")]
     write_index(cases, out)
     n_total, n_skip = len(cases), len(cases) - len(todo)
-    progress(f"study: {n_total} cases, {n_skip} already finished, {len(todo)} to run -> {out.resolve()}")
-    t0 = time.time()
-    n_done = 0
+    def say(msg):
+        note(msg, progress)
 
-    def report(res):
-        nonlocal n_done
-        n_done += 1
-        el = time.time() - t0
-        eta = el / n_done * (len(todo) - n_done)
-        msg = f"  [{n_skip + n_done}/{n_total}] {res['case_id']}: {res['status']} ({res['wall_time_s']:.1f} s)"
-        if res["status"] == "failed":
-            msg += f" - {res['error'][:200]}"
-        progress(msg + f"  elapsed {el:.0f} s, ETA {eta:.0f} s")
-        write_index(cases, out)
-
+    say(f"study: {n_total} cases, {n_skip} already finished, {len(todo)} to run -> {out.resolve()}")
     if not todo:
         return write_index(cases, out)
-    if scheduler == "serial":
-        for c in todo:
-            report(run_case(c, out))
-        return write_index(cases, out)
-    from dask.distributed import Client, LocalCluster, as_completed
+    with counter_bar(len(todo), "study", progress, unit="case") as bar:
+        def report(res):
+            bar.update(1)
+            bar.set_postfix_str(f"{res['case_id']}: {res['status']} ({res['wall_time_s']:.1f} s)")
+            if res["status"] == "failed":
+                say(f"  {res['case_id']}: failed - {res['error'][:200]}")
+            write_index(cases, out)
 
-    cluster = None
-    if scheduler is None:
-        n = n_workers or os.cpu_count() or 1
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
-        client = Client(cluster)
-    else:
-        client = Client(scheduler)
+        if scheduler == "serial":
+            for c in todo:
+                report(run_case(c, out))
+        else:
+            _run_on_dask(todo, out, scheduler, n_workers, report, say)
+    return write_index(cases, out)
+
+
+def _run_on_dask(todo, out, scheduler, n_workers, report, say):
+    """Submit the cases to Dask and ``report`` each result as it arrives."""
+    client, cluster = _client(scheduler, n_workers)
     try:
-        progress(f"dask: {len(client.scheduler_info().get('workers', {}))} workers, dashboard "
-                 f"{client.dashboard_link}")
+        say(f"dask: {len(client.scheduler_info().get('workers', {}))} workers, dashboard {client.dashboard_link}")
         futures = [client.submit(run_case, c, str(out), key=f"frb-{c.case_id}", pure=False) for c in todo]
-        for fut in as_completed(futures):
+        for fut in _distributed().as_completed(futures):
             try:
                 report(fut.result())
             except Exception as exc:  # noqa: BLE001  (a lost worker: the case stays pending, rerun picks it up)
-                progress(f"  a task failed outside the case handler: {exc}")
+                say(f"  a task failed outside the case handler: {exc}")
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
-    return write_index(cases, out)
 
 
 def stability_map(out_dir):
@@ -369,11 +552,21 @@ EXAMPLES = {
 
 
 def example_cases(name):
+    """Cases of a built-in study (a key of :data:`EXAMPLES`).
+
+    Parameters
+    ----------
+    name : str
+
+    Returns
+    -------
+    list of Case
+    """
     if name not in EXAMPLES:
         raise ParameterError(f"example = {name!r} is unknown; valid: {', '.join(EXAMPLES)}")
     ex = EXAMPLES[name]
     return [c for a, o in ex["analyses"] for c in grid(ex["params"], a, **o)]
 
 
-__all__ = ["Case", "grid", "run_case", "run_study", "stability_map", "plot_stability_map", "example_cases",
-           "PARAMETERS", "ANALYSES", "build_case_system"]
+__all__ = ["Case", "grid", "check_options", "run_case", "run_study", "stability_map", "plot_stability_map",
+           "example_cases", "write_index", "PARAMETERS", "ANALYSES", "SCHEDULER_TIMEOUT_S", "build_case_system"]

@@ -1,13 +1,16 @@
-"""Spectral components of a run-up: peaks per spectrogram segment, tracks through the segments, onsets, labels.
+"""Spectral components of a run-up or run-down: peaks per spectrogram segment, tracks through the segments,
+onsets and ends, labels.
 
 The input is a spectrogram as :func:`frbmodel.spectral.spectrogram` computes it: the orbit amplitude [m] of
 forward and backward whirl, ``(n_freqs, n_segments)`` each, on non-negative frequencies [Hz], with the rotor
-speed [rpm] of every segment. In each segment the spectral peaks within ``db_range`` of the segment's largest
-one are found; harmonics and mirror images of stronger peaks are dropped; forward peaks at the rotor frequency
-form the synchronous component "1X"; the sub-synchronous peaks are assigned to the tracks of the previous
-segments by :func:`scipy.optimize.linear_sum_assignment` (gate: same direction and
+speed [rpm] of every segment. Segments are in time order; the speed may rise (run-up), fall (run-down) or stay
+constant — nothing here assumes that it increases. In each segment the spectral peaks within ``db_range`` of the
+segment's largest one are found; harmonics and mirror images of stronger peaks are dropped; forward peaks at the
+rotor frequency form the synchronous component "1X"; the sub-synchronous peaks are assigned to the tracks of the
+previous segments by :func:`scipy.optimize.linear_sum_assignment` (gate: same direction and
 |Δf| < max(3 df, 0.15 f)). Fragments of one component are joined, short tracks dropped, and each component gets
-two onset estimates (turning point and threshold crossing).
+its onset (turning point, or none if it is there from the start of the run), the speeds where it crosses the
+detection threshold on appearing and on vanishing, and a label.
 """
 from __future__ import annotations
 
@@ -106,16 +109,23 @@ class Track:
         return "forward" if self.direction > 0 else "backward"
 
 
+#: what :attr:`Component.onset_rpm` is (:attr:`Component.onset_estimate`)
+ONSET_TURNING_POINT = "turning point"
+ONSET_THRESHOLD = "threshold crossing"
+NO_ONSET_PRESENT = "none: present from the start"
+NO_ONSET_GROWING = "none: growing from the start"
+
+
 @dataclass
 class Component:
-    """A tracked and labelled spectral component of a run-up.
+    """A tracked and labelled spectral component of a run-up or run-down.
 
     Parameters
     ----------
     label : str
         "1X" (synchronous) or "sub1", "sub2", ... (sub-synchronous, in the order of their first detection).
     speeds_rpm : ndarray
-        Rotor speed [rpm] of each detection.
+        Rotor speed [rpm] of each detection, in time order (falling in a run-down).
     freqs_hz : ndarray
         Component frequency [Hz] of each detection.
     amplitude_m : ndarray
@@ -123,9 +133,29 @@ class Component:
     direction : str
         "forward" or "backward" whirl.
     onset_interp_rpm : float
-        Onset speed [rpm] (turning point for sub-synchronous components, threshold crossing for 1X).
+        Onset speed [rpm]: the turning point for sub-synchronous components, the threshold crossing for 1X; NaN
+        if the component is there from the start of the run (see ``onset_estimate``).
     onset_threshold_rpm : float
-        Speed [rpm] where the amplitude crosses the detection threshold (interpolated between segments).
+        Speed [rpm] where the amplitude rises through the detection threshold (interpolated between the last
+        segment without and the first with the component); NaN if it is detected in the first segment.
+    end_rpm : float
+        Speed [rpm] where the component vanishes: the amplitude falls through the detection threshold
+        (interpolated between the last segment with and the next without it); NaN if it lasts to the last segment.
+    onset_estimate : str
+        What ``onset_interp_rpm`` is: :data:`ONSET_TURNING_POINT`, :data:`ONSET_THRESHOLD`,
+        :data:`NO_ONSET_PRESENT` (detected in the first segment) or :data:`NO_ONSET_GROWING` (its amplitude,
+        traced back in time, falls all the way to the first segment: it grew from the start of the run).
+    segments : ndarray of int, optional
+        Spectrogram segment of each detection.
+
+    Examples
+    --------
+    A component seen in every segment of a run-down from 200 to 150 krpm has neither onset nor end:
+
+    >>> c = Component("sub1", np.array([200e3, 175e3, 150e3]), np.array([800.0, 700.0, 600.0]), np.ones(3),
+    ...               "forward", onset_estimate=NO_ONSET_PRESENT)
+    >>> c.onset_rpm, c.end_rpm, c.detected_from_rpm, float(c.ratio[0])
+    (nan, nan, 200000.0, 0.24)
     """
 
     label: str
@@ -136,23 +166,47 @@ class Component:
 
     onset_interp_rpm: float = math.nan
     onset_threshold_rpm: float = math.nan
+    end_rpm: float = math.nan
+    onset_estimate: str = ""
+    segments: np.ndarray = None
 
     @property
     def onset_rpm(self) -> float:
-        """Onset speed [rpm]: ``onset_interp_rpm``, or the first detection if that is unknown."""
-        return self.onset_interp_rpm if math.isfinite(self.onset_interp_rpm) else float(self.speeds_rpm[0])
+        """Onset speed [rpm] (``onset_interp_rpm``): NaN where the component has no onset in this run."""
+        return float(self.onset_interp_rpm)
 
     @property
-    def end_rpm(self) -> float:
-        """Speed of the last detection [rpm]."""
+    def from_start(self) -> bool:
+        """True if the component is there from the start of the run (present or growing): it has no onset."""
+        return self.onset_estimate in (NO_ONSET_PRESENT, NO_ONSET_GROWING)
+
+    @property
+    def detected_from_rpm(self) -> float:
+        """Speed of the first detection [rpm] (segment centre)."""
+        return float(self.speeds_rpm[0])
+
+    @property
+    def detected_to_rpm(self) -> float:
+        """Speed of the last detection [rpm] (segment centre)."""
         return float(self.speeds_rpm[-1])
+
+    def _ratio_times(self, ends, speed_rpm):
+        n = min(3, self.freqs_hz.size)
+        sel = slice(0, n) if ends == "first" else slice(-n, None)
+        return float(np.median(self.freqs_hz[sel] / self.speeds_rpm[sel]) * speed_rpm)
 
     @property
     def onset_hz(self) -> float:
         """Frequency at the onset speed [Hz]: the median f/f_rot of the first three detections (robust to a
-        one-segment shift of the first detection), times the onset speed (constant-ratio extrapolation)."""
-        n = min(3, self.freqs_hz.size)
-        return float(np.median(self.freqs_hz[:n] / self.speeds_rpm[:n]) * self.onset_rpm)
+        one-segment shift of the first detection), times the onset speed (constant-ratio extrapolation); NaN
+        without an onset."""
+        return self._ratio_times("first", self.onset_rpm)
+
+    @property
+    def end_hz(self) -> float:
+        """Frequency where the component vanishes [Hz]: the median f/f_rot of the last three detections times
+        :attr:`end_rpm`; NaN if it lasts to the end of the run."""
+        return self._ratio_times("last", self.end_rpm)
 
     @property
     def first_detection_hz(self) -> float:
@@ -424,13 +478,31 @@ def merge_fragments(tracks, speeds_rpm, max_gap=4, ratio_tol=0.2):
 
 
 # ---------------------------------------------------------------------------------------------------- onsets
+def _traced_log_amplitudes(spec, freqs_hz, speeds_rpm, k0, f0_hz):
+    """Log amplitude of a component traced backwards in time from segment ``k0`` (at ``f0_hz``) at constant
+    f/f_rot — the largest amplitude within ±15 % + 1.5 bins of the traced frequency — and the segments traced,
+    both in time order."""
+    ratio = f0_hz / (speeds_rpm[k0] / 60.0)
+    df = freqs_hz[1] - freqs_hz[0]
+    amps = []
+    for k in range(k0, -1, -1):  # backwards in time: towards lower speed in a run-up, higher in a run-down
+        fc = ratio * speeds_rpm[k] / 60.0
+        sel = np.flatnonzero(np.abs(freqs_hz - fc) <= 0.15 * fc + 1.5 * df)
+        if sel.size == 0:
+            break
+        amps.append(spec[sel, k].max())
+    amps = np.log(np.maximum(np.array(amps[::-1]), 1e-300))
+    return amps, np.arange(k0 - amps.size + 1, k0 + 1)
+
+
 def turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz):
-    """Onset at the turning point: trace a component backwards from its first detection (segment ``k0``, at
-    ``f0_hz``) at constant f/f_rot (largest amplitude within ±15 % + 1.5 bins) and return the speed [rpm] of its
-    smallest amplitude, where decay turned into growth (the growth rate crosses zero).
+    """Onset at the turning point: trace a component backwards in time from its first detection (segment ``k0``,
+    at ``f0_hz``) at constant f/f_rot and return the speed [rpm] of its smallest amplitude, where decay turned into
+    growth (the growth rate crosses zero).
 
     In a run-up the threshold crossing lags the loss of stability (slow passage through the Hopf point); the
-    turning point does not.
+    turning point does not. The trace runs over segments in time order, so it works alike for run-ups (back in
+    time = towards lower speed), run-downs (towards higher speed) and constant speed.
 
     Parameters
     ----------
@@ -439,7 +511,7 @@ def turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz):
     freqs_hz : (f,) ndarray
         Frequencies [Hz].
     speeds_rpm : (k,) ndarray
-        Rotor speed of every segment [rpm].
+        Rotor speed of every segment [rpm], in time order.
     k0 : int
         Segment of the first detection.
     f0_hz : float
@@ -448,20 +520,20 @@ def turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz):
     Returns
     -------
     float
-        Speed [rpm]: vertex of a least-squares parabola in log amplitude over ±4 segments about the (3-point median
-        smoothed) first local minimum, else the speed of that segment.
+        Speed [rpm]: vertex of a least-squares parabola in log amplitude over ±4 segments (in time) about the
+        (3-point median smoothed) first local minimum, mapped to speed by linear interpolation between the
+        segments; else the speed of that segment. NaN if the amplitude keeps falling back to the first segment of
+        the run (the component grew from the start: no onset in this run).
+
+    Examples
+    --------
+    An amplitude that falls back in time all the way to segment 0 has no turning point in the run:
+
+    >>> spec = np.array([[1e-9, 1e-8, 1e-7, 1e-6]] * 8)
+    >>> turning_point_rpm(spec, np.arange(8.0) * 100.0, np.array([4e4, 3e4, 2e4, 1e4]), 3, 200.0)
+    nan
     """
-    ratio = f0_hz / (speeds_rpm[k0] / 60.0)
-    df = freqs_hz[1] - freqs_hz[0]
-    amps = []
-    for k in range(k0, -1, -1):
-        fc = ratio * speeds_rpm[k] / 60.0
-        sel = np.flatnonzero(np.abs(freqs_hz - fc) <= 0.15 * fc + 1.5 * df)
-        if sel.size == 0:
-            break
-        amps.append(spec[sel, k].max())
-    amps = np.log(np.maximum(np.array(amps[::-1]), 1e-300))
-    ks = np.arange(k0 - amps.size + 1, k0 + 1)
+    amps, ks = _traced_log_amplitudes(spec, freqs_hz, speeds_rpm, k0, f0_hz)
     # walk back from the first detection while the smoothed amplitude keeps falling: the first local minimum
     sm = amps.copy()
     if amps.size >= 3:
@@ -469,24 +541,40 @@ def turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz):
     j = amps.size - 1
     while j > 0 and sm[j - 1] < sm[j]:
         j -= 1
+    if j == 0 and ks[0] == 0:
+        return math.nan  # still falling at the first segment of the run: growing from (before) the start
     if j == 0 or j == amps.size - 1:
         return float(speeds_rpm[ks[j]])
-    # a flat minimum at the noise floor is located by its surroundings, not by one segment's dip
+    # a flat minimum at the noise floor is located by its surroundings, not by one segment's dip; the parabola is
+    # fitted in time (segment index) — speed need not be monotonic — and its vertex mapped to speed
     lo, hi = max(j - 4, 0), min(j + 5, amps.size)
-    sp = speeds_rpm[ks[lo:hi]]
-    s_ref = speeds_rpm[ks[j]]
     if hi - lo >= 5:
-        c2, c1, _ = np.polyfit(sp - s_ref, amps[lo:hi], 2)
+        c2, c1, _ = np.polyfit(np.arange(lo - j, hi - j, dtype=float), amps[lo:hi], 2)
         if c2 > 0:
-            vertex = s_ref - c1 / (2 * c2)
-            if sp[0] <= vertex <= sp[-1]:
-                return float(vertex)
-    return float(s_ref)
+            vertex = -c1 / (2 * c2)
+            if lo - j <= vertex <= hi - 1 - j:
+                return float(np.interp(ks[j] + vertex, ks, speeds_rpm[ks]))
+    return float(speeds_rpm[ks[j]])
+
+
+def _crossing_rpm(spec, freqs_hz, speeds_rpm, k_out, k_in, f_hz, threshold_m):
+    """Speed [rpm] between segment ``k_in`` (component detected, at ``f_hz``) and its time neighbour ``k_out``
+    (not detected) where the amplitude crosses ``threshold_m``, interpolated in log amplitude; the speed of
+    ``k_in`` if the amplitudes do not straddle the threshold."""
+    i = int(np.argmin(np.abs(freqs_hz - f_hz)))
+    lo = max(i - 2, 0)
+    a_out = spec[lo:i + 3, k_out].max()
+    a_in = spec[lo:i + 3, k_in].max()
+    if not (0 < a_out < threshold_m <= a_in):
+        return float(speeds_rpm[k_in])
+    w = math.log(threshold_m / a_out) / math.log(a_in / a_out)
+    return float(speeds_rpm[k_out] + w * (speeds_rpm[k_in] - speeds_rpm[k_out]))
 
 
 def threshold_crossing_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz, threshold_m):
-    """Speed [rpm] where a component's amplitude crosses the detection threshold, interpolated in log amplitude
-    between the last segment without (``k0 − 1``) and the first with the component (``k0``, at ``f0_hz``).
+    """Speed [rpm] where a component's amplitude rises through the detection threshold, interpolated in log
+    amplitude between the last segment without (``k0 − 1``) and the first with the component (``k0``, at
+    ``f0_hz``).
 
     Parameters
     ----------
@@ -494,6 +582,7 @@ def threshold_crossing_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz, threshold_m):
         Orbit amplitude [m] in the component's whirl direction.
     freqs_hz : (f,) ndarray
     speeds_rpm : (k,) ndarray
+        Rotor speed of every segment [rpm], in time order (rising, falling or constant).
     k0 : int
     f0_hz : float
     threshold_m : float
@@ -502,40 +591,78 @@ def threshold_crossing_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz, threshold_m):
     Returns
     -------
     float
-        The interpolated speed, or the speed of segment ``k0`` if the amplitude does not cross there.
+        The interpolated speed; the speed of segment ``k0`` if the amplitude does not cross there; NaN if
+        ``k0 == 0`` (present from the start of the run: nothing crossed).
 
     Examples
     --------
-    Amplitude ×10 from one segment to the next, threshold ×√10 above the first: half way.
+    Amplitude ×10 from one segment to the next, threshold ×√10 above the first: half way — in a run-up and in a
+    run-down alike.
 
     >>> spec = np.array([[1e-8, 1e-7]] * 5)
     >>> threshold_crossing_rpm(spec, np.arange(5.0), np.array([1000.0, 2000.0]), 1, 2.0, 10 ** -7.5)
     1500.0
+    >>> threshold_crossing_rpm(spec, np.arange(5.0), np.array([3000.0, 2000.0]), 1, 2.0, 10 ** -7.5)
+    2500.0
     """
     if k0 == 0:
-        return float(speeds_rpm[0])
-    i = int(np.argmin(np.abs(freqs_hz - f0_hz)))
-    lo = max(i - 2, 0)
-    a_prev = spec[lo:i + 3, k0 - 1].max()
-    a_now = spec[lo:i + 3, k0].max()
-    if not (0 < a_prev < threshold_m <= a_now):
-        return float(speeds_rpm[k0])
-    w = math.log(threshold_m / a_prev) / math.log(a_now / a_prev)
-    return float(speeds_rpm[k0 - 1] + w * (speeds_rpm[k0] - speeds_rpm[k0 - 1]))
+        return math.nan
+    return _crossing_rpm(spec, freqs_hz, speeds_rpm, k0 - 1, k0, f0_hz, threshold_m)
+
+
+def vanishing_rpm(spec, freqs_hz, speeds_rpm, k1, f1_hz, threshold_m):
+    """Speed [rpm] where a component's amplitude falls through the detection threshold, interpolated in log
+    amplitude between its last segment (``k1``, at ``f1_hz``) and the next one (``k1 + 1``).
+
+    Parameters
+    ----------
+    spec, freqs_hz, speeds_rpm
+        As for :func:`threshold_crossing_rpm`.
+    k1 : int
+        Segment of the last detection.
+    f1_hz : float
+        Frequency of the last detection [Hz].
+    threshold_m : float
+        Detection threshold of segment ``k1`` [m].
+
+    Returns
+    -------
+    float
+        The interpolated speed; the speed of segment ``k1`` if the amplitude does not cross there; NaN if ``k1``
+        is the last segment (the component lasts to the end of the run).
+
+    Examples
+    --------
+    A run-down whose component drops ×10 from 2000 to 1000 rpm, threshold ×√10 below the last detection:
+
+    >>> spec = np.array([[1e-7, 1e-8]] * 5)
+    >>> vanishing_rpm(spec, np.arange(5.0), np.array([2000.0, 1000.0]), 0, 2.0, 10 ** -7.5)
+    1500.0
+    """
+    if k1 >= speeds_rpm.size - 1:
+        return math.nan
+    return _crossing_rpm(spec, freqs_hz, speeds_rpm, k1 + 1, k1, f1_hz, threshold_m)
 
 
 # ---------------------------------------------------------------------------------------------------- components
 def to_component(label, track, freqs_hz, speeds_rpm, forward, backward):
-    """The :class:`Component` ``label`` of ``track``, with its onset estimates (turning point for sub-synchronous
-    components, threshold crossing for 1X and as ``onset_threshold_rpm``)."""
+    """The :class:`Component` ``label`` of ``track``, with its onset (turning point for sub-synchronous
+    components, threshold crossing for 1X; none if it is there from the start of the run), the threshold
+    crossings where it appears (``onset_threshold_rpm``) and vanishes (``end_rpm``)."""
     k = np.array(track.segments)
     spec = forward if track.direction > 0 else backward
     comp = Component(label, speeds_rpm[k], np.array(track.freqs_hz), np.array(track.amplitudes_m),
-                     track.direction_name)
-    k0, f0 = int(k[0]), track.freqs_hz[0]
+                     track.direction_name, segments=k)
+    k0, f0, k1 = int(k[0]), track.freqs_hz[0], int(k[-1])
     comp.onset_threshold_rpm = threshold_crossing_rpm(spec, freqs_hz, speeds_rpm, k0, f0, track.thresholds_m[0])
-    comp.onset_interp_rpm = comp.onset_threshold_rpm if label == "1X" else \
-        turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0)
+    comp.end_rpm = vanishing_rpm(spec, freqs_hz, speeds_rpm, k1, track.freqs_hz[-1], track.thresholds_m[-1])
+    if k0 == 0:
+        comp.onset_estimate = NO_ONSET_PRESENT
+    elif label == "1X":
+        comp.onset_interp_rpm, comp.onset_estimate = comp.onset_threshold_rpm, ONSET_THRESHOLD
+    else:
+        comp.onset_interp_rpm = turning_point_rpm(spec, freqs_hz, speeds_rpm, k0, f0)
+        comp.onset_estimate = ONSET_TURNING_POINT if math.isfinite(comp.onset_interp_rpm) else NO_ONSET_GROWING
     return comp
 
 
@@ -563,9 +690,19 @@ def find_components(freqs_hz, speeds_rpm, forward, backward, db_range=25.0, min_
     return [to_component(lab, t, freqs_hz, speeds_rpm, forward, backward) for lab, t in labelled]
 
 
+def _simultaneous(a, b):
+    """Speeds [rpm] and the two components' frequencies [Hz] where both are detected: matched by segment (by speed
+    for components built without segments) — no interpolation, so the order of the speeds does not matter."""
+    if a.segments is not None and b.segments is not None:
+        _, ia, ib = np.intersect1d(a.segments, b.segments, return_indices=True)
+    else:
+        _, ia, ib = np.intersect1d(a.speeds_rpm, b.speeds_rpm, return_indices=True)
+    return a.speeds_rpm[ia], a.freqs_hz[ia], b.freqs_hz[ib]
+
+
 def internal_resonances(components):
     """Speed ranges where two sub-synchronous components satisfy f_b ≈ 2 f_a or f_a + f_b ≈ f_rot (within
-    ``RESONANCE_TOL``): the signature of "total instability".
+    ``RESONANCE_TOL``) at the same time: the signature of "total instability".
 
     Parameters
     ----------
@@ -574,7 +711,8 @@ def internal_resonances(components):
     Returns
     -------
     list of dict
-        Keys "components" (two labels), "condition" ("2:1" or "f_a + f_b = 1X"), "from [rpm]", "to [rpm]".
+        Keys "components" (two labels), "condition" ("2:1" or "f_a + f_b = 1X"), "from [rpm]", "to [rpm]" (the
+        lowest and highest speed where the condition holds, in a run-up and a run-down alike).
 
     Examples
     --------
@@ -588,11 +726,9 @@ def internal_resonances(components):
     found = []
     for i, a in enumerate(comps):
         for b in comps[i + 1:]:
-            common = np.intersect1d(a.speeds_rpm, b.speeds_rpm)
+            common, fa, fb = _simultaneous(a, b)
             if common.size == 0:
                 continue
-            fa = np.interp(common, a.speeds_rpm, a.freqs_hz)
-            fb = np.interp(common, b.speeds_rpm, b.freqs_hz)
             lo, hi = np.minimum(fa, fb), np.maximum(fa, fb)
             frot = common / 60.0
             for kind, ok in (("2:1", np.abs(hi - 2 * lo) < RESONANCE_TOL * hi),
@@ -603,9 +739,30 @@ def internal_resonances(components):
     return found
 
 
+#: columns of :func:`components_table`, with what each holds
+COMPONENT_COLUMNS = {
+    "component": '"1X" or "sub1", "sub2", ... in the order of their first detection',
+    "whirl direction": '"forward" or "backward"',
+    "onset [rpm]": "onset speed: see 'onset estimate'; empty if the component is there from the start",
+    "onset estimate": f"{ONSET_TURNING_POINT!r} (sub-synchronous), {ONSET_THRESHOLD!r} (1X), "
+                      f"{NO_ONSET_PRESENT!r} or {NO_ONSET_GROWING!r}",
+    "f at onset [Hz]": "frequency at the onset speed",
+    "first detection [rpm]": "speed where the amplitude rises through the detection threshold (empty if present "
+                             "from the start)",
+    "f at first detection [Hz]": "frequency of the first detection",
+    "vanishes at [rpm]": "speed where the amplitude falls through the detection threshold (empty if the "
+                         "component lasts to the end of the run)",
+    "f at vanishing [Hz]": "frequency where it vanishes",
+    "detected from [rpm]": "speed of the first segment with the component",
+    "detected to [rpm]": "speed of the last segment with the component",
+    "f/f_rot at first detection [-]": "frequency ratio of the first detection",
+    "max amplitude [m]": "largest orbit amplitude of the component",
+}
+
+
 def components_table(components):
-    """pandas DataFrame, one row per component: label, direction, onset/first detection/end speed [rpm],
-    frequency at onset and first detection [Hz], f/f_rot at the first detection [-], largest amplitude [m].
+    """pandas DataFrame, one row per component; the columns are the keys of :data:`COMPONENT_COLUMNS` (which says
+    what each holds). Speeds are in the run's time order: in a run-down "vanishes at" is below "detected from".
 
     Parameters
     ----------
@@ -617,15 +774,18 @@ def components_table(components):
     """
     import pandas as pd
 
-    rows = [{"component": c.label, "direction": c.direction, "onset [rpm]": c.onset_rpm,
-             "first detection [rpm]": c.onset_threshold_rpm, "end [rpm]": c.end_rpm,
-             "f at onset [Hz]": c.onset_hz, "f at first detection [Hz]": c.first_detection_hz,
-             "f/f_rot at onset [-]": float(c.ratio[0]),
+    rows = [{"component": c.label, "whirl direction": c.direction, "onset [rpm]": c.onset_rpm,
+             "onset estimate": c.onset_estimate, "f at onset [Hz]": c.onset_hz,
+             "first detection [rpm]": c.onset_threshold_rpm, "f at first detection [Hz]": c.first_detection_hz,
+             "vanishes at [rpm]": c.end_rpm, "f at vanishing [Hz]": c.end_hz,
+             "detected from [rpm]": c.detected_from_rpm, "detected to [rpm]": c.detected_to_rpm,
+             "f/f_rot at first detection [-]": float(c.ratio[0]),
              "max amplitude [m]": float(c.amplitude_m.max())} for c in components]
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=list(COMPONENT_COLUMNS))
 
 
-__all__ = ["SYNC_TOL", "RESONANCE_TOL", "FORWARD", "BACKWARD", "Peak", "Track", "Component", "peak_frequency_hz",
-           "segment_peaks", "secondary_peaks", "assign", "split_segment", "track_peaks", "merge_fragments",
-           "turning_point_rpm", "threshold_crossing_rpm", "to_component", "find_components", "internal_resonances",
-           "components_table"]
+__all__ = ["SYNC_TOL", "RESONANCE_TOL", "FORWARD", "BACKWARD", "ONSET_TURNING_POINT", "ONSET_THRESHOLD",
+           "NO_ONSET_PRESENT", "NO_ONSET_GROWING", "COMPONENT_COLUMNS", "Peak", "Track", "Component",
+           "peak_frequency_hz", "segment_peaks", "secondary_peaks", "assign", "split_segment", "track_peaks",
+           "merge_fragments", "turning_point_rpm", "threshold_crossing_rpm", "vanishing_rpm", "to_component",
+           "find_components", "internal_resonances", "components_table"]

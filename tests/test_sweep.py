@@ -1,4 +1,5 @@
-"""Parameter studies on Dask: equality with serial runs, resume after a kill, failing cases."""
+"""Parameter studies on Dask: equality with serial runs, resume after a kill, failing cases (input validation, the
+[dist] extra and descending grids: test_rundown_sweep.py)."""
 import json
 import os
 import signal
@@ -24,8 +25,8 @@ def _rows(out):
 def test_local_cluster_equals_serial(tmp_path):
     cases = grid({"outer_clearance": [36e-6, 40e-6, 42e-6, 46e-6]}, "campbell", methods=["J"],
                  speeds_rpm=(1e3, 250e3, 40))
-    run_study(cases, tmp_path / "serial", scheduler="serial", progress=lambda m: None)
-    idx = run_study(cases, tmp_path / "dask", n_workers=2, progress=lambda m: None)
+    run_study(cases, tmp_path / "serial", scheduler="serial")
+    idx = run_study(cases, tmp_path / "dask", n_workers=2)
     assert (idx["status"] == "finished").all() and len(idx) == 4
     a, b = _rows(tmp_path / "serial"), _rows(tmp_path / "dask")
     assert len(a) > 0
@@ -37,8 +38,8 @@ def test_local_cluster_equals_serial(tmp_path):
 
 def test_killed_study_resumes_without_recomputing(tmp_path):
     out = tmp_path / "study"
-    cmd = [sys.executable, "-m", "frbmodel.cli", "sweep", "--param", "outer_clearance=36e-6,38e-6,40e-6,42e-6,44e-6,46e-6",
-           *SMALL_RUNUP, "--serial", "--out", str(out)]
+    cmd = [sys.executable, "-m", "frbmodel.cli", "sweep", "--param",
+           "outer_clearance=36e-6,38e-6,40e-6,42e-6,44e-6,46e-6", *SMALL_RUNUP, "--serial", "--out", str(out)]
     env = dict(os.environ, MPLBACKEND="Agg")
     p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
     deadline = time.time() + 300
@@ -58,7 +59,7 @@ def test_killed_study_resumes_without_recomputing(tmp_path):
     ref = tmp_path / "ref"
     cases = grid({"outer_clearance": [36e-6, 38e-6, 40e-6, 42e-6, 44e-6, 46e-6]}, "runup", speed_rpm=(20e3, 30e3),
                  duration=0.04)
-    run_study(cases, ref, scheduler="serial", progress=lambda m: None)
+    run_study(cases, ref, scheduler="serial")
     pd.testing.assert_frame_equal(_rows(out), _rows(ref))
     assert (pd.read_csv(out / "index.csv")["status"] == "finished").all()
 
@@ -66,13 +67,13 @@ def test_killed_study_resumes_without_recomputing(tmp_path):
 def test_failing_case_is_recorded_and_others_finish(tmp_path):
     # a viscosity this low cannot carry the turbine's load: the equilibrium (eps -> 1) fails for that case only
     cases = grid({"viscosity_turbine": [1e-7, 4.9e-3]}, "runup", speed_rpm=(20e3, 30e3), duration=0.04)
-    idx = run_study(cases, tmp_path, n_workers=2, progress=lambda m: None)
+    idx = run_study(cases, tmp_path, n_workers=2)
     st = dict(zip(idx["viscosity_turbine [Pa s]"], idx["status"]))
     assert st == {1e-7: "failed", 4.9e-3: "finished"}
     err = idx.loc[idx["status"] == "failed", "error"].iloc[0]
     assert "turbine bearing" in err and "rpm" in err
     # a rerun leaves the failed case alone unless asked to retry it
-    idx2 = run_study(cases, tmp_path, scheduler="serial", progress=lambda m: None)
+    idx2 = run_study(cases, tmp_path, scheduler="serial")
     assert list(idx2["status"]) == list(idx["status"])
 
 
