@@ -194,7 +194,8 @@ def rsr_figure(results, title="Ring-speed ratio", bearing_names=None):
         Label (method letter) -> ``(speeds [rpm] (n,), RSR [-] (n, nb))``, bearings in the system's order.
     title : str
     bearing_names : sequence of str, optional
-        Panel titles, e.g. ``[b.name for b in system.bearings]`` (default "bearing 1", "bearing 2", ...).
+        Bearing names, e.g. ``[b.name for b in system.bearings]``: panel titles "<name> bearing" (default
+        "bearing 1", "bearing 2", ...).
 
     Returns
     -------
@@ -203,7 +204,8 @@ def rsr_figure(results, title="Ring-speed ratio", bearing_names=None):
     import matplotlib.pyplot as plt
 
     nb = np.asarray(next(iter(results.values()))[1]).shape[1]
-    names = list(bearing_names) if bearing_names is not None else [f"bearing {j + 1}" for j in range(nb)]
+    titles = [f"{n} bearing" for n in bearing_names] if bearing_names is not None else \
+        [f"bearing {j + 1}" for j in range(nb)]
     fig, axes = plt.subplots(1, nb, figsize=(5 * nb, 4), sharey=True, squeeze=False)
     axes = axes[0]
     styles = ["-", "--", "-.", ":"]
@@ -211,7 +213,7 @@ def rsr_figure(results, title="Ring-speed ratio", bearing_names=None):
         for j, ax in enumerate(axes):
             ax.plot(np.asarray(s) / 1e3, np.asarray(r)[:, j], ls=styles[k % 4], lw=1.6, label=f"method {label}")
     for j, ax in enumerate(axes):
-        ax.set_title(f"{names[j]} bearing", fontsize=10)
+        ax.set_title(titles[j], fontsize=10)
         ax.set_xlabel("rotor speed [krpm]")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("RSR = ω_FR / ω_R [-]")
