@@ -268,8 +268,8 @@ def cmd_compare(args):
     writable_dir(args.out)
     cl = [check_positive("--clearances", x, "m") for x in args.clearances.split(",")]
     a, b = _speed_pair(args.speeds)
-    table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out,
-                           progress=lambda m: print(m, flush=True), fmax_hz=args.fmax)
+    table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out, progress=True,
+                           fmax_hz=args.fmax)
     print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     print(f"results in {Path(args.out).resolve()}")
 
@@ -354,9 +354,9 @@ def cmd_sweep(args):
                 raise ParameterError(f"--param {item!r} is invalid: use NAME=V1,V2,... with SI values") from None
         opts = {}
         if args.analysis == "campbell":
-            a, b, n = args.speeds.split(":") if args.speeds.count(":") == 2 else (1e3, 250e3, 200)
+            speeds = parse_speeds(args.speeds if args.speeds.count(":") == 2 else "1000:250000:200")
             opts = {"methods": [m.strip().upper() for m in args.methods.split(",")],
-                    "speeds_rpm": (float(a), float(b), int(n))}
+                    "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
         else:
             lo, hi = _speed_pair(args.speeds if args.speeds.count(":") == 1 else "1000:250000")
             opts = {"speed_rpm": (lo, hi), "duration": args.duration}
@@ -366,8 +366,9 @@ def cmd_sweep(args):
                 opts["ssp"] = str(Path(args.ssp).resolve())
         cases = grid(params, args.analysis, **opts)
     scheduler = "serial" if args.serial else args.scheduler
+    writable_dir(args.out)
     idx = run_study(cases, args.out, scheduler=scheduler, n_workers=args.workers, retry_failed=args.retry_failed,
-                    progress=lambda m: print(m, flush=True))
+                    progress=True)
     paths = plot_stability_map(args.out)
     sm = stability_map(args.out)
     n_fail = int((idx["status"] == "failed").sum())

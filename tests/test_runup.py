@@ -73,7 +73,7 @@ def test_tighter_tolerance_does_not_move_onsets(tc):
     for ca, cb in zip(a, b):
         assert ca.label == cb.label and ca.direction == cb.direction
         # acceptance: < 1 % change of the detected onset speeds
-        assert cb.onset_threshold_rpm == pytest.approx(ca.onset_threshold_rpm, rel=0.01)
+        assert cb.onset_threshold_rpm == pytest.approx(ca.onset_threshold_rpm, rel=0.01, nan_ok=True)
         assert cb.onset_rpm == pytest.approx(ca.onset_rpm, rel=0.01, nan_ok=True)  # NaN: present from the start
         assert cb.onset_hz == pytest.approx(ca.onset_hz, rel=0.01, nan_ok=True)
 
