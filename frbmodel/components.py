@@ -20,11 +20,12 @@ import numpy as np
 from numba import njit
 
 from .bearing import ring_rhs_kernel
-from .dynamics import add_unbalance_forces, rotor_acceleration, rotor_operators
-from .errors import FilmContactError, ParameterError
-from .film import check_model, correction_polys
+from .dynamics import add_unbalance_forces, rotor_acceleration, rotor_operators, rotor_polar_inertia, spin_acceleration
+from .errors import ConvergenceError, FilmContactError, IntegrationError, ParameterError, check_finite, check_positive
+from .film import check_model
+from .losses import bearing_loss_kernel, film_arrays
 from .rotor import GRAVITY
-from .units import rpm_to_rad_s
+from .units import rad_s_to_rpm, rpm_to_rad_s
 
 #: default ring integration substep [s] of :class:`BearingComponent` (and of the bearing FMU)
 BEARING_SUBSTEP = 5e-6
@@ -76,23 +77,33 @@ def _journal_on_path(j0, t, jj):
     jj[3] = j0[3] + j0[5] * t
 
 
+#: largest number of modified-Newton iterations of one SDIRK stage of the ring integrator
+NEWTON_MAX_ITER = 12
+
+
 @njit(cache=True)
-def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, J, refresh, eps_cap, free_spin, rsr_fixed):
+def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, J, refresh, eps_cap, free_spin, rsr_fixed,
+                max_iter):
     """Solve Y = base + gh·f(Y) for the ring state (in place in ``yn``, start value on entry) by modified Newton;
-    ``J`` holds I − gh ∂f/∂y and is recomputed when ``refresh`` or when convergence stalls. Returns both ε at the
-    solution and whether J was (re)computed."""
+    ``J`` holds I − gh ∂f/∂y and is recomputed when ``refresh`` or when convergence stalls. Without ``free_spin``
+    the ring speed is held at ``rsr_fixed``·w (not iterated). Converged when the last correction is below 1e-10 of
+    the outer clearance in position and 1e-9 of the ring speed (at least 1 rad/s) in speed.
+
+    Returns ``(eps_inner, eps_outer, fresh, converged, position_correction, speed_correction)``: both ε at the
+    solution, whether J was (re)computed, and the last correction (|Δx| + |Δy| [m], |Δω_FR| [rad/s])."""
     f = np.empty(5)
     fp = np.empty(5)
     ei, eo = 0.0, 0.0
     fresh = False
-    for it in range(12):
+    dpos, dspeed = math.inf, math.inf
+    for it in range(max_iter):
         if not free_spin:
             yn[4] = rsr_fixed * w
         _, _, ei, eo = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yn, w,
                                        eps_cap, f)
-        if not free_spin:
-            f[4] = 0.0
         r = yn - base - gh * f
+        if not free_spin:
+            r[4] = 0.0  # prescribed ring speed: row 4 of J is the identity, so Δω_FR = 0
         if refresh or it >= 4:
             for k in range(5):
                 typ = geom[1, 2] if k < 2 else (geom[1, 2] * 1e3 if k < 4 else 10.0)
@@ -101,27 +112,32 @@ def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, J, refre
                 yp[k] += d
                 ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yp, w, eps_cap, fp)
                 if not free_spin:
-                    fp[4] = 0.0
+                    fp[4] = f[4]
                 for i in range(5):
                     J[i, k] = (1.0 if i == k else 0.0) - gh * (fp[i] - f[i]) / d
             refresh = False
             fresh = True
         dy = np.linalg.solve(J, -r)
         yn += dy
-        if abs(dy[0]) + abs(dy[1]) < 1e-10 * geom[1, 2] and abs(dy[4]) < 1e-9 * max(abs(yn[4]), 1.0):
-            break
-    return ei, eo, fresh
+        dpos, dspeed = abs(dy[0]) + abs(dy[1]), abs(dy[4])
+        if dpos < 1e-10 * geom[1, 2] and dspeed < 1e-9 * max(abs(yn[4]), 1.0):
+            return ei, eo, fresh, True, dpos, dspeed
+    return ei, eo, fresh, False, dpos, dspeed
 
 
 @njit(cache=True)
 def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot, H, n_sub, eps_cap, free_spin,
-               rsr_fixed):
+               rsr_fixed, max_iter):
     """Integrate the ring over [0, H] with the journal on the path x(t) = j0[:2] + j0[2:4] t + j0[4:6] t²/2
     (velocity j0[2:4] + j0[4:6] t), ``n_sub`` substeps of the 2-stage SDIRK method (L-stable, second order: the
     ring-in-film modes reach ~20 kHz at high speed, where backward Euler's numerical damping shifts the whirl
     limit cycles); modified Newton with one FD Jacobian per macro step, refreshed when convergence stalls.
-    ``free_spin``: ring speed is a state; else ω_FR = rsr_fixed·ω_R. Returns the largest ε seen and the force on
-    the journal [N] at the end of the step (end of the path, new ring state)."""
+    ``free_spin``: ring speed is a state; else ω_FR = rsr_fixed·ω_R.
+
+    Returns ``(eps_max, fx, fy, failed_at, dpos, dspeed)``: the largest ε seen and the force on the journal [N] at
+    the end of the step (end of the path, new ring state, written into ``ring``); ``failed_at`` is −1 or the stage
+    time [s] in the step where the Newton iteration did not converge (then ``ring`` is unchanged and ``dpos`` [m],
+    ``dspeed`` [rad/s] are its last corrections)."""
     g = SDIRK_GAMMA
     h = H / n_sub
     y = ring.copy()
@@ -134,8 +150,11 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
         ta = (s + g) * h
         _journal_on_path(j0, ta, jj)
         y1 = y.copy()
-        ei, eo, fresh = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * ta, y, y1,
-                                          g * h, J, not have_jac, eps_cap, free_spin, rsr_fixed)
+        ei, eo, fresh, ok, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj,
+                                                      omega_r + omega_r_dot * ta, y, y1, g * h, J, not have_jac,
+                                                      eps_cap, free_spin, rsr_fixed, max_iter)
+        if not ok:
+            return eps_max, math.nan, math.nan, ta, dpos, dspeed
         have_jac = have_jac or fresh
         eps_max = max(eps_max, ei, eo)
         # stage 2 at t + h: Y2 = y + (1 − γ) h k1 + γh f(Y2), k1 = (Y1 − y) / (γh); y_new = Y2
@@ -143,8 +162,10 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
         tb = (s + 1) * h
         _journal_on_path(j0, tb, jj)
         y2 = y1.copy()
-        ei, eo, _ = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * tb, base, y2,
-                                        g * h, J, False, eps_cap, free_spin, rsr_fixed)
+        ei, eo, _, ok, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * tb,
+                                                  base, y2, g * h, J, False, eps_cap, free_spin, rsr_fixed, max_iter)
+        if not ok:
+            return eps_max, math.nan, math.nan, tb, dpos, dspeed
         y = y2
         eps_max = max(eps_max, ei, eo)
     ring[:] = y
@@ -152,7 +173,7 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot
     f = np.empty(5)
     fx, fy, _, _ = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], y,
                                    omega_r + omega_r_dot * H, eps_cap, f)
-    return eps_max, fx, fy
+    return eps_max, fx, fy, -1.0, 0.0, 0.0
 
 
 class JournalHistory:
@@ -221,17 +242,14 @@ class BearingComponent:
         self.gravity = float(gravity)
         self.substep = float(substep)
         self.contact_eps = float(contact_eps)
-        self.geom = np.array([[f.radius, f.length, f.clearance, f.viscosity] for f in (bearing.inner, bearing.outer)])
-        self.polys = np.zeros((2, 2, 5))
-        for k, film in enumerate((bearing.inner, bearing.outer)):
-            for m_, p in enumerate(correction_polys(film, self.film_model)):
-                self.polys[k, m_, 5 - p.size:] = p
+        self.geom, self.polys = film_arrays(bearing, self.film_model)
         self.ring = np.zeros(5)  # x, y [m], vx, vy [m/s], ω_FR [rad/s]
         self.rsr6 = ring_speed_ratio(bearing)
         self.eps = (0.0, 0.0)
         self.force_end = np.zeros(2)
         self.history = JournalHistory()
         self.path_accel = np.zeros(2)
+        self.newton_max_iter = NEWTON_MAX_ITER
 
     def initialize_equilibrium(self, load, omega_rotor):
         """Ring at the method-J equilibrium for vertical journal ``load`` [N] at ``omega_rotor`` [rad/s].
@@ -277,12 +295,51 @@ class BearingComponent:
         self.eps = (ei, eo)
         return np.array([fx, fy]), K, C, (ei, eo)
 
+    def losses(self, journal, omega_rotor):
+        """Film torque on the journal and friction power of both films at the current inputs and ring state.
+
+        Parameters
+        ----------
+        journal : array_like (4,)
+            Journal x, y [m], vx, vy [m/s].
+        omega_rotor : float
+            Rotor speed [rad/s].
+
+        Returns
+        -------
+        journal_torque : float
+            Inner-film torque on the journal about +z [N m] (negative: it brakes the rotor).
+        power_loss : float
+            Friction power of the inner and outer film [W] (:func:`frbmodel.losses.bearing_loss_kernel`).
+
+        Raises
+        ------
+        FilmContactError
+            When an ε reaches 1.
+        """
+        j = self._check(journal, omega_rotor)
+        ring = self._ring_for_force(omega_rotor)
+        t_j, p_i, p_o = bearing_loss_kernel(self.geom, self.polys, j[0], j[1], j[2], j[3], ring, float(omega_rotor),
+                                            math.inf)
+        if not (math.isfinite(t_j) and math.isfinite(p_i) and math.isfinite(p_o)):
+            raise FilmContactError(f"{self.bearing.name} bearing: a film's eccentricity ratio is >= 1 (the member "
+                                   "touches its wall)")
+        return float(t_j), float(p_i + p_o)
+
     def step(self, journal, omega_rotor, omega_rotor_dot, H, t=None, accel=None):
         """Advance the ring by ``H`` [s] with the journal extrapolated quadratically from ``journal``
         (x, y, vx, vy) [m, m/s] and the acceleration ``accel`` [m/s²]; by default the acceleration is the
         :class:`JournalHistory` estimate at time ``t`` [s] (zero, i.e. a linear path, when ``t`` is None).
         Afterwards ``force_end`` [N] is the force on the journal at the end of the step on that path and
-        ``path_accel`` [m/s²] the acceleration used."""
+        ``path_accel`` [m/s²] the acceleration used.
+
+        Raises
+        ------
+        ConvergenceError
+            The ring integrator's Newton iteration did not converge (the ring state is left unchanged; an FMU
+            reports Discard, so that a master can retry with a smaller step).
+        FilmContactError
+            A film's ε exceeded ``contact_eps``."""
         j = self._check(journal, omega_rotor)
         if accel is None:
             accel = self.history.acceleration(t, j, H) if t is not None else (0.0, 0.0)
@@ -298,8 +355,24 @@ class BearingComponent:
 
             rsr = ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99))
         path = np.array([j[0], j[1], j[2], j[3], ax, ay])
-        eps_max, fx, fy = _ring_step(*self._args(), path, self.ring, float(omega_rotor), float(omega_rotor_dot),
-                                     float(H), n_sub, 0.999, free, rsr)
+        ring0 = self.ring.copy()
+        try:
+            eps_max, fx, fy, failed_at, dpos, dspeed = _ring_step(
+                *self._args(), path, self.ring, float(omega_rotor), float(omega_rotor_dot), float(H), n_sub, 0.999,
+                free, rsr, int(self.newton_max_iter))
+        except np.linalg.LinAlgError:  # a non-finite Newton iterate: a numerical blow-up of the ring
+            self.ring[:] = ring0
+            raise IntegrationError(f"{self.bearing.name} bearing: the ring state became non-finite in the step at "
+                                   f"{rad_s_to_rpm(float(omega_rotor)):.0f} rpm (macro step {H:.3g} s); the ring "
+                                   "state is left at the start of the step") from None
+        if failed_at >= 0.0:
+            when = f"t = {t + failed_at:.9g} s" if t is not None else f"{failed_at:.3g} s into the step"
+            raise ConvergenceError(
+                f"{self.bearing.name} bearing: the ring integrator's Newton iteration did not converge in "
+                f"{self.newton_max_iter} iterations at {when}, rotor speed {rad_s_to_rpm(float(omega_rotor)):.0f} rpm "
+                f"(macro step {H:.3g} s, substep {H / n_sub:.3g} s): last correction {dpos:.3g} m in position "
+                f"(tolerance {1e-10 * self.bearing.outer.clearance:.3g} m), {dspeed:.3g} rad/s in ring speed; the "
+                "ring state is left at the start of the step")
         if not (math.isfinite(fx) and math.isfinite(fy) and np.isfinite(self.ring).all()):
             raise FilmContactError(f"{self.bearing.name} bearing: ring state became non-finite")
         if eps_max > self.contact_eps:
@@ -430,6 +503,10 @@ def _rotor_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, kb, cb, f
     return y, ph
 
 
+#: rotor speed sources of :class:`RotorComponent` (and the rotor FMU's ``speed_source``)
+SPEED_SOURCES = ("ramp", "input", "torque")
+
+
 class RotorComponent:
     """The FE rotor for co-simulation; journals receive the linearized bearing forces of the coupling scheme.
 
@@ -437,16 +514,43 @@ class RotorComponent:
     ----------
     system : Turbocharger
         Rotor, bearing nodes and gravity are taken from it.
-    speed : callable t -> (Ω [rad/s], Ω̇ [rad/s²])
+    speed : callable t -> (Ω [rad/s], Ω̇ [rad/s²]), optional
+        The prescribed speed of ``speed_source="ramp"`` (e.g. :func:`ramp_speed`).
     unbalance : sequence of Unbalance
     substep : float
         Trapezoidal substep [s] (default: the macro step itself, at most 5e-6 s).
+    speed_source : {"ramp", "input", "torque"}
+        Where the rotor speed comes from. "ramp": ``speed(t)``. "input": the ``speed_in`` argument of every
+        :meth:`step` [rad/s], held with the rate of the last two inputs (backward difference, zero at the first
+        step or after a gap) as the angular acceleration over the step. "torque": the speed is a state, with
+        J_p Ω̇ = T_drive + Σ T_J (:func:`frbmodel.dynamics.spin_acceleration`) from the ``drive_torque`` and
+        ``journal_torques`` arguments of every :meth:`step`, held over the step (first order in the step).
+    initial_speed : float, optional
+        Rotor speed at t = 0 [rad/s]: required for "torque"; for "input" the speed reported before the first step.
+    polar_inertia : float, optional
+        J_p [kg m²] of "torque" (default: :func:`frbmodel.dynamics.rotor_polar_inertia` of the system's rotor).
+
+    Attributes
+    ----------
+    rotor_speed : float
+        Current rotor speed [rad/s] (output ``rotor_speed`` of the rotor FMU).
+    phi : float
+        Current rotor rotation angle [rad] (output ``rotor_angle``).
     """
 
-    def __init__(self, system, speed, unbalance=(), substep=ROTOR_SUBSTEP):
+    def __init__(self, system, speed=None, unbalance=(), substep=ROTOR_SUBSTEP, speed_source="ramp",
+                 initial_speed=None, polar_inertia=None):
+        if speed_source not in SPEED_SOURCES:
+            raise ParameterError(f"speed_source = {speed_source!r} is unknown; valid: {', '.join(SPEED_SOURCES)}")
+        if speed_source == "ramp" and not callable(speed):
+            raise ParameterError("speed_source = 'ramp' needs a speed function t -> (omega [rad/s], omega_dot "
+                                 f"[rad/s2]); got speed = {speed!r}")
+        if speed_source == "torque" and initial_speed is None:
+            raise ParameterError("speed_source = 'torque' needs initial_speed [rad/s] (the spin is a state)")
         rotor = system.rotor
         self.system = system
         self.speed = speed
+        self.speed_source = speed_source
         self.n = rotor.n_dof
         self.eom = rotor.acceleration_matrices  # (M⁻¹, M⁻¹K, M⁻¹G)
         self.f_grav = rotor.gravity_load(system.gravity)
@@ -456,9 +560,15 @@ class RotorComponent:
         self.unb_me = np.array([float(u.amount) for u in unbalance])
         self.unb_phase = np.array([float(u.phase) for u in unbalance])
         self.substep = float(substep)
+        self.polar_inertia = check_positive("rotor polar_inertia", rotor_polar_inertia(rotor) if polar_inertia is None
+                                            else polar_inertia, "kg m^2")
         self.y = np.zeros(2 * self.n)
         self.phi = 0.0
         self.t = 0.0
+        w0 = 0.0 if initial_speed is None else check_finite("initial_speed", initial_speed, "rad/s")
+        self.omega = speed(0.0)[0] if speed_source == "ramp" else w0
+        self.omega_dot = 0.0
+        self._last_input = None  # (t, speed_in) of the previous step ("input")
 
     def journal(self, b):
         """(x, y, vx, vy) of bearing ``b``'s journal [m, m/s]."""
@@ -467,7 +577,37 @@ class RotorComponent:
     def node_xy(self, node):
         return self.y[4 * node:4 * node + 2].copy()
 
-    def step(self, H, forces, Ks, Cs, refs=None, path=None):
+    @property
+    def rotor_speed(self):
+        """Rotor speed [rad/s] at the current time."""
+        return float(self.speed(self.t)[0]) if self.speed_source == "ramp" else float(self.omega)
+
+    def current_speed(self):
+        """``(Ω [rad/s], Ω̇ [rad/s²])`` at the current time (the rate of the last step for "input"/"torque")."""
+        if self.speed_source == "ramp":
+            w, wd = self.speed(self.t)
+            return float(w), float(wd)
+        return float(self.omega), float(self.omega_dot)
+
+    def _spin(self, H, speed_in, drive_torque, journal_torques):
+        """Speed at the start of the step and the angular acceleration held over it, ``(Ω0, Ω̇)``."""
+        if self.speed_source == "ramp":
+            return self.speed(self.t)
+        if self.speed_source == "input":
+            w0 = check_finite("speed_in", speed_in, "rad/s")
+            last = self._last_input
+            gap = None if last is None else self.t - last[0]
+            wd = (w0 - last[1]) / gap if gap is not None and 0.0 < gap <= 4.0 * H else 0.0
+            return w0, wd
+        nb = self.jdofs.shape[0]
+        tj = np.asarray(journal_torques if journal_torques is not None else [], dtype=float).reshape(-1)
+        if tj.size != nb or not np.isfinite(tj).all():
+            raise ParameterError(f"speed_source = 'torque' needs {nb} finite journal torques [N m]; got "
+                                 f"{journal_torques!r}")
+        drive = check_finite("drive_torque", drive_torque, "N m")
+        return self.omega, spin_acceleration(drive, tj, self.polar_inertia)
+
+    def step(self, H, forces, Ks, Cs, refs=None, path=None, speed_in=None, drive_torque=0.0, journal_torques=None):
         """Advance by ``H`` [s] with per-bearing F0 [N], K [N/m], C [N s/m], linearized about the journal states
         ``refs`` [(x, y, vx, vy)] at which F0 was evaluated (default: the current journal states).
 
@@ -477,8 +617,20 @@ class RotorComponent:
         F_p(τ) = F0 + (F1 − F0) τ/H + K a τ (H − τ)/2, and corrected for the deviation from the path:
         F = F_p − K (x − x_p) − C (v − v_p) = F0 + [(F1 − F0)/H + K (v_ref + a H/2) + C a] τ − K (x − x_ref) −
         C (v − v_ref) — exact when the force is linear in the journal state. Without ``path``:
-        F0 − K (x − x_ref) − C (v − v_ref)."""
-        w0, wd = self.speed(self.t)
+        F0 − K (x − x_ref) − C (v − v_ref).
+
+        Speed inputs (see ``speed_source``): ``speed_in`` [rad/s] ("input"); ``drive_torque`` [N m] and
+        ``journal_torques`` (per bearing, the film torques on the journals [N m]) ("torque"). Over the step the speed
+        is Ω(τ) = Ω0 + Ω̇ τ.
+
+        Raises
+        ------
+        ParameterError
+            Missing or non-finite speed inputs.
+        IntegrationError
+            The rotor state became non-finite (a numerical blow-up: the macro step is too large for the coupling).
+        """
+        w0, wd = self._spin(H, speed_in, drive_torque, journal_torques)
         nb = self.jdofs.shape[0]
         f0 = np.asarray(forces, dtype=float).reshape(nb, 2)
         kb = np.asarray(Ks, dtype=float).reshape(nb, 2, 2)
@@ -491,12 +643,34 @@ class RotorComponent:
             f1 = np.asarray(path[0], dtype=float).reshape(nb, 2)
             acc = np.asarray(path[1], dtype=float).reshape(nb, 2)
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
-        self.y, self.phi = _rotor_step(self.y, self.phi, H, n_sub, *self.eom, self.f_grav, self.jdofs, kb, cb, f0,
-                                       refs, f1, acc, path is not None, w0, wd, self.unb_node, self.unb_me,
-                                       self.unb_phase)
+        try:
+            y, phi = _rotor_step(self.y, self.phi, H, n_sub, *self.eom, self.f_grav, self.jdofs, kb, cb, f0, refs, f1,
+                                 acc, path is not None, w0, wd, self.unb_node, self.unb_me, self.unb_phase)
+        except np.linalg.LinAlgError:  # the compiled solve refuses a non-finite intermediate state
+            y, phi = np.full_like(self.y, np.nan), math.nan
+        if not (np.all(np.isfinite(y)) and math.isfinite(phi)):
+            raise IntegrationError(f"rotor state became non-finite in the step t = {self.t:.6g} s + {H:.3g} s at "
+                                   f"{rad_s_to_rpm(w0):.0f} rpm: the macro step is too large for the coupling (the "
+                                   "state is left at the start of the step)")
+        if self.speed_source == "input":
+            self._last_input = (self.t, float(w0))
+        self.y, self.phi = y, phi
         self.t += H
-        if not np.all(np.isfinite(self.y)):
-            raise ParameterError("rotor state became non-finite: the macro step is too large for the coupling")
+        self.omega, self.omega_dot = float(w0 + wd * H), float(wd)
+
+    def state(self):
+        """The component's state as plain data (for FMU get/set state): rotor DoFs, angle, time, speed."""
+        return {"y": [float(x) for x in self.y], "phi": float(self.phi), "t": float(self.t),
+                "omega": float(self.omega), "omega_dot": float(self.omega_dot),
+                "last_input": None if self._last_input is None else list(self._last_input)}
+
+    def set_state(self, st):
+        """Restore a state from :meth:`state`."""
+        self.y[:] = st["y"]
+        self.phi, self.t = float(st["phi"]), float(st["t"])
+        self.omega, self.omega_dot = float(st.get("omega", self.omega)), float(st.get("omega_dot", 0.0))
+        last = st.get("last_input")
+        self._last_input = None if last is None else (float(last[0]), float(last[1]))
 
 
 def ramp_speed(start_rpm, end_rpm, ramp_time):
@@ -528,7 +702,7 @@ def rotor_state_space(rotor_comp):
         the system is assembled).
     """
     n = rotor_comp.n
-    w, wd = rotor_comp.speed(rotor_comp.t)
+    w, wd = rotor_comp.current_speed()
     A = rotor_comp.system.rotor.state_matrix(w, wd)
     minv = rotor_comp.eom[0]
     nb = rotor_comp.jdofs.shape[0]

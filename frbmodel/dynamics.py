@@ -6,7 +6,9 @@ the monolithic run-up (:func:`monolithic_rhs`) and the co-simulation rotor step
 (:mod:`frbmodel.components`) both call it, the latter with its linearized bearing terms added to the same
 matrices. :func:`monolithic_rhs` is dy/dt of the full state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring
 speeds, rotation angle] for a prescribed rotor speed, :func:`monolithic_jac` its finite-difference Jacobian and
-:func:`add_unbalance_forces` the rotating unbalance load.
+:func:`add_unbalance_forces` the rotating unbalance load. The rotor speed is either prescribed (a table) or, for a
+torque-driven rotor, a state appended to that layout whose rate is :func:`spin_acceleration`, the one spin
+equation (also used by the co-simulation rotor).
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from .bearing import ring_rhs_kernel
+from .losses import journal_torque_kernel
 
 
 @njit(cache=True)
@@ -98,15 +101,57 @@ def rotor_acceleration(minv, minv_k, minv_g, f, q, qd, omega, omega_dot, minv_c=
     return minv @ f - s @ q - d @ qd
 
 
+def rotor_polar_inertia(rotor):
+    """Polar moment of inertia J_p [kg m²] of the rotor about its spin axis: discs plus shaft elements,
+    J_p = Σ I_p,disc + Σ ρ (π/32)(D_o⁴ − D_i⁴) l (physics.md §7.3).
+
+    Parameters
+    ----------
+    rotor : Rotor
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> round(rotor_polar_inertia(frb.turbocharger().rotor), 10)
+    0.0001261863
+    """
+    shaft = sum(e.density * 2.0 * e.second_moment * e.length for e in rotor.shaft)
+    return float(shaft + sum(d.polar_inertia for d in rotor.discs))
+
+
 @njit(cache=True)
-def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag):
-    """Add the journal forces of both bearings to ``f`` and write the rings' derivatives into ``out``."""
+def spin_acceleration(drive_torque, journal_torques, polar_inertia):
+    """Rotor angular acceleration [rad/s²] of the torque-driven spin, J_p Ω̇ = T_drive + Σ_b T_J,b (physics.md §7.3):
+    the one implementation of the spin equation (monolithic run-up and co-simulation rotor).
+
+    Parameters
+    ----------
+    drive_torque : float
+        Net external torque about +z [N m] (e.g. turbine minus compressor).
+    journal_torques : ndarray (nb,)
+        Inner-film torques on the journals about +z [N m] (negative: braking),
+        :func:`frbmodel.losses.journal_torque_kernel`.
+    polar_inertia : float
+        Rotor polar moment of inertia J_p [kg m²] (:func:`rotor_polar_inertia`).
+    """
+    total = drive_torque
+    for b in range(journal_torques.size):
+        total += journal_torques[b]
+    return total / polar_inertia
+
+
+@njit(cache=True)
+def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj):
+    """Add the journal forces of both bearings to ``f`` and write the rings' derivatives into ``out``; with a
+    ``tj`` of size 2, also the film torques on the journals [N m] (zero on springs)."""
     base = 2 * n_r
     ring = np.empty(5)
     dring = np.empty(5)
     for b in range(2):
         j = 4 * jn[b]
         r0 = base + 4 * b
+        if tj.size:
+            tj[b] = 0.0
         if springs > 0.0:
             f[j] -= springs * y[j]
             f[j + 1] -= springs * y[j + 1]
@@ -126,13 +171,16 @@ def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, spr
         for k in range(4):
             out[r0 + k] = dring[k]
         out[base + 8 + b] = dring[4]
+        if tj.size:
+            tj[b] = journal_torque_kernel(geom[b, 0], y[j] - ring[0], y[j + 1] - ring[1], fix, fiy, w, ring[4],
+                                          eps_cap)
 
 
 @njit(cache=True)
 def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
-                   tg, wg, wdg, springs, eps_cap, diag):
+                   tg, wg, wdg, springs, eps_cap, diag, polar_inertia=0.0, drive_torque=None):
     """dy/dt of the monolithic model for the state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds,
-    rotation angle], written into ``out`` and returned.
+    rotation angle (, rotor speed)], written into ``out`` and returned.
 
     ``eom`` = (M⁻¹, M⁻¹K, M⁻¹G) (:attr:`Rotor.acceleration_matrices`); ``f_grav`` the nodal gravity load [N];
     ``jn`` the bearing nodes; ``geom`` (2, 2, 4): (bearing, film, [R, L, c, μ]); ``polys`` (2, 2, 2, 5):
@@ -140,12 +188,24 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
     profile (uniform grid [s], Ω [rad/s], Ω̇ [rad/s²]); ``springs`` > 0: journals on isotropic linear springs of
     that stiffness [N/m] instead of films (rings idle). ``diag`` (4,) receives the film eccentricity ratios
     (turbine inner, outer, compressor inner, outer).
+    Torque-driven rotor: ``drive_torque`` (the drive torque [N m] on the grid ``tg``) and ``polar_inertia`` J_p
+    [kg m²]; the rotor speed is then the last state, with rate :func:`spin_acceleration` (``wg``, ``wdg`` unused).
     """
-    w = interp_uniform(t, tg, wg)
-    wd = interp_uniform(t, tg, wdg)
+    fb = np.zeros(n_r)
+    if drive_torque is None:
+        tj = np.empty(0)
+        w = interp_uniform(t, tg, wg)
+        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj)
+        wd = interp_uniform(t, tg, wdg)
+    else:
+        tj = np.empty(2)
+        w = y[2 * n_r + 11]
+        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj)
+        wd = spin_acceleration(interp_uniform(t, tg, drive_torque), tj, polar_inertia)
+        out[2 * n_r + 11] = wd
     f = f_grav.copy()
     add_unbalance_forces(f, y[2 * n_r + 10], w, wd, unb_node, unb_me, unb_phase)
-    _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag)
+    f += fb  # the bearing loads after the unbalance, as before the torque-driven option (same rounding)
     q = y[:n_r]
     qd = y[n_r:2 * n_r]
     out[:n_r] = qd
@@ -156,18 +216,18 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
 
 @njit(cache=True)
 def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
-                   unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag):
+                   unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, polar_inertia=0.0, drive_torque=None):
     """Forward-difference Jacobian of :func:`monolithic_rhs` into ``jac`` (all in compiled code: one RHS call per
     state; step 1.5e-8 · max(|y_k|, scale_k))."""
     n = y.size
     monolithic_rhs(t, y, f0, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
-                   tg, wg, wdg, springs, eps_cap, diag)
+                   tg, wg, wdg, springs, eps_cap, diag, polar_inertia, drive_torque)
     yp = y.copy()
     for k in range(n):
         h = 1.5e-8 * max(abs(y[k]), scale[k])
         yp[k] = y[k] + h
         monolithic_rhs(t, yp, work, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
-                       unb_phase, tg, wg, wdg, springs, eps_cap, diag)
+                       unb_phase, tg, wg, wdg, springs, eps_cap, diag, polar_inertia, drive_torque)
         for i in range(n):
             jac[i, k] = (work[i] - f0[i]) / h
         yp[k] = y[k]

@@ -21,6 +21,11 @@ class ConvergenceError(FRBError, RuntimeError):
     """An iterative solve (equilibrium, ring speed, ring integrator Newton loop) did not converge."""
 
 
+class IntegrationError(FRBError, ArithmeticError):
+    """A time integration blew up numerically (a state became non-finite): not bad input, but a step too large
+    for the dynamics or the coupling."""
+
+
 class RunStopped(FRBError):
     """A long run (run-up, co-simulation) ended before its end time: wall contact, integrator failure, an FMU
     failure or an interruption. ``.result`` holds what was computed up to there; the files written so far stay on

@@ -1,7 +1,9 @@
 """Named-column, streamed time-series results of run-ups and co-simulations.
 
 The column schema follows the system: one group of columns per bearing (ring speed, RSR, journal and ring
-position, the eccentricity ratio of its inner and outer film) and per disc (its displacement). The monolithic
+position, the eccentricity ratio of its inner and outer film), per disc (its displacement), and last per bearing the
+film torque on the journal and the bearing's friction power (:mod:`frbmodel.losses`). Files written before the
+last two existed load with NaN there. The monolithic
 run-up (:func:`frbmodel.runup.runup`) and the co-simulation master (:mod:`frbmodel.cosim.master`) both fill rows by
 name through :meth:`RunupSchema.row` and stream them with a :class:`Recorder`, so their files are read back by the
 same :meth:`RunupResult.load`.
@@ -76,6 +78,10 @@ class RunupSchema:
         return cls(bearings, discs)
 
     @staticmethod
+    def _loss_columns(b):
+        return [f"journal torque {b} [N m]", f"power loss {b} [W]"]
+
+    @staticmethod
     def _bearing_columns(b):
         return [f"ring speed {b} [rad/s]", f"RSR {b} [-]", f"journal {b} x [m]", f"journal {b} y [m]",
                 f"ring {b} x [m]", f"ring {b} y [m]", f"eps {b} inner [-]", f"eps {b} outer [-]"]
@@ -95,21 +101,26 @@ class RunupSchema:
             cols += [f"{kind} {b} {q} [m]" for b in self.bearings for q in "xy"]
         cols += [f"eps {lab} [-]" for lab in self.film_labels]
         cols += [f"{d} {q} [m]" for d in self.discs for q in "xy"]
+        cols += [c for b in self.bearings for c in self._loss_columns(b)]
         return cols
 
-    def row(self, time_s, speed_rpm, ring_speed, journal, ring, eps, discs):
+    def row(self, time_s, speed_rpm, ring_speed, journal, ring, eps, discs, journal_torque=None, power_loss=None):
         """One row by name: ``ring_speed`` (nb,) [rad/s]; ``journal``, ``ring`` (nb, 2) [m] relative to the housing;
-        ``eps`` (nb, 2) inner/outer film eccentricity ratios; ``discs`` (nd, 2) disc displacements [m].
-        The RSR is ring speed / rotor speed (NaN at zero rotor speed)."""
+        ``eps`` (nb, 2) inner/outer film eccentricity ratios; ``discs`` (nd, 2) disc displacements [m];
+        ``journal_torque`` (nb,) film torques on the journals [N m] and ``power_loss`` (nb,) the bearings' friction
+        power [W] (NaN when not given). The RSR is ring speed / rotor speed (NaN at zero rotor speed)."""
         nb, nd = len(self.bearings), len(self.discs)
         ring_speed = np.asarray(ring_speed, dtype=float).reshape(nb)
         omega = speed_rpm * RPM
         rsr = ring_speed / omega if omega != 0.0 else np.full(nb, math.nan)
+        torque = np.full(nb, math.nan) if journal_torque is None else np.asarray(journal_torque, dtype=float)
+        power = np.full(nb, math.nan) if power_loss is None else np.asarray(power_loss, dtype=float)
         return np.concatenate([[time_s, speed_rpm], np.column_stack([ring_speed, rsr]).ravel(),
                                np.asarray(journal, dtype=float).reshape(2 * nb),
                                np.asarray(ring, dtype=float).reshape(2 * nb),
                                np.asarray(eps, dtype=float).reshape(2 * nb),
-                               np.asarray(discs, dtype=float).reshape(2 * nd)])
+                               np.asarray(discs, dtype=float).reshape(2 * nd),
+                               np.column_stack([torque.reshape(nb), power.reshape(nb)]).ravel()])
 
     def eps_slice(self):
         """Slice of the eccentricity columns in a row."""
@@ -232,7 +243,10 @@ class RunupResult:
     journal, ring : dict bearing name -> (n, 2) positions [m] relative to the housing
     eccentricity : (n, 2 nb) ε of the films, in the order of :attr:`film_labels`
     displacement : dict disc name -> (n, 2) [m]
-    status : "finished" | "stopped" | "interrupted"
+    journal_torque : dict bearing name -> (n,) film torque on the journal about +z [N m] (negative: braking)
+    power_loss : dict bearing name -> (n,) friction power of both films of the bearing [W]
+        (NaN where the run did not record them: linear springs, results of older versions, FMUs without the
+        outputs)
     message : str
     meta : dict
         Metadata of the run (system, tolerances, wall time, ...), as in ``runup.json``.
@@ -248,6 +262,8 @@ class RunupResult:
     status: str = "finished"
     message: str = ""
     meta: dict = field(default_factory=dict)
+    journal_torque: dict = field(default_factory=dict)
+    power_loss: dict = field(default_factory=dict)
 
     @property
     def schema(self):
@@ -283,6 +299,9 @@ class RunupResult:
             cols += [a[:, k] for a in d.values() for k in range(2)]
         cols += [self.eccentricity[:, k] for k in range(2 * nb)]
         cols += [a[:, k] for a in self.displacement.values() for k in range(2)]
+        nan = np.full(self.time.shape, np.nan)
+        for b in self.journal:
+            cols += [self.journal_torque.get(b, nan), self.power_loss.get(b, nan)]
         return np.column_stack(cols)
 
     @classmethod
@@ -301,8 +320,10 @@ class RunupResult:
 
     @classmethod
     def from_dataframe(cls, df, meta=None):
-        """Result from a table with the columns of :attr:`RunupSchema.columns`."""
-        return cls.from_rows(RunupSchema.from_columns(df.columns), df.to_numpy(dtype=float), meta)
+        """Result from a table with the columns of :attr:`RunupSchema.columns` (the journal torque and power loss
+        columns may be missing: NaN then)."""
+        schema = RunupSchema.from_columns(df.columns)
+        return cls.from_rows(schema, df.reindex(columns=schema.columns).to_numpy(dtype=float), meta)
 
     @classmethod
     def from_rows(cls, schema, rows, meta=None):
@@ -319,5 +340,8 @@ class RunupResult:
         ecc = rows[:, c:c + 2 * nb]
         c += 2 * nb
         disp = {d: rows[:, c + 2 * i:c + 2 * i + 2] for i, d in enumerate(schema.discs)}
+        c += 2 * len(schema.discs)
+        torque = {b: rows[:, c + 2 * i] for i, b in enumerate(schema.bearings)}
+        power = {b: rows[:, c + 2 * i + 1] for i, b in enumerate(schema.bearings)}
         return cls(rows[:, 0], rows[:, 1], ring_speed, journal, ring, ecc, disp, meta.get("status", "finished"),
-                   meta.get("message", ""), meta)
+                   meta.get("message", ""), meta, torque, power)

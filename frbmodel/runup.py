@@ -3,7 +3,10 @@
 The equations are physics.md §7: all rotor FE DoFs with gyroscopics (``M q̈ + Ω G q̇ + (K + Ω̇ G) q``),
 gravity, optional unbalance per wheel, both rings' lateral DoFs and spin speed (ring speed is a state, driven
 by the film torques), and the nonlinear film forces of :mod:`frbmodel.film` (short or finite-length corrected).
-The rotor speed follows a prescribed profile. The right-hand side and its finite-difference Jacobian are
+The rotor speed follows a prescribed profile, or, torque-driven (:meth:`SpeedProfile.torque`), is a state driven by a
+drive torque and braked by the journals' film torques (:func:`frbmodel.dynamics.spin_acceleration`). The
+recorded results include the film torque on each journal and each bearing's friction power
+(:func:`frbmodel.losses.bearing_loss_kernel`). The right-hand side and its finite-difference Jacobian are
 compiled with numba; the stiff, error-controlled integration is LSODA (scipy).
 """
 from __future__ import annotations
@@ -17,10 +20,12 @@ import numpy as np
 
 from .dynamics import monolithic_jac as _jac
 from .dynamics import monolithic_rhs as _rhs
+from .dynamics import rotor_polar_inertia
 from .equilibrium import bearing_equilibrium
-from .errors import ParameterError, RunupStopped, check_positive
-from .film import check_model, correction_polys
+from .errors import ParameterError, RunupStopped, check_finite, check_positive
+from .film import check_model
 from .interrupt import deferred_signals
+from .losses import bearing_loss_kernel, film_arrays
 from .progress import simulation_bar
 from .recorder import Recorder, RunupResult, RunupSchema
 from .units import RPM
@@ -51,10 +56,12 @@ def check_speed(name, speed_rpm):
 
 @dataclass
 class SpeedProfile:
-    """Rotor speed vs time, tabulated (linear interpolation inside the RHS).
+    """Rotor speed vs time, tabulated (linear interpolation inside the RHS), or a torque-driven rotor.
 
     Build with :meth:`ramp`, :meth:`constant`, :meth:`exponential` or :meth:`from_function`. A profile whose end
-    speed is below its start speed is a run-down (:attr:`direction` ``"down"``).
+    speed is below its start speed is a run-down (:attr:`direction` ``"down"``). :meth:`torque` makes the rotor
+    speed a state instead: J_p Ω̇ = T_drive(t) + Σ T_J (physics.md §7.3); then ``omega`` holds only the start speed
+    and ``drive_torque`` the drive torque [N m] on the grid ``t``.
 
     Examples
     --------
@@ -67,10 +74,19 @@ class SpeedProfile:
     omega: np.ndarray  # [rad/s]
     omega_dot: np.ndarray  # [rad/s²]
     description: str
+    drive_torque: np.ndarray | None = None  # [N m] on the grid t (torque-driven rotor), else None
+
+    @property
+    def torque_driven(self):
+        """True if the rotor speed is a state driven by :attr:`drive_torque` (:meth:`torque`)."""
+        return self.drive_torque is not None
 
     @property
     def direction(self):
-        """``"up"``, ``"down"`` or ``"constant"``: the sign of the end speed minus the start speed."""
+        """``"up"``, ``"down"`` or ``"constant"``: the sign of the end speed minus the start speed (torque-driven:
+        ``"up"`` if the mean drive torque is positive, else ``"down"``: the films only brake)."""
+        if self.torque_driven:
+            return "up" if float(np.mean(self.drive_torque)) > 0 else "down"
         d = float(self.omega[-1] - self.omega[0])
         return "up" if d > 0 else "down" if d < 0 else "constant"
 
@@ -120,7 +136,45 @@ class SpeedProfile:
         w = rpm * RPM
         return cls(t, w, np.gradient(w, t), "user function")
 
+    @classmethod
+    def torque(cls, drive_torque_Nm, start_rpm, duration, n=20001):
+        """Torque-driven rotor: the speed starts at ``start_rpm`` and follows J_p Ω̇ = T_drive(t) + Σ T_J, with the
+        journals' film torques T_J braking it (physics.md §7.3; J_p from the system's rotor).
+
+        Parameters
+        ----------
+        drive_torque_Nm : float or callable
+            Net external torque about +z [N m] (turbine minus compressor), constant or ``fun(t [s]) -> N m``
+            (tabulated on ``n`` points).
+        start_rpm : float
+            Initial rotor speed [rpm].
+        duration : float
+            [s]
+
+        Examples
+        --------
+        >>> p = SpeedProfile.torque(2e-3, 2000, 0.1)
+        >>> p.torque_driven, p.description
+        (True, 'torque-driven from 2000 rpm, drive torque 0.002 N m, 0.1 s')
+        """
+        start_rpm, _, duration = cls._checked(start_rpm, start_rpm, duration)
+        if callable(drive_torque_Nm):
+            t = np.linspace(0.0, duration, n)
+            tq = np.array([float(drive_torque_Nm(x)) for x in t])
+            text = "user function"
+        else:
+            t = np.array([0.0, duration])
+            tq = np.full(2, check_finite("drive torque", drive_torque_Nm, "N m"))
+            text = f"{tq[0]:g} N m"
+        bad = np.flatnonzero(~np.isfinite(tq))
+        if bad.size:
+            raise ParameterError(f"drive torque = {tq[bad[0]]!r} N m at t = {t[bad[0]]:g} s is invalid: it must be "
+                                 "finite")
+        return cls(t, np.full(t.size, start_rpm * RPM), np.zeros(t.size),
+                   f"torque-driven from {start_rpm:.0f} rpm, drive torque {text}, {duration:g} s", tq)
+
     def __call__(self, t):
+        """Prescribed rotor speed [rad/s] at ``t`` [s] (for a torque-driven profile: the start speed)."""
         return np.interp(t, self.t, self.omega)
 
 
@@ -137,8 +191,8 @@ class Unbalance:
 class Problem:
     """Constant data of a monolithic run-up: the compiled RHS's arguments and the state layout.
 
-    State y = [q (n_r), q̇ (n_r), ring_b (x, y, vx, vy) for each bearing, ring speeds, rotation angle].
-    Build with :func:`build_problem`.
+    State y = [q (n_r), q̇ (n_r), ring_b (x, y, vx, vy) for each bearing, ring speeds, rotation angle] and, for a
+    torque-driven rotor, the rotor speed [rad/s] last. Build with :func:`build_problem`.
     """
 
     system: object
@@ -148,10 +202,22 @@ class Problem:
     n_rotor: int
     springs: float
     diag: np.ndarray  # filled by each RHS call with the films' eccentricity ratios
+    polar_inertia: float = 0.0  # rotor J_p [kg m²]
+    geom: np.ndarray | None = None  # (2, 2, 4) film data per bearing (frbmodel.losses.film_arrays)
+    polys: np.ndarray | None = None  # (2, 2, 2, 5) correction polynomials per bearing
+
+    @property
+    def torque_driven(self):
+        return self.profile.torque_driven
 
     @property
     def n_states(self):
-        return 2 * self.n_rotor + 11
+        return 2 * self.n_rotor + 11 + (1 if self.torque_driven else 0)
+
+    @property
+    def speed_index(self):
+        """Index of the rotor speed in the state (torque-driven rotor), else None."""
+        return 2 * self.n_rotor + 11 if self.torque_driven else None
 
     def ring_index(self, b):
         """Index of bearing ``b``'s ring x in the state."""
@@ -163,8 +229,10 @@ class Problem:
     def rhs(self, t, y, out):
         return _rhs(t, y, out, *self.args)
 
-    def speed(self, t):
-        """Rotor speed [rad/s] at time ``t`` [s]."""
+    def speed(self, t, y=None):
+        """Rotor speed [rad/s] at time ``t`` [s] (torque-driven: from the state ``y``)."""
+        if self.torque_driven:
+            return float(y[self.speed_index])
         return float(np.interp(t, self.profile.t, self.profile.omega))
 
 
@@ -185,13 +253,9 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
         raise ParameterError(f"the run-up needs exactly 2 bearings, the system has {len(system.bearings)}")
     rotor = system.rotor
     springs = 0.0 if linear_springs is None else check_positive("linear_springs", linear_springs, "N/m")
-    geom = np.array([[[f.radius, f.length, f.clearance, f.viscosity] for f in (b.inner, b.outer)]
-                     for b in system.bearings])
-    polys = np.zeros((2, 2, 2, 5))
-    for i, b in enumerate(system.bearings):
-        for k, film in enumerate((b.inner, b.outer)):
-            for m_, p in enumerate(correction_polys(film, film_model)):
-                polys[i, k, m_, 5 - p.size:] = p
+    arrays = [film_arrays(b, film_model) for b in system.bearings]
+    geom = np.array([a[0] for a in arrays])
+    polys = np.array([a[1] for a in arrays])
     unb_node = np.array([rotor.disc(u.disc).node for u in unbalance], dtype=np.int64)
     unb_me = np.array([check_positive(f"unbalance of {u.disc}", u.amount, "kg m", allow_zero=True)
                        for u in unbalance])
@@ -204,7 +268,13 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
             np.array([b.node for b in system.bearings], dtype=np.int64), geom, polys,
             np.array([b.ring_mass for b in system.bearings]), np.array([b.ring_inertia for b in system.bearings]),
             system.gravity, unb_node, unb_me, unb_phase, tg, profile.omega, profile.omega_dot, springs, EPS_CAP, diag)
-    return Problem(system, profile, film_model, args, rotor.n_dof, springs, diag)
+    jp = rotor_polar_inertia(rotor)
+    if profile.torque_driven:
+        if not jp > 0:
+            raise ParameterError(f"rotor polar inertia = {jp!r} kg m^2 is invalid for a torque-driven rotor: valid "
+                                 "range > 0")
+        args = args + (jp, np.asarray(profile.drive_torque, dtype=float))
+    return Problem(system, profile, film_model, args, rotor.n_dof, springs, diag, jp, geom, polys)
 
 
 def initial_state(problem, initial="equilibrium", perturbation=0.05):
@@ -216,6 +286,8 @@ def initial_state(problem, initial="equilibrium", perturbation=0.05):
     system, rotor, n_r = problem.system, problem.system.rotor, problem.n_rotor
     w0 = float(problem.profile.omega[0])
     y0 = np.zeros(problem.n_states)
+    if problem.torque_driven:
+        y0[problem.speed_index] = w0
     clear_i = [b.inner.clearance for b in system.bearings]
     clear_o = [b.outer.clearance for b in system.bearings]
     if problem.springs > 0:
@@ -248,12 +320,23 @@ def initial_state(problem, initial="equilibrium", perturbation=0.05):
     return y0
 
 
+def _speed_bound(problem):
+    """Largest rotor speed [rad/s] of the run: the profile's, or for a torque-driven rotor the start speed plus the
+    largest drive torque acting alone (the films only brake) over the whole duration, at most MAX_SPEED_RPM."""
+    w_max = max(float(problem.profile.omega[0]), float(problem.profile.omega.max()))
+    if problem.torque_driven:
+        tq = max(0.0, float(np.max(problem.profile.drive_torque)))
+        w_max = min(w_max + tq * float(problem.profile.t[-1]) / problem.polar_inertia, MAX_SPEED_RPM * RPM)
+    return w_max
+
+
 def atol_vector(problem, atol_scale=1.0):
     """LSODA absolute tolerances per state: ``1e-9 m × atol_scale`` on displacements, scaled by a 0.03 m arm for
-    rotations, by the largest rotor speed for velocities, 1e-6 × that speed for the ring speeds [rad/s], 1e-6 rad
-    for the rotation angle. Returns (atol, finite-difference scale)."""
+    rotations, by the largest rotor speed for velocities, 1e-6 × that speed for the ring speeds and the rotor speed
+    of a torque-driven rotor [rad/s], 1e-6 rad for the rotation angle. Returns (atol, finite-difference scale).
+    The largest speed of a torque-driven run is bounded by the drive torque alone (:func:`_speed_bound`)."""
     n_r = problem.n_rotor
-    w_max = max(float(problem.profile.omega[0]), float(problem.profile.omega.max()))
+    w_max = _speed_bound(problem)
     pos_tol = 1e-9 * atol_scale
     atol = np.empty(problem.n_states)
     atol[:n_r] = pos_tol
@@ -263,8 +346,10 @@ def atol_vector(problem, atol_scale=1.0):
         b = problem.ring_index(i)
         atol[b:b + 2] = pos_tol
         atol[b + 2:b + 4] = pos_tol * w_max
-    atol[2 * n_r + 8:2 * n_r + 10] = 1e-6 * float(problem.profile.omega.max()) * atol_scale
+    atol[2 * n_r + 8:2 * n_r + 10] = 1e-6 * w_max * atol_scale
     atol[2 * n_r + 10] = 1e-6 * atol_scale
+    if problem.torque_driven:
+        atol[problem.speed_index] = 1e-6 * w_max * atol_scale
     return atol, np.maximum(atol * 1e3, 1e-12)
 
 
@@ -277,6 +362,24 @@ def static_rotor_state(system, journal_positions):
     return system.rotor.static_deflection([b.node for b in system.bearings], journal_positions, system.gravity)
 
 
+def _losses(problem, y, w):
+    """Film torque on each journal [N m] and friction power of each bearing [W] in state ``y`` at rotor speed ``w``
+    [rad/s] (:func:`frbmodel.losses.bearing_loss_kernel`, positions capped as in the RHS); NaN on linear springs."""
+    nb = len(problem.system.bearings)
+    if problem.springs > 0:
+        return np.full(nb, np.nan), np.full(nb, np.nan)
+    n_r = problem.n_rotor
+    torque, power = np.empty(nb), np.empty(nb)
+    for i, b in enumerate(problem.system.bearings):
+        j = 4 * b.node
+        r = problem.ring_index(i)
+        ring = np.append(y[r:r + 4], y[problem.ring_speed_index(i)])
+        t_j, p_i, p_o = bearing_loss_kernel(problem.geom[i], problem.polys[i], y[j], y[j + 1], y[n_r + j],
+                                            y[n_r + j + 1], ring, w, EPS_CAP)
+        torque[i], power[i] = t_j, p_i + p_o
+    return torque, power
+
+
 def _sample(problem, schema, t, y, buf):
     """One named result row of state ``y`` at time ``t``."""
     problem.rhs(t, y, buf)  # fills problem.diag with the films' eccentricities
@@ -285,8 +388,10 @@ def _sample(problem, schema, t, y, buf):
     ring = [y[problem.ring_index(i):problem.ring_index(i) + 2] for i in range(2)]
     eps = problem.diag if problem.springs == 0 else np.zeros(4)
     discs = [y[4 * d.node:4 * d.node + 2] for d in system.rotor.discs]
-    w = problem.speed(t)
-    return schema.row(t, w / RPM, y[2 * n_r + 8:2 * n_r + 10], journal, ring, eps, discs)
+    w = problem.speed(t, y)
+    torque, power = _losses(problem, y, w)
+    return schema.row(t, w / RPM, y[2 * n_r + 8:2 * n_r + 10], journal, ring, eps, discs, journal_torque=torque,
+                      power_loss=power)
 
 
 def _contact_message(schema, row, contact_eps):
@@ -299,6 +404,15 @@ def _contact_message(schema, row, contact_eps):
     member = "journal" if film == "inner" else "ring"
     return (f"{bearing} bearing, {film} film: eccentricity ratio {ecc[worst]:.4f} exceeds contact_eps = "
             f"{contact_eps} (the {member} reaches its wall) at t = {row[0]:.6g} s, rotor speed {row[1]:.0f} rpm; "
+            "results up to there are kept")
+
+
+def _speed_message(row):
+    """Message when the speed of a torque-driven rotor in ``row`` left 0 < speed <= MAX_SPEED_RPM, else None."""
+    if 0.0 < row[1] <= MAX_SPEED_RPM:
+        return None
+    return (f"rotor speed {row[1]:.0f} rpm at t = {row[0]:.6g} s left the valid range 0 < speed <= "
+            f"{MAX_SPEED_RPM:.0e} rpm (drive torque too small to overcome the film friction, or too large); "
             "results up to there are kept")
 
 
@@ -328,13 +442,16 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
         for k in range(1, t_out.size):
             y = solver.integrate(t_out[k])
             if not solver.successful() or not np.all(np.isfinite(y)):
-                message = (f"integrator failed at t = {solver.t:.6g} s, speed {problem.speed(solver.t) / RPM:.0f} "
+                w_fail = problem.speed(solver.t, solver.y)
+                message = (f"integrator failed at t = {solver.t:.6g} s, speed {w_fail / RPM:.0f} "
                            f"rpm (LSODA return code {solver.get_return_code()}); results up to there are kept")
                 status = "stopped"
                 break
             row = _sample(problem, rec.schema, t_out[k], y, f_buf)
             rec.append(row)
             message = _contact_message(rec.schema, row, contact_eps) if problem.springs == 0 else None
+            if not message and problem.torque_driven:
+                message = _speed_message(row)
             if message:
                 status = "stopped"
                 break
@@ -359,7 +476,9 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     duration : float
         Simulated time [s].
     profile : SpeedProfile or callable, optional
-        ``SpeedProfile.constant(...)``, ``SpeedProfile.ramp(...)``, or ``fun(t) -> rpm``.
+        ``SpeedProfile.constant(...)``, ``SpeedProfile.ramp(...)``, ``fun(t) -> rpm``, or a torque-driven rotor
+        ``SpeedProfile.torque(drive_torque_Nm, start_rpm, duration)`` (the speed is then a state; the recorded
+        ``journal torque <bearing> [N m]`` columns are the film torques that brake it).
     film_model : {"short", "short_corrected"}, optional
         Default: the system's.
     unbalance : sequence of Unbalance
@@ -419,7 +538,9 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     meta = {"system": system.to_dict(), "film_model": model, "profile": profile.description, "duration_s": duration,
             "output_rate_hz": output_rate_hz, "rtol": rtol, "atol_displacement_m": 1e-9 * atol_scale,
             "unbalance": [u.__dict__ for u in unbalance], "linear_springs_N_per_m": linear_springs,
-            "perturbation_of_clearance": perturbation, "contact_eps": contact_eps, "units": "SI; speed in rpm"}
+            "perturbation_of_clearance": perturbation, "contact_eps": contact_eps, "units": "SI; speed in rpm",
+            **({"speed_source": "torque", "polar_inertia_kg_m2": problem.polar_inertia} if problem.torque_driven
+               else {})}
     t_wall = time.perf_counter()
     with Recorder(RunupSchema.from_system(system), t_out.size, out_dir, meta) as rec:
         status, message, nfev, njev = _integrate(

@@ -158,3 +158,39 @@ def test_bad_acceleration_is_refused():
     bc, journal, _, omega = _whirling_bearing()
     with pytest.raises(frb.ParameterError, match="acceleration"):
         bc.step(journal(0.0), omega, 0.0, 1e-5, accel=(math.nan, 0.0))
+
+
+def test_ring_newton_non_convergence_is_reported():
+    """Issue #10: the ring integrator's Newton loop must not return unconverged silently. A 2 ms macro step drives
+    the extrapolated journal path of a 400 Hz whirl far through the film (a τ²/2 ≈ 0.13 mm), where the stage
+    equations have no nearby solution; a single allowed iteration cannot converge either. Both raise
+    ConvergenceError naming the bearing, time and speed, and leave the ring state untouched."""
+    bc, journal, w, omega = _whirling_bearing()
+    j0 = journal(0.0)
+    ring0 = bc.ring.copy()
+    with pytest.raises(frb.ConvergenceError, match=r"turbine bearing: .*did not converge in 12 iterations at t = .* "
+                                                   r"150000 rpm .*last correction"):
+        bc.step(j0, omega, 0.0, 2e-3, t=0.0, accel=-w * w * (j0[:2] - journal.centre))
+    np.testing.assert_array_equal(bc.ring, ring0)
+    bc.newton_max_iter = 1
+    with pytest.raises(frb.ConvergenceError, match="did not converge in 1 iterations"):
+        bc.step(j0, omega, 0.0, 1e-5)
+    np.testing.assert_array_equal(bc.ring, ring0)
+    bc.newton_max_iter = 12  # the default converges on the same step
+    bc.step(j0, omega, 0.0, 1e-5)
+
+
+def test_rotor_blow_up_is_an_integration_error():
+    """A numerical blow-up (here a linearly unstable negative support stiffness whose growth overflows) is an
+    IntegrationError (an ArithmeticError), not a ParameterError: the input was valid, the integration failed."""
+    from frbmodel.errors import IntegrationError
+
+    tc = frb.turbocharger(36e-6)
+    rot = RotorComponent(tc, ramp_speed(50e3, 50e3, 1.0))
+    rot.y[0] = 1e-6
+    K, C, F = [np.eye(2) * -1e9] * 2, [np.zeros((2, 2))] * 2, [np.zeros(2)] * 2
+    with pytest.raises(IntegrationError, match="non-finite") as info:
+        for _ in range(2000):
+            rot.step(1e-5, F, K, C)
+    assert isinstance(info.value, ArithmeticError) and not isinstance(info.value, frb.ParameterError)
+    assert np.isfinite(rot.y).all()  # the state is left at the start of the failed step

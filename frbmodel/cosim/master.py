@@ -34,6 +34,8 @@ END_OF_STEP = ("force_end", "journal_accel")
 VALIDATED_STEP_S = (1e-7, 2e-5)
 #: bearing outputs recorded per bearing, in the order the recorder's row needs them
 BEARING_RECORD = ("ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer")
+#: bearing outputs recorded per bearing when the FMU has them (film torque on the journal [N m], power loss [W])
+BEARING_LOSSES = ("journal_torque", "power_loss")
 
 
 def system_from_parameters(params):
@@ -285,13 +287,21 @@ class Master:
 
     # ------------------------------------------------------------------ record
     def sample(self, t):
-        """The recorder row at time ``t`` from the rotor's and bearings' outputs."""
+        """The recorder row at time ``t`` from the rotor's and bearings' outputs (journal torque and power loss
+        NaN for a bearing FMU without the outputs :data:`BEARING_LOSSES`)."""
         r = self.rotor.call("getReal", self._rec_rotor)
         b = np.array([f.call("getReal", v) for f, v in zip(self.bearings, self._rec_bearing)])
         nb, nd = len(self.bearings), len(self.schema.discs)
+        cached = getattr(self, "_rec_losses", None)
+        if cached is None or cached[0] is not self.bearings:  # value references of the instances set up now
+            cached = self._rec_losses = (self.bearings, [f.vr(BEARING_LOSSES) if all(map(f.has, BEARING_LOSSES))
+                                                         else None for f in self.bearings])
+        losses = np.array([f.call("getReal", v) if v is not None else [math.nan, math.nan]
+                           for f, v in zip(self.bearings, cached[1])], dtype=float)
         journal = np.reshape(r[1:1 + 2 * nb], (nb, 2))
         discs = np.reshape(r[1 + 2 * nb:1 + 2 * nb + 2 * nd], (nd, 2))
-        return self.schema.row(t, rad_s_to_rpm(r[0]), b[:, 0], journal, b[:, 1:3], b[:, 3:5], discs)
+        return self.schema.row(t, rad_s_to_rpm(r[0]), b[:, 0], journal, b[:, 1:3], b[:, 3:5], discs,
+                               journal_torque=losses[:, 0], power_loss=losses[:, 1])
 
     def meta(self, output_rate_hz):
         return {"ssp": str(self.ssp_path), "parameter_set": self.parameter_set, "step_size_s": self.step_size,
