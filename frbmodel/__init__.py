@@ -20,6 +20,7 @@ from .errors import (
     CosimStopped,
     FilmContactError,
     FRBError,
+    IntegrationError,
     ParameterError,
     RunStopped,
     RunupStopped,
@@ -34,6 +35,7 @@ from .film import (
     static_position,
 )
 from .linear import LinearSystem, linear_system
+from .losses import bearing_loss, bearing_losses
 from .methods import METHODS, Method, get_method
 from .modal import Modes, modes
 from .parameters import FloatingRingBearing, Turbocharger, load_system
@@ -49,10 +51,10 @@ from .whirl import film_onset_speeds
 __all__ = [
     "__version__", "BearingEquilibrium", "CampbellResult", "Component", "ConvergenceError", "CosimStopped", "Disc",
     "EquilibriumResult", "FILM_MODELS", "FRBError", "Film", "FilmContactError", "FloatingRingBearing",
-    "LinearSystem", "METHODS", "Method", "Modes", "PAPER_OUTER_CLEARANCES", "ParameterError", "Recorder", "Rotor",
-    "RunStopped", "RunupResult", "RunupSchema", "RunupStopped", "ShaftElement", "SpectrogramResult", "SpeedProfile",
-    "Turbocharger", "Unbalance", "campbell", "equilibrium", "film_coefficients", "film_force",
-    "film_onset_speeds", "film_torques", "get_method", "linear_system", "load_system", "modes",
-    "rad_s_to_rpm", "ring_speed_ratio", "ring_torque", "rpm_to_rad_s", "runup", "spectrogram",
-    "static_eccentricity", "static_position", "turbocharger",
+    "IntegrationError", "LinearSystem", "METHODS", "Method", "Modes", "PAPER_OUTER_CLEARANCES", "ParameterError",
+    "Recorder", "Rotor", "RunStopped", "RunupResult", "RunupSchema", "RunupStopped", "ShaftElement",
+    "SpectrogramResult", "SpeedProfile", "Turbocharger", "Unbalance", "bearing_loss", "bearing_losses", "campbell",
+    "equilibrium", "film_coefficients", "film_force", "film_onset_speeds", "film_torques", "get_method",
+    "linear_system", "load_system", "modes", "rad_s_to_rpm", "ring_speed_ratio", "ring_torque", "rpm_to_rad_s",
+    "runup", "spectrogram", "static_eccentricity", "static_position", "turbocharger",
 ]

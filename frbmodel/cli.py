@@ -164,6 +164,8 @@ def _profile(args):
         return SpeedProfile.ramp(a, b, args.duration)
     if args.profile == "exponential":
         return SpeedProfile.exponential(a, b, args.duration)
+    if args.profile == "torque":
+        return SpeedProfile.torque(args.drive_torque, a, args.duration)
     return SpeedProfile.constant(a, args.duration)
 
 
@@ -290,6 +292,31 @@ def cmd_plot(args):
     down = run.speed_rpm[-1] < run.speed_rpm[0]
     title = f"{'run-down' if down else 'run-up'} ({run.status})"
     write_composites(run, system, out, xscale=args.xscale, title=title)
+    print(f"results in {out.resolve()}")
+
+
+def cmd_losses(args):
+    """Bearing journal torque and power loss at the static equilibrium over speed (CSV + figure), optionally with
+    the recorded losses of a run-up / co-simulation folder."""
+    import matplotlib.pyplot as plt
+
+    from .losses import bearing_losses, plot_bearing_losses
+    from .recorder import RunupResult
+
+    tc = load_from_args(args)
+    out = writable_dir(args.out)
+    run = RunupResult.load(args.run) if args.run else None
+    table = bearing_losses(tc, parse_speeds(args.speeds), args.method)
+    p_csv = out / f"bearing_losses_{args.method}.csv"
+    table.to_csv(p_csv, index=False)
+    fig = plot_bearing_losses(table, run, title=f"Bearing power loss, {tc.name}")
+    p_png = out / f"bearing_losses_{args.method}.png"
+    fig.savefig(p_png, dpi=130)
+    plt.close(fig)
+    cols = ["speed [rpm]", "bearing", "journal torque [N m]", "power loss [W]", "power loss inner [W]",
+            "power loss outer [W]"]
+    print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
+    print(f"wrote:\n  {p_csv}\n  {p_png}")
     print(f"results in {out.resolve()}")
 
 
@@ -440,7 +467,10 @@ def _add_runup(sub):
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
     r.add_argument("--speeds", default="20000:250000", help="START:END [rpm]")
     r.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
-    r.add_argument("--profile", choices=["ramp", "exponential", "constant"], default="ramp")
+    r.add_argument("--profile", choices=["ramp", "exponential", "constant", "torque"], default="ramp",
+                   help="speed profile; 'torque': the spin is a state driven by --drive-torque and braked by the films "
+                        "(starts at START of --speeds)")
+    r.add_argument("--drive-torque", type=float, default=0.0, help="net drive torque about +z [N m] (--profile torque)")
     r.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
                    help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable)")
     r.add_argument("--rate", type=float, default=20e3, help="output sampling rate [Hz]")
@@ -529,6 +559,20 @@ def _add_paper_figures(sub):
     f.set_defaults(func=cmd_paper_figures)
 
 
+def _add_losses(sub):
+    from .methods import METHODS
+
+    lo = sub.add_parser("losses", formatter_class=_Formatter,
+                        help="bearing journal torque and friction power loss vs speed (CSV + PNG)")
+    lo.add_argument("--speeds", default="10000:250000:49", help="START:STOP:COUNT [rpm] or comma list")
+    lo.add_argument("--method", default="J", type=str.upper, choices=[m for m in METHODS if m in "CDFGIJ"],
+                    help="equilibrium method")
+    lo.add_argument("--run", default=None, metavar="DIR", help="overlay the recorded losses of this run-up folder")
+    lo.add_argument("--out", default="results/losses", help="output folder")
+    _system_args(lo)
+    lo.set_defaults(func=cmd_losses)
+
+
 def _add_plot(sub):
     pl = sub.add_parser("plot", formatter_class=_Formatter,
                         help="re-render the figures of a run-up / co-simulation results folder")
@@ -555,6 +599,7 @@ def build_parser():
     _add_sweep(sub)
     _add_paper_figures(sub)
     _add_plot(sub)
+    _add_losses(sub)
     return p
 
 
