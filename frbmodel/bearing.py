@@ -7,14 +7,42 @@ from __future__ import annotations
 
 from numba import njit
 
-from .errors import ParameterError
-from .film import film_force_kernel, film_torques, film_torques_kernel, offset_torque_coefficient, petroff_coefficient
+from .errors import ParameterError, check_real, check_real_array, renamed_keyword
+from .film import (
+    check_model,
+    film_force_kernel,
+    film_torques,
+    film_torques_kernel,
+    offset_torque_coefficient,
+    petroff_coefficient,
+)
 
 
 @njit(cache=True)
 def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_y, fo_x, fo_y, omega_rotor,
                        omega_ring):
-    """M^I + M^O [N m] on the ring (scalars). ``*_geom`` = (radius, length, clearance, viscosity) arrays."""
+    """Total torque M^I + M^O on the ring (compiled, scalars; physics.md §6.2).
+
+    Parameters
+    ----------
+    inner_geom, outer_geom : ndarray (4,)
+        (radius [m], length [m], clearance [m], viscosity [Pa s]) of the inner and outer film.
+    ri_x, ri_y : float
+        Journal minus ring centre [m].
+    fi_x, fi_y : float
+        Inner-film force on the journal [N].
+    ro_x, ro_y : float
+        Ring minus housing centre [m].
+    fo_x, fo_y : float
+        Outer-film force on the ring [N].
+    omega_rotor, omega_ring : float
+        Journal and ring spin speeds [rad/s].
+
+    Returns
+    -------
+    float
+        Torque on the ring [N m], CCW about +z.
+    """
     _, t_i = film_torques_kernel(inner_geom[0], inner_geom[1], inner_geom[2], inner_geom[3], ri_x, ri_y, fi_x, fi_y,
                                  omega_rotor, omega_ring)
     t_o, _ = film_torques_kernel(outer_geom[0], outer_geom[1], outer_geom[2], outer_geom[3], ro_x, ro_y, fo_x, fo_y,
@@ -24,12 +52,34 @@ def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_
 
 @njit(cache=True)
 def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, omega_rotor, eps_cap, dring):
-    """Ring equations of physics.md §7.2 for one bearing (the one implementation; the monolithic run-up and
-    the bearing FMU both call it).
+    """Ring equations of physics.md §7.2 for one bearing (compiled; the one implementation: the monolithic run-up
+    and the bearing FMU both call it).
 
-    ``geom`` (2, 4): [R, L, c, μ] of inner and outer film; ``polys`` (2, 2, 5) correction polynomials;
-    journal state (jx, jy, jvx, jvy) [m, m/s]; ``ring`` = (x, y, vx, vy, ω_FR). Writes d(ring)/dt into ``dring``
-    and returns ``(F_I,x, F_I,y, eps_inner, eps_outer)`` — the inner-film force on the journal [N].
+    Parameters
+    ----------
+    geom : ndarray (2, 4)
+        [R, L, c, μ] of the inner and outer film [m, m, m, Pa s].
+    polys : ndarray (2, 2, 5)
+        Correction polynomials (film, radial/tangential, coefficients).
+    ring_m, ring_i, grav : float
+        Ring mass [kg], polar inertia [kg m²], gravity [m/s²].
+    jx, jy, jvx, jvy : float
+        Journal position [m] and velocity [m/s].
+    ring : ndarray (5,)
+        Ring state (x, y, vx, vy, ω_FR) [m, m/s, rad/s].
+    omega_rotor : float
+        Rotor speed [rad/s].
+    eps_cap : float
+        Eccentricity cap of the film forces (see :func:`frbmodel.film.film_force_kernel`).
+    dring : ndarray (5,)
+        Output: d(ring)/dt.
+
+    Returns
+    -------
+    fx, fy : float
+        Inner-film force on the journal [N].
+    eps_inner, eps_outer : float
+        Eccentricity ratios of the inner and outer film.
     """
     wfr = ring[4]
     rix = jx - ring[0]
@@ -53,31 +103,79 @@ def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, o
 
 
 def ring_torque(bearing, r_inner, force_inner, r_outer, force_outer, omega_rotor, omega_ring):
-    """Total torque [N m] on the ring (CCW about +z), M^I + M^O of physics.md §6.2 / §7.2.
+    """Total torque on the ring, M^I + M^O of physics.md §6.2 / §7.2.
 
     Parameters
     ----------
     bearing : FloatingRingBearing
-    r_inner : (..., 2)
-        Journal minus ring centre [m]; ``force_inner`` the inner-film force on the journal [N].
-    r_outer : (..., 2)
-        Ring centre minus housing centre [m]; ``force_outer`` the outer-film force on the ring [N].
-    omega_rotor, omega_ring : float or array
+    r_inner : array_like (..., 2)
+        Journal minus ring centre [m].
+    force_inner : array_like (..., 2)
+        Inner-film force on the journal [N].
+    r_outer : array_like (..., 2)
+        Ring centre minus housing centre [m].
+    force_outer : array_like (..., 2)
+        Outer-film force on the ring [N].
+    omega_rotor, omega_ring : float or array_like
         Journal and ring spin speeds [rad/s].
+
+    Returns
+    -------
+    float or ndarray (...)
+        Torque on the ring [N m], CCW about +z.
+
+    Raises
+    ------
+    ParameterError
+        An input is not finite, not real or not of shape (..., 2) (the message names it).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> b = frb.turbocharger().bearings[0]
+    >>> z = [0.0, 0.0]
+    >>> t = frb.ring_torque(b, z, z, z, z, 1000.0, 1000.0 * frb.ring_speed_ratio(b))
+    >>> abs(t) < 1e-15    # centred films at the eq. (6) ring speed: the Petroff torques balance
+    True
     """
+    for name, v, unit in (("r_inner", r_inner, "m"), ("force_inner", force_inner, "N"), ("r_outer", r_outer, "m"),
+                          ("force_outer", force_outer, "N")):
+        check_real_array(name, v, unit, last_axis=2)
+    for name, v in (("omega_rotor", omega_rotor), ("omega_ring", omega_ring)):
+        check_real_array(name, v, "rad/s")
     _, t_ring_from_inner = film_torques(bearing.inner, r_inner, force_inner, omega_rotor, omega_ring)
     t_ring_from_outer, _ = film_torques(bearing.outer, r_outer, force_outer, omega_ring, 0.0)
     return t_ring_from_inner + t_ring_from_outer
 
 
+@renamed_keyword("model", "film_model")
 def ring_speed_ratio(bearing, eps_inner: float = 0.0, eps_outer: float = 0.0, torque: str = "petroff",
-                     model: str = "short") -> float:
+                     film_model: str = "short") -> float:
     """Ring-speed ratio ω_FR / ω_R of the steady torque balance at given film eccentricity ratios.
 
     ``torque="petroff"``: Petroff torques only — the paper's eq. (7); with ``eps_inner = eps_outer = 0``
     this is eq. (6), ``1 / (1 + (μ_O/μ_I)(L_O/L_I)(c_I/c_O)(D_O/D_I)³)``.
     ``torque="full"``: Petroff plus the pressure-offset torques (physics.md §6.3),
     ``(A_I − k_I) / (A_I + A_O + k_I + k_O)``.
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    eps_inner, eps_outer : float
+        Eccentricity ratios of the inner and outer film, 0 <= ε < 1.
+    torque : {"petroff", "full"}
+    film_model : {"short", "short_corrected"}
+        (``model=`` is the deprecated old name.)
+
+    Returns
+    -------
+    float
+        ω_FR / ω_R [-].
+
+    Raises
+    ------
+    ParameterError
+        An ε outside [0, 1) or not a real number, an unknown ``torque`` or film model.
 
     Examples
     --------
@@ -87,17 +185,18 @@ def ring_speed_ratio(bearing, eps_inner: float = 0.0, eps_outer: float = 0.0, to
     0.19903
     """
     for name, eps in (("eps_inner", eps_inner), ("eps_outer", eps_outer)):
-        if not (0.0 <= eps < 1.0):
+        if not (0.0 <= check_real(name, eps) < 1.0):
             raise ParameterError(f"{name} = {eps!r} is invalid: valid range 0 <= eps < 1")
     if torque not in ("petroff", "full"):
         raise ParameterError(f"torque = {torque!r} is unknown; valid values are 'petroff', 'full'")
-    a_i, a_o, k_i, k_o = static_torque_coefficients(bearing, eps_inner, eps_outer, model, torque == "full")
+    film_model = check_model(film_model)
+    a_i, a_o, k_i, k_o = static_torque_coefficients(bearing, eps_inner, eps_outer, film_model, torque == "full")
     if torque == "petroff":
         return float(a_i / (a_i + a_o))
     return float((a_i - k_i) / (a_i + a_o + k_i + k_o))
 
 
-def static_torque_coefficients(bearing, eps_inner: float, eps_outer: float, model: str = "short",
+def static_torque_coefficients(bearing, eps_inner: float, eps_outer: float, film_model: str = "short",
                                offset: bool = True):
     """Coefficients of the steady ring torque (physics.md §6.2, §6.3).
 
@@ -106,7 +205,7 @@ def static_torque_coefficients(bearing, eps_inner: float, eps_outer: float, mode
     bearing : FloatingRingBearing
     eps_inner, eps_outer : float
         Eccentricity ratios of the inner and outer film.
-    model : {"short", "short_corrected"}
+    film_model : {"short", "short_corrected"}
     offset : bool
         Also compute the pressure-offset coefficients (else they are returned as 0).
 
@@ -115,21 +214,50 @@ def static_torque_coefficients(bearing, eps_inner: float, eps_outer: float, mode
     a_i, a_o, k_i, k_o : float
         Petroff coefficients A = 2π μ R³ L / (c sqrt(1 − ε²)) and offset coefficients k with (e/2) F_t = k ω_s
         [N m s], so that the torque on the ring is a_i (ω_R − ω_FR) − k_i (ω_R + ω_FR) − a_o ω_FR − k_o ω_FR.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> b = frb.turbocharger().bearings[0]
+    >>> a_i, a_o, k_i, k_o = static_torque_coefficients(b, 0.0, 0.0)
+    >>> round(float(a_i / (a_i + a_o)), 5), k_i, k_o     # eq. (6); centred films have no offset torque
+    (0.19903, 0.0, 0.0)
     """
     a_i = petroff_coefficient(bearing.inner, eps_inner)
     a_o = petroff_coefficient(bearing.outer, eps_outer)
     if not offset:
         return a_i, a_o, 0.0, 0.0
-    k_i = offset_torque_coefficient(bearing.inner, eps_inner, model)
-    k_o = offset_torque_coefficient(bearing.outer, eps_outer, model)
+    k_i = offset_torque_coefficient(bearing.inner, eps_inner, film_model)
+    k_o = offset_torque_coefficient(bearing.outer, eps_outer, film_model)
     return a_i, a_o, k_i, k_o
 
 
 def static_ring_torque(bearing, eps_inner: float, eps_outer: float, omega_rotor: float, omega_ring: float,
-                       model: str = "short") -> float:
-    """Steady torque [N m] on the ring at static film states (eq. 32 residual, full torques,
-    :func:`static_torque_coefficients`) at rotor and ring speeds ``omega_rotor``, ``omega_ring`` [rad/s]."""
-    a_i, a_o, k_i, k_o = static_torque_coefficients(bearing, eps_inner, eps_outer, model)
+                       film_model: str = "short") -> float:
+    """Steady torque on the ring at static film states (the eq. (32) residual with full torques).
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    eps_inner, eps_outer : float
+        Eccentricity ratios of the inner and outer film.
+    omega_rotor, omega_ring : float
+        Rotor and ring speed [rad/s].
+    film_model : {"short", "short_corrected"}
+
+    Returns
+    -------
+    float
+        Torque on the ring [N m] (:func:`static_torque_coefficients`).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> b = frb.turbocharger().bearings[0]
+    >>> abs(static_ring_torque(b, 0.0, 0.0, 1000.0, 1000.0 * frb.ring_speed_ratio(b))) < 1e-15
+    True
+    """
+    a_i, a_o, k_i, k_o = static_torque_coefficients(bearing, eps_inner, eps_outer, film_model)
     return float(a_i * (omega_rotor - omega_ring) - k_i * (omega_rotor + omega_ring) - a_o * omega_ring
                  - k_o * omega_ring)
 

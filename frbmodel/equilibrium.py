@@ -8,15 +8,14 @@ in the ring speed with closed-form film solutions inside.
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .bearing import ring_speed_ratio, static_ring_torque
-from .errors import ConvergenceError, ParameterError
-from .film import film_coefficients, film_force, static_position
+from .errors import ConvergenceError, ParameterError, check_real, check_system
+from .film import check_model, film_coefficients, film_force, static_position_kernel
 from .methods import get_method
 from .rotor import GRAVITY
 from .units import rad_s_to_rpm, rpm_to_rad_s
@@ -24,7 +23,35 @@ from .units import rad_s_to_rpm, rpm_to_rad_s
 
 @dataclass
 class BearingEquilibrium:
-    """Static state of one floating-ring bearing. Positions in [m], speeds in [rad/s]."""
+    """Static state of one floating-ring bearing (from :func:`bearing_equilibrium`).
+
+    Attributes
+    ----------
+    name : str
+        Bearing name.
+    r_inner : ndarray (2,)
+        Journal centre minus ring centre [m].
+    ring : ndarray (2,)
+        Ring centre relative to the housing [m].
+    eps_inner, eps_outer : float
+        Eccentricity ratios of the inner and outer film [-].
+    ring_speed : float
+        Ring speed ω_FR [rad/s].
+    ring_speed_ratio : float
+        ω_FR / ω_R [-].
+    rotor_speed : float
+        ω_R [rad/s].
+    iterations, evaluations : int
+        Solver iterations and film evaluations.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> tc = frb.turbocharger(36e-6)
+    >>> eq = bearing_equilibrium(tc.bearings[0], tc.bearing_loads[0], 10472.0, "J")   # 100 krpm
+    >>> round(eq.ring_speed_ratio, 3), eq.omega_inner == eq.rotor_speed + eq.ring_speed
+    (0.198, True)
+    """
 
     name: str
     r_inner: np.ndarray  # journal centre minus ring centre [m] (kept itself: it can be far below |ring|)
@@ -55,7 +82,27 @@ class BearingEquilibrium:
 
 @dataclass
 class EquilibriumResult:
-    """Equilibrium of both bearings at one speed (``bearings[0]`` turbine side)."""
+    """Equilibrium of both bearings at one speed (from :func:`equilibrium`).
+
+    Attributes
+    ----------
+    method : str
+        Method letter.
+    speed_rpm : float
+        Rotor speed [rpm].
+    bearings : tuple of BearingEquilibrium
+        In the system's bearing order (Table 2: turbine, compressor).
+    cpu_time_s : float
+        Time of the solve [s].
+    meta : dict
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> eq = frb.equilibrium(frb.turbocharger(36e-6), "J", 100e3)
+    >>> list(eq.to_dataframe()["bearing"])
+    ['turbine', 'compressor']
+    """
 
     method: str
     speed_rpm: float
@@ -65,13 +112,16 @@ class EquilibriumResult:
 
     @property
     def iterations(self) -> int:
+        """Solver iterations of both bearings."""
         return sum(b.iterations for b in self.bearings)
 
     @property
     def evaluations(self) -> int:
+        """Film evaluations of both bearings."""
         return sum(b.evaluations for b in self.bearings)
 
     def to_dataframe(self):
+        """One row per bearing: positions [m], ε [-], ring speed [rad/s], RSR [-], solver counts (pandas)."""
         import pandas as pd
 
         rows = []
@@ -96,21 +146,21 @@ class EquilibriumResult:
 
 
 def _loads(bearing, w, g):
-    return np.array([0.0, w]), np.array([0.0, w + bearing.ring_mass * g])
+    return (0.0, w), (0.0, w + bearing.ring_mass * g)
 
 
 def _uncoupled(bearing, w, omega_r, model, g, rsr):
     f_i, f_o = _loads(bearing, w, g)
     omega_fr = rsr * omega_r
-    r_i, eps_i, it_i = static_position(bearing.inner, f_i, omega_r + omega_fr, model)
-    r_o, eps_o, it_o = static_position(bearing.outer, f_o, omega_fr, model)
+    r_i, eps_i, it_i = static_position_kernel(bearing.inner, *f_i, omega_r + omega_fr, model)
+    r_o, eps_o, it_o = static_position_kernel(bearing.outer, *f_o, omega_fr, model)
     return BearingEquilibrium(bearing.name, r_i, r_o, eps_i, eps_o, omega_fr, rsr, omega_r, it_i + it_o, 2)
 
 
 def _outer_only(bearing, w, omega_r, model, g, rsr):
     _, f_o = _loads(bearing, w, g)
     omega_fr = rsr * omega_r
-    r_o, eps_o, it = static_position(bearing.outer, f_o, omega_fr, model)
+    r_o, eps_o, it = static_position_kernel(bearing.outer, *f_o, omega_fr, model)
     return BearingEquilibrium(bearing.name, np.zeros(2), r_o, 0.0, eps_o, omega_fr, rsr, omega_r, it, 1)
 
 
@@ -173,8 +223,8 @@ def _ring_speed_root(bearing, w, omega_r, model, g, residual_kind):
 
     def films(omega_fr):
         counter["n"] += 1
-        r_i, eps_i, _ = static_position(bearing.inner, f_i, omega_r + omega_fr, model)
-        r_o, eps_o, _ = static_position(bearing.outer, f_o, omega_fr, model)
+        r_i, eps_i, _ = static_position_kernel(bearing.inner, *f_i, omega_r + omega_fr, model)
+        r_o, eps_o, _ = static_position_kernel(bearing.outer, *f_o, omega_fr, model)
         return r_i, eps_i, r_o, eps_o
 
     def residual(omega_fr):
@@ -204,7 +254,7 @@ def _ring_speed_root(bearing, w, omega_r, model, g, residual_kind):
                               int(res.iterations), 2 * counter["n"])
 
 
-def bearing_equilibrium(bearing, load, speed, method, film_model="short", gravity=GRAVITY):
+def bearing_equilibrium(bearing, load, omega_rotor, method, film_model="short", gravity=GRAVITY):
     """Equilibrium of one bearing carrying a vertical load at one rotor speed (physics.md §6.4).
 
     Parameters
@@ -212,7 +262,7 @@ def bearing_equilibrium(bearing, load, speed, method, film_model="short", gravit
     bearing : FloatingRingBearing
     load : float
         Static reaction W [N] the inner film carries (positive = upward force on the journal).
-    speed : float
+    omega_rotor : float
         Rotor speed [rad/s], > 0.
     method : str
         One of C, D, F, G, I, J.
@@ -223,20 +273,40 @@ def bearing_equilibrium(bearing, load, speed, method, film_model="short", gravit
     Returns
     -------
     BearingEquilibrium
+
+    Raises
+    ------
+    ParameterError
+        Method without film equilibrium, unknown film model, or a load / speed / gravity that is not a finite real
+        number (speed <= 0).
+    ConvergenceError
+        The ring-speed or coupled solve failed.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> tc = frb.turbocharger(36e-6)
+    >>> eq = bearing_equilibrium(tc.bearings[0], tc.bearing_loads[0], 1000.0, "F")
+    >>> round(eq.ring_speed_ratio, 5)                  # method F uses eq. (6)
+    0.19903
     """
     m = get_method(method)
     if m.equilibrium is None:
         raise ParameterError(f"method {m.letter} has no film equilibrium; equilibria exist for "
                              "C, D, F, G, I, J")
-    if not speed > 0.0:
-        raise ParameterError(f"rotor speed = {speed!r} rad/s is invalid for method {m.letter}: a linearized film "
-                             "needs a rotor speed > 0")
+    omega_rotor = check_real("rotor speed omega_rotor", omega_rotor, "rad/s")
+    if not omega_rotor > 0.0:
+        raise ParameterError(f"rotor speed = {omega_rotor!r} rad/s is invalid for method {m.letter}: a linearized "
+                             "film needs a rotor speed > 0")
+    load = check_real("bearing load", load, "N")
+    gravity = check_real("gravity", gravity, "m/s^2", minimum=0.0, inclusive=True)
+    film_model = check_model(film_model)
     kind = m.equilibrium
     if kind in ("petroff", "torque"):
-        return _ring_speed_root(bearing, load, speed, film_model, gravity, kind)
+        return _ring_speed_root(bearing, load, omega_rotor, film_model, gravity, kind)
     rsr = ring_speed_ratio(bearing)
     solver = {"uncoupled": _uncoupled, "outer_film": _outer_only, "coupled": _coupled}[kind]
-    return solver(bearing, load, speed, film_model, gravity, rsr)
+    return solver(bearing, load, omega_rotor, film_model, gravity, rsr)
 
 
 def equilibrium(system, method="J", speed_rpm=150e3) -> EquilibriumResult:
@@ -262,8 +332,9 @@ def equilibrium(system, method="J", speed_rpm=150e3) -> EquilibriumResult:
     >>> round(eq.bearings[0].ring_speed_ratio, 3)
     0.198
     """
-    speed_rpm = float(speed_rpm)
-    if not speed_rpm > 0.0 or not math.isfinite(speed_rpm):
+    check_system(system)
+    speed_rpm = check_real("speed_rpm", speed_rpm, "rpm")
+    if not speed_rpm > 0.0:
         raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for a film equilibrium: valid range > 0")
     m = get_method(method)
     t0 = time.perf_counter()

@@ -3,6 +3,7 @@
 Every error raised for bad input names the quantity, its value and the valid range, so a user can fix
 the input without reading the code.
 """
+import math
 
 
 class FRBError(Exception):
@@ -69,3 +70,211 @@ def check_finite(name, value, unit=""):
     if not (v == v and abs(v) != float("inf")):
         raise ParameterError(f"{name} = {value!r} {unit} is invalid: it must be finite".replace("  ", " "))
     return v
+
+
+# ------------------------------------------------------------------ strict checks of API arguments
+def _describe(value) -> str:
+    """``repr`` of a value for a message, shortened."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _range_text(minimum, inclusive, unit) -> str:
+    unit = f" {unit}" if unit else ""
+    if minimum is None:
+        return f"a finite real number{unit}"
+    return f"a finite real number {'>=' if inclusive else '>'} {minimum:g}{unit}"
+
+
+def check_real(name, value, unit="", minimum=None, inclusive=False):
+    """Return ``float(value)`` for a real-number API argument, or raise :class:`ParameterError`.
+
+    Stricter than :func:`check_positive`: a string (``"36e-6"``), a bool, ``None``, a complex number or a
+    sequence is refused rather than converted, because an API argument of the wrong type is a mistake the user
+    should see where it is made, not deep inside a computation.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, used in the message.
+    value : object
+        The value given: an ``int``, ``float``, NumPy real scalar or 0-d real array.
+    unit : str
+        Unit for the message (e.g. ``"m"``).
+    minimum : float, optional
+        Lower bound of the valid range (none if None).
+    inclusive : bool
+        ``value == minimum`` is valid.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        Naming ``name``, the value and the valid range.
+
+    Examples
+    --------
+    >>> check_real("outer_clearance", 36e-6, "m", minimum=0.0)
+    3.6e-05
+    >>> try:
+    ...     check_real("outer_clearance", "36e-6", "m", minimum=0.0)
+    ... except ParameterError as exc:
+    ...     print(exc)
+    outer_clearance = '36e-6' is a str; expected a finite real number > 0 m (a number, not text)
+    """
+    if type(value) is float and math.isfinite(value) and (  # fast path for the common case
+            minimum is None or value > minimum or (inclusive and value == minimum)):
+        return value
+    import numbers
+
+    import numpy as np
+
+    expected = _range_text(minimum, inclusive, unit)
+    arr = value if isinstance(value, np.ndarray) and value.ndim == 0 else None
+    if arr is not None and arr.dtype.kind in "iuf":
+        value = arr.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        hint = " (a number, not text)" if isinstance(value, str) else ""
+        raise ParameterError(f"{name} = {_describe(value)} is a {type(value).__name__}; expected {expected}{hint}")
+    v = float(value)
+    if not math.isfinite(v) or (minimum is not None and (v < minimum or (v == minimum and not inclusive))):
+        raise ParameterError(f"{name} = {_describe(value)}{' ' + unit if unit else ''} is invalid: valid range is "
+                             f"{expected}")
+    return v
+
+
+_KINDS = {"b": "booleans", "U": "text", "S": "text", "O": "objects (mixed or ragged)", "c": "complex numbers"}
+
+
+def check_real_array(name, value, unit="", last_axis=None):
+    """Return ``value`` as a float array of finite real numbers, or raise :class:`ParameterError`.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, used in the message.
+    value : array_like
+        Real numbers (no strings, no booleans, no complex numbers).
+    unit : str
+        Unit for the message.
+    last_axis : int, optional
+        Required length of the last axis (e.g. 2 for x-y vectors); a scalar is then refused.
+
+    Returns
+    -------
+    ndarray of float
+
+    Raises
+    ------
+    ParameterError
+        Naming ``name``, its value and what is expected (type, shape, finiteness).
+
+    Examples
+    --------
+    >>> check_real_array("e", [1e-6, 0.0], "m", last_axis=2)
+    array([1.e-06, 0.e+00])
+    >>> try:
+    ...     check_real_array("e", [float("nan"), 0.0], "m", last_axis=2)
+    ... except ParameterError as exc:
+    ...     print(exc)
+    e = [nan, 0.0] m is invalid: every entry must be a finite real number (entry (0,) is nan)
+    """
+    import numpy as np
+
+    shape = f" of shape (..., {last_axis})" if last_axis else ""
+    try:
+        arr = np.asarray(value)
+    except ValueError:  # ragged nesting
+        arr = np.asarray(None)
+    if arr.dtype.kind not in "iuf":
+        raise ParameterError(f"{name} = {_describe(value)} is invalid: expected real numbers{shape} "
+                             f"[{unit or '-'}], got {_KINDS.get(arr.dtype.kind, arr.dtype.name)}")
+    if last_axis is not None and (arr.ndim == 0 or arr.shape[-1] != last_axis):
+        raise ParameterError(f"{name} = {_describe(value)} has shape {arr.shape}; expected shape (..., {last_axis}) "
+                             f"(x, y components) [{unit or '-'}]")
+    arr = arr.astype(float)
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ParameterError(f"{name} = {_describe(value)}{' ' + unit if unit else ''} is invalid: every entry must "
+                             f"be a finite real number (entry {idx} is {float(arr[idx])!r})")
+    return arr
+
+
+def check_system(system, name="system"):
+    """Return ``system`` if it looks like a :class:`~frbmodel.parameters.Turbocharger`, else raise
+    :class:`ParameterError` naming what was given.
+
+    Parameters
+    ----------
+    system : object
+        Needs ``rotor``, ``bearings``, ``bearing_loads``, ``film_model`` and ``gravity`` (duck typing).
+    name : str
+        The argument's name, used in the message.
+
+    Returns
+    -------
+    object
+        ``system`` itself.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_system(36e-6)
+    ... except ParameterError as exc:
+    ...     print(exc)  # doctest: +ELLIPSIS
+    system = 3.6e-05 is a float; expected a Turbocharger (frb.turbocharger(...) or frb.load_system(path))
+    """
+    if not all(hasattr(system, a) for a in ("rotor", "bearings", "bearing_loads", "film_model", "gravity")):
+        raise ParameterError(f"{name} = {_describe(system)} is a {type(system).__name__}; expected a Turbocharger "
+                             "(frb.turbocharger(...) or frb.load_system(path))")
+    return system
+
+
+def renamed_keyword(old, new, since="0.1.0"):
+    """Decorator: accept the keyword ``old`` as ``new`` for one more release, with a :class:`DeprecationWarning`.
+
+    Parameters
+    ----------
+    old, new : str
+        Old and new keyword names.
+    since : str
+        Version that renamed it (named in the warning).
+
+    Returns
+    -------
+    callable
+        The decorator.
+
+    Examples
+    --------
+    >>> @renamed_keyword("model", "film_model")
+    ... def f(film_model="short"):
+    ...     return film_model
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     print(f(model="short_corrected"), w[0].category.__name__)
+    short_corrected DeprecationWarning
+    """
+    import functools
+    import warnings
+
+    def decorate(func):
+        @functools.wraps(func)
+        def wrapper(*args, **kwargs):
+            if old in kwargs:
+                if new in kwargs:
+                    raise ParameterError(f"{func.__name__}() got both {old}= (deprecated) and {new}=; pass {new}= "
+                                         "only")
+                warnings.warn(f"{func.__name__}({old}=...) is deprecated since frbmodel {since} and will be removed "
+                              f"in the next release; use {new}=...", DeprecationWarning, stacklevel=2)
+                kwargs[new] = kwargs.pop(old)
+            return func(*args, **kwargs)
+
+        return wrapper
+
+    return decorate

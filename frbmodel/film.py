@@ -5,7 +5,7 @@ Conventions (physics.md §1): a film sits between an *inner member* and an *oute
 sum of the two surfaces' angular speeds (journal + ring for the inner film, ring for the outer film).
 Every force returned is the film force **on the inner member** [N]; the outer member receives its negative.
 
-Two film models exist (``model=``):
+Two film models exist (``film_model=``):
 
 ``"short"``
     Infinitely short bearing with half-Sommerfeld cavitation (π-film, moving cavitation boundary),
@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from .errors import FilmContactError, ParameterError, check_positive
+from .errors import FilmContactError, ParameterError, check_real, check_real_array, renamed_keyword
 
 FILM_MODELS = ("short", "short_corrected")
 PI = math.pi
@@ -58,7 +58,7 @@ class Film:
 
     def __post_init__(self):
         for name, unit in (("radius", "m"), ("length", "m"), ("clearance", "m"), ("viscosity", "Pa s")):
-            object.__setattr__(self, name, check_positive(f"film {name}", getattr(self, name), unit))
+            object.__setattr__(self, name, check_real(f"film {name}", getattr(self, name), unit, minimum=0.0))
         if self.clearance >= 0.1 * self.radius:
             raise ParameterError(
                 f"film clearance = {self.clearance:g} m is invalid for radius {self.radius:g} m: the thin-film "
@@ -70,13 +70,54 @@ class Film:
         return self.length / (2.0 * self.radius)
 
     def to_dict(self) -> dict:
+        """The film as plain data ``{radius, length, clearance, viscosity}`` [SI]."""
         return asdict(self)
 
 
-def check_model(model: str) -> str:
-    if model not in FILM_MODELS:
-        raise ParameterError(f"film model = {model!r} is unknown; valid models are {', '.join(FILM_MODELS)}")
-    return model
+def check_film(film, name="film") -> Film:
+    """Return ``film`` if it is a :class:`Film`, else raise :class:`ParameterError` naming what was given.
+
+    Parameters
+    ----------
+    film : Film
+    name : str
+        The argument's name, used in the message.
+
+    Returns
+    -------
+    Film
+
+    Examples
+    --------
+    >>> check_film(Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)).clearance
+    3.4e-05
+    """
+    if not isinstance(film, Film):
+        raise ParameterError(f"{name} = {film!r:.80} is a {type(film).__name__}; expected a Film "
+                             "(frbmodel.Film(radius, length, clearance, viscosity) or bearing.inner / bearing.outer)")
+    return film
+
+
+def check_model(film_model: str) -> str:
+    """Return ``film_model`` if it is one of :data:`FILM_MODELS`, else raise :class:`ParameterError`.
+
+    Parameters
+    ----------
+    film_model : str
+        ``"short"`` or ``"short_corrected"``.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> check_model("short")
+    'short'
+    """
+    if not isinstance(film_model, str) or film_model not in FILM_MODELS:
+        raise ParameterError(f"film model = {film_model!r} is unknown; valid models are {', '.join(FILM_MODELS)}")
+    return film_model
 
 
 # --------------------------------------------------------------------------------------------------
@@ -97,11 +138,36 @@ def _polyval(p, x):
 
 @njit(cache=True)
 def film_force_kernel(radius, length, clearance, viscosity, poly_r, poly_t, rx, ry, vx, vy, omega_sum, eps_cap):
-    """Film force on the inner member ``(fx, fy, eps)`` for one relative state (scalars, SI units).
+    """Film force on the inner member for one relative state (compiled, scalars, SI units; physics.md §2.4).
 
-    ``poly_r``, ``poly_t``: correction polynomials in ε (``NO_CORRECTION`` for the short film).
-    ``eps_cap``: if ε exceeds it, the force is evaluated at ε = eps_cap along the same direction (a numerical
-    guard for trial states of an implicit integrator); pass ``inf`` for none — then ε >= 1 gives NaN.
+    Parameters
+    ----------
+    radius, length, clearance, viscosity : float
+        Film geometry [m] and viscosity [Pa s].
+    poly_r, poly_t : ndarray
+        Correction polynomials in ε (``NO_CORRECTION`` for the short film, :func:`correction_polys`).
+    rx, ry, vx, vy : float
+        Relative position [m] and velocity [m/s], inner minus outer.
+    omega_sum : float
+        Sum of the surfaces' angular speeds [rad/s].
+    eps_cap : float
+        If ε exceeds it, the force is evaluated at ε = eps_cap along the same direction (a numerical guard for
+        trial states of an implicit integrator); ``inf`` for none — then ε >= 1 gives NaN.
+
+    Returns
+    -------
+    fx, fy : float
+        Force on the inner member [N] (NaN for ε >= 1 without a cap; no input checks: see :func:`film_force`).
+    eps : float
+        The true eccentricity ratio (before capping).
+
+    Examples
+    --------
+    >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
+    >>> fx, fy, eps = film_force_kernel(f.radius, f.length, f.clearance, f.viscosity, NO_CORRECTION, NO_CORRECTION,
+    ...                                 9.4691e-6, -3.7916e-6, 0.0, 0.0, 3000.0, math.inf)
+    >>> bool(np.allclose([fx, fy], film_force(f, [9.4691e-6, -3.7916e-6], [0.0, 0.0], 3000.0), rtol=1e-15))
+    True
     """
     ecc = math.sqrt(rx * rx + ry * ry)
     if ecc > 0.0:
@@ -145,9 +211,26 @@ def _film_force_loop(radius, length, clearance, viscosity, poly_r, poly_t, rx, r
         out[k, 1] = fy
 
 
-def correction_polys(film: "Film", model: str):
-    """``(poly_r, poly_t)`` of the film model for this film (``NO_CORRECTION`` for the short film)."""
-    if model == "short_corrected":
+def correction_polys(film: "Film", film_model: str):
+    """Correction polynomials of a film model for this film.
+
+    Parameters
+    ----------
+    film : Film
+    film_model : {"short", "short_corrected"}
+
+    Returns
+    -------
+    poly_r, poly_t : ndarray
+        Coefficients in ε (highest power first) of the radial and tangential correction factors;
+        ``NO_CORRECTION`` (= 1) for the short film.
+
+    Examples
+    --------
+    >>> correction_polys(Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3), "short")
+    (array([1.]), array([1.]))
+    """
+    if film_model == "short_corrected":
         from .finite_length import correction_polynomials
 
         return correction_polynomials(film.length_to_diameter)
@@ -155,7 +238,24 @@ def correction_polys(film: "Film", model: str):
 
 
 def eccentricity_ratio(film: Film, e):
-    """ε = |e| / c [-] for relative position(s) ``e`` [m] (..., 2)."""
+    """Eccentricity ratio ε = |e| / c of relative position(s) ``e``.
+
+    Parameters
+    ----------
+    film : Film
+    e : array_like (..., 2)
+        Relative position inner minus outer centre [m].
+
+    Returns
+    -------
+    ndarray (...)
+        ε [-].
+
+    Examples
+    --------
+    >>> float(eccentricity_ratio(Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3), [0.0, -17e-6]))
+    0.5
+    """
     e = np.asarray(e, dtype=float)
     return np.hypot(e[..., 0], e[..., 1]) / film.clearance
 
@@ -169,7 +269,8 @@ def _check_contact(eps, where=""):
             "(the member touches its wall)")
 
 
-def film_force(film: Film, e, e_dot, omega_sum, model: str = "short"):
+@renamed_keyword("model", "film_model")
+def film_force(film: Film, e, e_dot, omega_sum, film_model: str = "short"):
     """Dynamic film force on the inner member [N].
 
     Parameters
@@ -181,7 +282,8 @@ def film_force(film: Film, e, e_dot, omega_sum, model: str = "short"):
         Relative velocity [m/s].
     omega_sum : float or array_like (...)
         Sum of the two surfaces' angular speeds [rad/s].
-    model : {"short", "short_corrected"}
+    film_model : {"short", "short_corrected"}
+        (``model=`` is the deprecated old name.)
 
     Returns
     -------
@@ -190,6 +292,8 @@ def film_force(film: Film, e, e_dot, omega_sum, model: str = "short"):
 
     Raises
     ------
+    ParameterError
+        An input is not finite, not real or of the wrong shape (the message names it and its value).
     FilmContactError
         If the eccentricity ratio is >= 1.
 
@@ -200,32 +304,64 @@ def film_force(film: Film, e, e_dot, omega_sum, model: str = "short"):
     >>> round(float(F[1]), 2)   # physics.md §4.3: W = 5.6157 N carried upward
     5.62
     """
-    model = check_model(model)
-    e, e_dot, ws = np.broadcast_arrays(np.asarray(e, dtype=float), np.asarray(e_dot, dtype=float),
-                                       np.asarray(omega_sum, dtype=float)[..., None])
+    film_model = check_model(film_model)
+    check_film(film)
+    e, e_dot, ws = _broadcast_inputs(e, e_dot, omega_sum)
     shape = e.shape[:-1]
     n = int(np.prod(shape))
     out = np.empty((n, 2))
-    pr, pt = correction_polys(film, model)
+    pr, pt = correction_polys(film, film_model)
     flat = [np.array(a, dtype=float).reshape(n) for a in (e[..., 0], e[..., 1], e_dot[..., 0], e_dot[..., 1],
                                                          ws[..., 0])]
     _film_force_loop(film.radius, film.length, film.clearance, film.viscosity, pr, pt, *flat, out)
     if not np.all(np.isfinite(out)):
         _check_contact(eccentricity_ratio(film, e))
-        raise ParameterError("film force is not finite: check the inputs for NaN or inf "
-                             f"(e = {e!r} m, e_dot = {e_dot!r} m/s, omega_sum = {omega_sum!r} rad/s)")
+        raise ParameterError("film force is not finite at finite inputs (an overflow): "
+                             f"e = {e!r} m, e_dot = {e_dot!r} m/s, omega_sum = {omega_sum!r} rad/s")
     return out.reshape(shape + (2,))
+
+
+def _broadcast_inputs(e, e_dot, omega_sum):
+    """Checked, broadcast film-force inputs: e, e_dot (..., 2) and omega_sum (..., 1)."""
+    e = check_real_array("e", e, "m", last_axis=2)
+    e_dot = check_real_array("e_dot", e_dot, "m/s", last_axis=2)
+    ws = check_real_array("omega_sum", omega_sum, "rad/s")
+    try:
+        return np.broadcast_arrays(e, e_dot, ws[..., None])
+    except ValueError:
+        raise ParameterError(f"e (shape {e.shape}), e_dot (shape {e_dot.shape}) and omega_sum (shape {ws.shape}) "
+                             "do not broadcast: give e and e_dot as (..., 2) and omega_sum as (...) with the same "
+                             "leading shape (or scalars)") from None
 
 
 # --------------------------------------------------------------------------------------------------
 # Static (quasi-static) relations (physics.md §2.6, §3, §4.2)
 # --------------------------------------------------------------------------------------------------
-def static_force_rt(eps: float, model: str = "short", lam: float | None = None):
-    """Static (F_r, F_t) in units of μ ω_s R L³ / c² for eccentricity ratio ``eps`` (scalar)."""
+def static_force_rt(eps: float, film_model: str = "short", lam: float | None = None):
+    """Static film force in the line-of-centres frame, dimensionless (physics.md §2.6, §5).
+
+    Parameters
+    ----------
+    eps : float
+        Eccentricity ratio, 0 <= ε < 1.
+    film_model : {"short", "short_corrected"}
+    lam : float, optional
+        L/D of the film (needed for ``"short_corrected"``).
+
+    Returns
+    -------
+    f_r, f_t : float
+        Radial and tangential force in units of μ ω_s R L³ / c².
+
+    Examples
+    --------
+    >>> [round(x, 6) for x in static_force_rt(0.3)]    # -ε²/(1-ε²)², π ε / (4 (1-ε²)^1.5)
+    [-0.108683, 0.271425]
+    """
     s2 = 1.0 - eps * eps
     f_r = -eps * eps / (s2 * s2)
     f_t = PI * eps / (4.0 * s2 * math.sqrt(s2))
-    if model == "short_corrected":
+    if film_model == "short_corrected":
         from .finite_length import correction_factors_scalar
 
         fr, ft, _, _ = correction_factors_scalar(eps, lam)
@@ -233,9 +369,28 @@ def static_force_rt(eps: float, model: str = "short", lam: float | None = None):
     return f_r, f_t
 
 
-def static_load(eps: float, model: str = "short", lam: float | None = None) -> float:
-    """Dimensionless static load W̄ = W c² / (μ ω_s R L³) at eccentricity ratio ``eps``."""
-    f_r, f_t = static_force_rt(eps, model, lam)
+def static_load(eps: float, film_model: str = "short", lam: float | None = None) -> float:
+    """Dimensionless static load W̄ = W c² / (μ ω_s R L³) at eccentricity ratio ``eps``.
+
+    Parameters
+    ----------
+    eps : float
+        Eccentricity ratio, 0 <= ε < 1.
+    film_model : {"short", "short_corrected"}
+    lam : float, optional
+        L/D of the film (needed for ``"short_corrected"``).
+
+    Returns
+    -------
+    float
+        W̄ [-].
+
+    Examples
+    --------
+    >>> round(static_load(0.3), 6)     # physics.md §3 table
+    0.292375
+    """
+    f_r, f_t = static_force_rt(eps, film_model, lam)
     return math.hypot(f_r, f_t)
 
 
@@ -285,36 +440,94 @@ def _eps_from_load_corrected(wbar: float, lam: float):
     return eps, res.iterations
 
 
-def static_eccentricity(film: Film, load: float, omega_sum: float, model: str = "short"):
-    """Eccentricity ratio ε of a film carrying static ``load`` [N] at ``omega_sum`` [rad/s].
+@renamed_keyword("model", "film_model")
+def static_eccentricity(film: Film, load: float, omega_sum: float, film_model: str = "short"):
+    """Eccentricity ratio ε of a film carrying a static load (physics.md §3, §5).
 
-    Returns ``(eps, iterations)``.  Closed form (quartic) for the short film, a 1-D root for the
-    corrected film (physics.md §3, §5).
+    Closed form (quartic) for the short film, a 1-D root for the corrected film.
+
+    Parameters
+    ----------
+    film : Film
+    load : float
+        Static load [N] (its magnitude is used).
+    omega_sum : float
+        Sum of the two surfaces' angular speeds [rad/s], > 0.
+    film_model : {"short", "short_corrected"}
+        (``model=`` is the deprecated old name.)
+
+    Returns
+    -------
+    eps : float
+        Eccentricity ratio [-].
+    iterations : int
+        Newton (short) or Brent (corrected) iterations.
+
+    Raises
+    ------
+    ParameterError
+        ``load`` or ``omega_sum`` not a finite real number, or ``omega_sum`` <= 0.
+
+    Examples
+    --------
+    >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
+    >>> eps, _ = static_eccentricity(f, 5.61568, 3000.0)
+    >>> round(eps, 4)                     # physics.md §4.3
+    0.3
     """
-    model = check_model(model)
-    if not omega_sum > 0.0:
-        raise ParameterError(
-            f"film speed omega_sum = {omega_sum!r} rad/s is invalid for a static film solution: it must be > 0 "
-            "(a film carries a static load only when its surfaces move)")
+    film_model = check_model(film_model)
+    check_film(film)
+    load = check_real("load", load, "N")
+    omega_sum = check_real("omega_sum", omega_sum, "rad/s", minimum=0.0)
     wbar = abs(load) * film.clearance ** 2 / (film.viscosity * omega_sum * film.radius * film.length ** 3)
-    if model == "short":
+    if film_model == "short":
         return _eps_from_load_short(wbar)
     return _eps_from_load_corrected(wbar, film.length_to_diameter)
 
 
-def attitude_angle(eps: float, model: str = "short", lam: float | None = None) -> float:
-    """Attitude angle β [rad] between load line and line of centres (physics.md §3)."""
+def attitude_angle(eps: float, film_model: str = "short", lam: float | None = None) -> float:
+    """Attitude angle β between load line and line of centres (physics.md §3).
+
+    Parameters
+    ----------
+    eps : float
+        Eccentricity ratio, 0 <= ε < 1.
+    film_model : {"short", "short_corrected"}
+    lam : float, optional
+        L/D of the film (needed for ``"short_corrected"``).
+
+    Returns
+    -------
+    float
+        β [rad] (π/2 at ε = 0).
+
+    Examples
+    --------
+    >>> round(math.degrees(attitude_angle(0.3)), 3)     # physics.md §3 table
+    68.178
+    """
     if eps <= 0.0:
         return 0.5 * PI
-    f_r, f_t = static_force_rt(eps, model, lam)
+    f_r, f_t = static_force_rt(eps, film_model, lam)
     return math.atan2(f_t, -f_r)
 
 
-def static_position(film: Film, force, omega_sum: float, model: str = "short"):
+@renamed_keyword("model", "film_model")
+def static_position(film: Film, force, omega_sum: float, film_model: str = "short"):
     """Relative position ``e`` [m] at which the film exerts ``force`` [N] on its inner member.
 
     Closed-form inverse of the static film law (physics.md §3): ε from the load, the attitude angle β,
     and φ = ψ_F + β − π with ψ_F the direction of the required force.
+
+    Parameters
+    ----------
+    film : Film
+    force : array_like (2,)
+        Required force on the inner member [N] (x, y).
+    omega_sum : float
+        Sum of the two surfaces' angular speeds [rad/s], > 0.
+    film_model : {"short", "short_corrected"}
+        (``model=`` is the deprecated old name.)
 
     Returns
     -------
@@ -325,6 +538,11 @@ def static_position(film: Film, force, omega_sum: float, model: str = "short"):
     iterations : int
         Newton (short) or Brent (corrected) iterations of the 1-D inverse.
 
+    Raises
+    ------
+    ParameterError
+        ``force`` is not two finite real numbers, or ``omega_sum`` is not a finite number > 0.
+
     Examples
     --------
     >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
@@ -332,23 +550,78 @@ def static_position(film: Film, force, omega_sum: float, model: str = "short"):
     >>> round(eps, 4)
     0.3
     """
-    fx, fy = float(force[0]), float(force[1])
+    force = check_real_array("force", force, "N", last_axis=2)
+    if force.shape != (2,):
+        raise ParameterError(f"force = {force!r} has shape {force.shape}; expected one force (2,) [N]")
+    check_film(film)
+    omega_sum = check_real("omega_sum", omega_sum, "rad/s", minimum=0.0)
+    return static_position_kernel(film, float(force[0]), float(force[1]), omega_sum, check_model(film_model))
+
+
+def static_position_kernel(film: Film, fx: float, fy: float, omega_sum: float, film_model: str):
+    """:func:`static_position` without input checks, for the equilibrium solvers (their inputs are checked once).
+
+    Parameters
+    ----------
+    film : Film
+    fx, fy : float
+        Required force on the inner member [N] (finite).
+    omega_sum : float
+        Sum of the surfaces' angular speeds [rad/s], > 0.
+    film_model : {"short", "short_corrected"}
+
+    Returns
+    -------
+    e : ndarray (2,)
+        Relative position inner minus outer [m].
+    eps : float
+        Eccentricity ratio.
+    iterations : int
+
+    Examples
+    --------
+    >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
+    >>> e, eps, _ = static_position_kernel(f, 0.0, 5.61568, 3000.0, "short")
+    >>> bool(np.array_equal(e, static_position(f, (0.0, 5.61568), 3000.0)[0]))
+    True
+    """
     w = math.hypot(fx, fy)
-    eps, it = static_eccentricity(film, w, omega_sum, model)
+    wbar = w * film.clearance ** 2 / (film.viscosity * omega_sum * film.radius * film.length ** 3)
+    eps, it = _eps_from_load_short(wbar) if film_model == "short" else \
+        _eps_from_load_corrected(wbar, film.length_to_diameter)
     if eps >= 1.0:
         raise FilmContactError(f"static load {w:g} N drives eps to {eps:g}; valid range 0 <= eps < 1")
     if eps == 0.0:
         return np.zeros(2), 0.0, it
-    beta = attitude_angle(eps, model, film.length_to_diameter)
+    beta = attitude_angle(eps, film_model, film.length_to_diameter)
     phi = math.atan2(fy, fx) + beta - PI
     r = eps * film.clearance
     return np.array([r * math.cos(phi), r * math.sin(phi)]), eps, it
 
 
-def rt_coefficients(eps: float, model: str = "short", lam: float | None = None):
-    """Dimensionless stiffness and damping in the (r, t) frame (physics.md §4.2, §5).
+def rt_coefficients(eps: float, film_model: str = "short", lam: float | None = None):
+    """Dimensionless stiffness and damping in the (r, t) frame (physics.md §4.2, §5); valid down to ε = 0.
 
-    K in units of μ ω_s R L³ / c³ and C in units of μ R L³ / c³; valid down to ε = 0.
+    Parameters
+    ----------
+    eps : float
+        Eccentricity ratio, 0 <= ε < 1.
+    film_model : {"short", "short_corrected"}
+    lam : float, optional
+        L/D of the film (needed for ``"short_corrected"``).
+
+    Returns
+    -------
+    K : ndarray (2, 2)
+        Stiffness in units of μ ω_s R L³ / c³.
+    C : ndarray (2, 2)
+        Damping in units of μ R L³ / c³.
+
+    Examples
+    --------
+    >>> K, C = rt_coefficients(0.0)          # centred film: pure cross-coupling, isotropic damping
+    >>> K.round(4).tolist(), C.round(4).tolist()
+    ([[0.0, 0.7854], [-0.7854, 0.0]], [[1.5708, -0.0], [-0.0, 1.5708]])
     """
     e2 = eps * eps
     s2 = 1.0 - e2
@@ -363,7 +636,7 @@ def rt_coefficients(eps: float, model: str = "short", lam: float | None = None):
     c_tt = PI / (2.0 * s3)
     K = np.array([[k_rr, k_rt], [k_tr, k_tt]])
     C = np.array([[c_rr, c_rt], [c_rt, c_tt]])
-    if model == "short_corrected":
+    if film_model == "short_corrected":
         from .finite_length import correction_factors_scalar
 
         fr, ft, dfr, dft = correction_factors_scalar(eps, lam)
@@ -375,12 +648,36 @@ def rt_coefficients(eps: float, model: str = "short", lam: float | None = None):
     return K, C
 
 
-def film_coefficients(film: Film, e, omega_sum: float, model: str = "short"):
+@renamed_keyword("model", "film_model")
+def film_coefficients(film: Film, e, omega_sum: float, film_model: str = "short"):
     """Linearized stiffness and damping of a film at a static point.
 
-    ``K = -dF/de`` [N/m] and ``C = -dF/de_dot`` [N s/m] (2x2, x-y frame), F the force on the inner member,
-    evaluated at relative position ``e`` [m] with zero relative velocity and ``omega_sum`` [rad/s] held
-    fixed. Uses the (r, t) form, so it stays finite as ε → 0.
+    ``K = -dF/de`` and ``C = -dF/de_dot`` (x-y frame), F the force on the inner member, at zero relative velocity
+    with ``omega_sum`` held fixed. Uses the (r, t) form, so it stays finite as ε → 0.
+
+    Parameters
+    ----------
+    film : Film
+    e : array_like (2,)
+        Relative position inner minus outer centre [m], |e| < clearance.
+    omega_sum : float
+        Sum of the two surfaces' angular speeds [rad/s].
+    film_model : {"short", "short_corrected"}
+        (``model=`` is the deprecated old name.)
+
+    Returns
+    -------
+    K : ndarray (2, 2)
+        Stiffness [N/m].
+    C : ndarray (2, 2)
+        Damping [N s/m].
+
+    Raises
+    ------
+    ParameterError
+        ``e`` is not two finite real numbers or ``omega_sum`` not a finite real number.
+    FilmContactError
+        |e| >= clearance.
 
     Examples
     --------
@@ -389,13 +686,17 @@ def film_coefficients(film: Film, e, omega_sum: float, model: str = "short"):
     >>> round(float(K[0, 0]) / 1e5, 2), round(float(C[1, 1]), 0)       # physics.md §4.3
     (3.98, 449.0)
     """
-    model = check_model(model)
-    e = np.asarray(e, dtype=float)
+    film_model = check_model(film_model)
+    check_film(film)
+    e = check_real_array("e", e, "m", last_axis=2)
+    if e.shape != (2,):
+        raise ParameterError(f"e = {e!r} has shape {e.shape}; expected one relative position (2,) [m]")
+    omega_sum = check_real("omega_sum", omega_sum, "rad/s")
     ecc = math.hypot(e[0], e[1])
     c = film.clearance
     eps = ecc / c
     _check_contact(eps)
-    Kd, Cd = rt_coefficients(eps, model, film.length_to_diameter)
+    Kd, Cd = rt_coefficients(eps, film_model, film.length_to_diameter)
     if ecc > 0.0:
         cp, sp = e[0] / ecc, e[1] / ecc
     else:
@@ -412,16 +713,44 @@ def film_coefficients(film: Film, e, omega_sum: float, model: str = "short"):
 # --------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def petroff_kernel(radius, length, clearance, viscosity, eps):
-    """A = 2π μ R³ L / (c sqrt(1-ε²)) [N m s] (scalar or array ε)."""
+    """Petroff coefficient A = 2π μ R³ L / (c sqrt(1-ε²)) [N m s] (compiled; scalar or array ``eps``).
+
+    Parameters
+    ----------
+    radius, length, clearance, viscosity : float
+        Film geometry [m] and viscosity [Pa s].
+    eps : float or ndarray
+        Eccentricity ratio(s).
+
+    Returns
+    -------
+    float or ndarray
+        A [N m s].
+    """
     return 2.0 * PI * viscosity * radius ** 3 * length / (clearance * np.sqrt(1.0 - eps * eps))
 
 
 @njit(cache=True)
 def film_torques_kernel(radius, length, clearance, viscosity, rx, ry, fx, fy, omega_inner, omega_outer):
-    """Wall torques ``(T_inner_wall, T_outer_wall)`` [N m] of one film (scalars or equal-shape arrays).
+    """Wall torques of one film (compiled; scalars or equal-shape arrays), physics.md §6.1.
 
-    ``T_inner = +M_P(ω_outer − ω_inner) − (e × F)/2``, ``T_outer = −M_P(ω_outer − ω_inner) − (e × F)/2``
-    (physics.md §6.1), e = (rx, ry) inner minus outer centre, F = (fx, fy) the force on the inner member.
+    ``T_inner = +M_P(ω_outer − ω_inner) − (e × F)/2``, ``T_outer = −M_P(ω_outer − ω_inner) − (e × F)/2``.
+
+    Parameters
+    ----------
+    radius, length, clearance, viscosity : float
+        Film geometry [m] and viscosity [Pa s].
+    rx, ry : float or ndarray
+        e = inner minus outer centre [m].
+    fx, fy : float or ndarray
+        Film force on the inner member [N].
+    omega_inner, omega_outer : float or ndarray
+        Spin speeds of the inner and outer wall [rad/s].
+
+    Returns
+    -------
+    T_inner_wall, T_outer_wall : float or ndarray
+        [N m], CCW about +z.
     """
     eps = np.sqrt(rx * rx + ry * ry) / clearance
     mp = petroff_kernel(radius, length, clearance, viscosity, eps) * (omega_outer - omega_inner)
@@ -430,28 +759,97 @@ def film_torques_kernel(radius, length, clearance, viscosity, rx, ry, fx, fy, om
 
 
 def petroff_coefficient(film: Film, eps):
-    """A = 2π μ R³ L / (c sqrt(1-ε²)) [N m s]: Petroff torque per unit speed difference."""
+    """Petroff torque per unit speed difference, A = 2π μ R³ L / (c sqrt(1-ε²)).
+
+    Parameters
+    ----------
+    film : Film
+    eps : float or array_like
+        Eccentricity ratio(s), 0 <= ε < 1.
+
+    Returns
+    -------
+    float or ndarray
+        A [N m s].
+
+    Examples
+    --------
+    >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
+    >>> round(petroff_coefficient(f, 0.0) * 1e6, 4)      # 2π μ R³ L / c [µN m s]
+    0.9793
+    """
     eps = np.asarray(eps, dtype=float) if np.ndim(eps) else float(eps)
     return petroff_kernel(film.radius, film.length, film.clearance, film.viscosity, eps)
 
 
 def film_torques(film: Film, e, force, omega_inner, omega_outer):
-    """Torques [N m] (CCW about +z) the film exerts on its inner and outer wall, each about its own centre.
+    """Torques the film exerts on its inner and outer wall, each about its own centre (physics.md §6.1).
 
     ``T_inner = +M_P(ω_outer − ω_inner) − (e × F)/2`` and ``T_outer = −M_P(ω_outer − ω_inner) − (e × F)/2``,
-    with ``e × F = e_x F_y − e_y F_x`` and F the film force on the inner member (physics.md §6.1).
-    Works on arrays (..., 2).
+    with ``e × F = e_x F_y − e_y F_x``.
+
+    Parameters
+    ----------
+    film : Film
+    e : array_like (..., 2)
+        Relative position inner minus outer centre [m].
+    force : array_like (..., 2)
+        Film force on the inner member [N] (e.g. from :func:`film_force`).
+    omega_inner, omega_outer : float or array_like (...)
+        Spin speeds of the inner and outer wall [rad/s].
+
+    Returns
+    -------
+    T_inner_wall, T_outer_wall : float or ndarray (...)
+        [N m], CCW about +z.
+
+    Raises
+    ------
+    ParameterError
+        An input is not finite, not real or of the wrong shape.
+
+    Examples
+    --------
+    >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
+    >>> ti, to = film_torques(f, [0.0, 0.0], [0.0, 0.0], 1000.0, 0.0)   # centred: Petroff torques only
+    >>> round(ti * 1e3, 4), round(to * 1e3, 4)                          # [mN m]
+    (-0.9793, 0.9793)
     """
-    e, force = np.asarray(e, dtype=float), np.asarray(force, dtype=float)
-    args = np.broadcast_arrays(e[..., 0], e[..., 1], force[..., 0], force[..., 1],
-                               np.asarray(omega_inner, dtype=float), np.asarray(omega_outer, dtype=float))
+    check_film(film)
+    e = check_real_array("e", e, "m", last_axis=2)
+    force = check_real_array("force", force, "N", last_axis=2)
+    w_i = check_real_array("omega_inner", omega_inner, "rad/s")
+    w_o = check_real_array("omega_outer", omega_outer, "rad/s")
+    try:
+        args = np.broadcast_arrays(e[..., 0], e[..., 1], force[..., 0], force[..., 1], w_i, w_o)
+    except ValueError:
+        raise ParameterError(f"e (shape {e.shape}), force (shape {force.shape}), omega_inner (shape {w_i.shape}) "
+                             f"and omega_outer (shape {w_o.shape}) do not broadcast") from None
     if args[0].ndim == 0:
         return film_torques_kernel(film.radius, film.length, film.clearance, film.viscosity, *map(float, args))
     args = [np.array(a) for a in args]
     return film_torques_kernel(film.radius, film.length, film.clearance, film.viscosity, *args)
 
 
-def offset_torque_coefficient(film: Film, eps: float, model: str = "short") -> float:
-    """k with (e/2) F_t = k ω_s at a static point [N m s] (physics.md §6.2, §6.3)."""
-    _, f_t = static_force_rt(eps, model, film.length_to_diameter)
+def offset_torque_coefficient(film: Film, eps: float, film_model: str = "short") -> float:
+    """Pressure-offset torque coefficient k with (e/2) F_t = k ω_s at a static point (physics.md §6.2, §6.3).
+
+    Parameters
+    ----------
+    film : Film
+    eps : float
+        Eccentricity ratio, 0 <= ε < 1.
+    film_model : {"short", "short_corrected"}
+
+    Returns
+    -------
+    float
+        k [N m s].
+
+    Examples
+    --------
+    >>> offset_torque_coefficient(Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3), 0.0)   # centred film: no offset torque
+    0.0
+    """
+    _, f_t = static_force_rt(eps, film_model, film.length_to_diameter)
     return 0.5 * eps * film.clearance * f_t * film.viscosity * film.radius * film.length ** 3 / film.clearance ** 2

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .equilibrium import bearing_equilibrium
-from .errors import ParameterError
+from .errors import ParameterError, check_real, check_system
 from .film import film_coefficients
 from .methods import get_method
 from .units import rpm_to_rad_s
@@ -32,6 +32,15 @@ class LinearSystem:
     equilibrium : tuple of BearingEquilibrium or None
     ring_dofs : list of (int, int) or None
         Global indices of (x, y) of each ring.
+    n_rotor_dof : int
+        Number of rotor DoFs (they come first).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ls = frb.linear_system(frb.turbocharger(), "A", 0.0)
+    >>> ls.dof_labels[:4], ls.n_rotor_dof
+    (['node0.v', 'node0.w', 'node0.thx', 'node0.thy'], 16)
     """
 
     M: np.ndarray
@@ -45,9 +54,16 @@ class LinearSystem:
     n_rotor_dof: int
 
     def planes(self):
-        """``(a, b, sign)``: DoF indices of the x–z plane ``a`` = (v, θy, ring x) and the matching y–z plane
-        ``b`` = (w, θx, ring y), with ``sign`` mapping b to (w, −θx, ring y) so that the complex coordinate
-        ``a + i·sign·b`` is (v + i w, θy − i θx, x + i y)."""
+        """DoF indices of the two bending planes, for the complex-coordinate solve.
+
+        Returns
+        -------
+        a, b : ndarray of int
+            The x–z plane ``a`` = (v, θy, ring x) and the matching y–z plane ``b`` = (w, θx, ring y).
+        sign : ndarray
+            Maps b to (w, −θx, ring y), so that the complex coordinate ``a + i·sign·b`` is (v + i w, θy − i θx,
+            x + i y).
+        """
         nn = self.n_rotor_dof // 4
         a = [4 * i + k for i in range(nn) for k in (0, 3)]
         b = [4 * i + k for i in range(nn) for k in (1, 2)]
@@ -60,7 +76,23 @@ class LinearSystem:
 
 
 def film_pair_matrix(k_inner, k_outer):
-    """Journal/ring coupling of two films (paper eq. 27): [[K_I, −K_I], [−K_I, K_I + K_O]] (4 x 4)."""
+    """Journal/ring coupling of two films (paper eq. 27).
+
+    Parameters
+    ----------
+    k_inner, k_outer : ndarray (2, 2)
+        Inner and outer film matrix (stiffness [N/m] or damping [N s/m]).
+
+    Returns
+    -------
+    ndarray (4, 4)
+        [[K_I, −K_I], [−K_I, K_I + K_O]] on [journal x, journal y, ring x, ring y].
+
+    Examples
+    --------
+    >>> film_pair_matrix(np.eye(2), 2 * np.eye(2))[:, 0] + 0.0     # + 0.0: print -0.0 as 0.0
+    array([ 1.,  0., -1.,  0.])
+    """
     return np.block([[k_inner, -k_inner], [-k_inner, k_inner + k_outer]])
 
 
@@ -69,6 +101,21 @@ def series_elementwise(a, b):
 
     Where one entry is 0 the series value is 0; where a + b = 0 with a·b ≠ 0 the result is infinite —
     the artefact physics.md §12 item 7 warns about; it is reported as an error.
+
+    Parameters
+    ----------
+    a, b : ndarray
+        Equal-shape coefficient matrices.
+
+    Returns
+    -------
+    ndarray
+        a b / (a + b) element-wise (0 where a b = 0).
+
+    Examples
+    --------
+    >>> series_elementwise(np.array([2.0, 0.0]), np.array([2.0, 5.0])).tolist()
+    [1.0, 0.0]
     """
     num = a * b
     den = a + b
@@ -84,8 +131,29 @@ def series_elementwise(a, b):
 def bearing_matrices(bearing, eq, method, film_model="short", **kw):
     """Stiffness and damping of one bearing for ``method``.
 
-    Returns ``(K, C)``: 2 x 2 on the journal for methods without ring DoFs, 4 x 4 on
-    ``[journal x, journal y, ring x, ring y]`` for methods with ring DoFs.
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    eq : BearingEquilibrium or None
+        Its equilibrium (film methods only).
+    method : str
+        One of A, B, C, D, E, F, G, I, J.
+    film_model : {"short", "short_corrected"}
+    **kw
+        Spring stiffnesses of methods A, B, E: ``k``, ``kx``, ``ky`` [N/m].
+
+    Returns
+    -------
+    K, C : ndarray
+        [N/m], [N s/m]: 2 x 2 on the journal for methods without ring DoFs, 4 x 4 on
+        ``[journal x, journal y, ring x, ring y]`` for methods with ring DoFs.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> K, C = bearing_matrices(frb.turbocharger().bearings[0], None, "B")
+    >>> K.tolist(), bool(C.any())
+    ([[1000000.0, 0.0], [0.0, 2000000.0]], False)
     """
     m = get_method(method)
     opt = m.options(**kw)
@@ -152,12 +220,10 @@ def mass_matrix(system, method="J"):
 
 
 def _check_speed(m, speed_rpm):
-    speed_rpm = float(speed_rpm)
+    speed_rpm = check_real("speed_rpm", speed_rpm, "rpm")
     if m.needs_films and not speed_rpm > 0.0:
         raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for method {m.letter}: linearized films "
                              "need a rotor speed > 0")
-    if not np.isfinite(speed_rpm):
-        raise ParameterError(f"speed_rpm = {speed_rpm!r} is invalid: it must be finite")
     return speed_rpm
 
 
@@ -182,6 +248,12 @@ def linear_system(system, method="J", speed_rpm=150e3, equilibria=None, **kw) ->
         M [kg ...], C = C_b + Ω G [N s/m ...] and K = K_rotor + K_b [N/m ...] on the rotor DoFs followed by the
         rings' (x, y) for methods with ring DoFs.
 
+    Raises
+    ------
+    ParameterError
+        Not a system, an unknown method or option, a speed that is not a finite real number (> 0 for the film
+        methods), or ``equilibria`` of the wrong length.
+
     Examples
     --------
     >>> import frbmodel as frb
@@ -189,8 +261,12 @@ def linear_system(system, method="J", speed_rpm=150e3, equilibria=None, **kw) ->
     >>> ls.M.shape
     (20, 20)
     """
+    check_system(system)
     m = get_method(method)
     speed_rpm = _check_speed(m, speed_rpm)
+    if m.needs_films and equilibria is not None and len(equilibria) != len(system.bearings):
+        raise ParameterError(f"equilibria has {len(equilibria)} entries; expected one BearingEquilibrium per bearing "
+                             f"({len(system.bearings)})")
     rotor = system.rotor
     n_r = rotor.n_dof
     omega = rpm_to_rad_s(speed_rpm)

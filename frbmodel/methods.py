@@ -25,12 +25,35 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import ParameterError
+from .errors import ParameterError, check_real
 
 
 @dataclass(frozen=True)
 class Method:
-    """Ingredients of one bearing-modelling method (a row of the paper's Table 1)."""
+    """Ingredients of one bearing-modelling method (a row of the paper's Table 1).
+
+    Attributes
+    ----------
+    letter : str
+        A, B, C, D, E, F, G, I or J.
+    title : str
+        One-line description.
+    ring_dofs : bool
+        The global system has ring (x, y) DoFs (the paper's eq. (8)).
+    support : str
+        isotropic_spring | orthotropic_spring | outer_film | series_films | ring_springs | films.
+    equilibrium : str or None
+        None | outer_film | uncoupled | coupled | petroff | torque.
+    rsr : str or None
+        None | eq6 | eq7 | torque.
+    parameters, defaults : tuple
+        Names and default values [N/m] of the keyword parameters the method takes.
+
+    Examples
+    --------
+    >>> METHODS["B"].options(kx=3e6)
+    {'kx': 3000000.0, 'ky': 2000000.0}
+    """
 
     letter: str
     title: str
@@ -47,9 +70,24 @@ class Method:
         return self.equilibrium is not None
 
     def options(self, **kwargs) -> dict:
-        """Merge user keyword parameters with the defaults; reject unknown or invalid ones."""
-        from .errors import check_positive
+        """Merge user keyword parameters with the defaults.
 
+        Parameters
+        ----------
+        **kwargs
+            Spring stiffnesses ``k``, ``kx``, ``ky`` [N/m] the method takes (None: default).
+
+        Returns
+        -------
+        dict
+            Every parameter of the method with its value [N/m].
+
+        Raises
+        ------
+        ParameterError
+            A parameter the method does not take, or a value that is not a finite real number > 0 (strings are
+            refused, not converted).
+        """
         out = dict(zip(self.parameters, self.defaults))
         for k, v in kwargs.items():
             if v is None:
@@ -57,7 +95,7 @@ class Method:
             if k not in out:
                 raise ParameterError(f"parameter {k!r} is not used by method {self.letter}; "
                                      f"valid: {list(self.parameters) or 'none'}")
-            out[k] = check_positive(f"method {self.letter} {k}", v, "N/m")
+            out[k] = check_real(f"method {self.letter} {k}", v, "N/m", minimum=0.0)
         return out
 
 

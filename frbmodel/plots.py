@@ -16,6 +16,9 @@ from .whirl import FILM_NAMES
 MARKERS = {"forward": ("^", "triangle-up"), "backward": ("v", "triangle-down"), "mixed": ("o", "circle")}
 #: colour range of modal damping, as in the paper's figures
 D_MIN, D_MAX = -1.0, 0.7
+#: colour of neutral modes (|D| within its round-off bound), which the damping colour map would draw white
+NEUTRAL_COLOR, NEUTRAL_COLOR_PLOTLY = "0.45", "rgb(115, 115, 115)"
+NEUTRAL_LABEL = "neutral (|D| <= round-off bound)"
 WHIRL_STYLES = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a")
 
 
@@ -74,8 +77,9 @@ def _default_fmax(cd):
 
 def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None):
     """Holistic Campbell diagram: frequency vs speed, colour = modal damping (diverging, centred at 0),
-    marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge;
-    dashed film whirl curves above their onset; optional 1X line.
+    marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge, neutral modes
+    (|D| within its round-off bound, e.g. every mode of the undamped methods A, B, E) grey; dashed film whirl curves
+    above their onset; optional 1X line.
 
     Parameters
     ----------
@@ -104,28 +108,36 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
     cmap = plt.get_cmap("RdBu")
     S = np.repeat(cd.speeds_rpm[:, None], cd.n_modes, axis=1) / 1e3
     F, D, P = cd.frequencies_hz, cd.damping, cd.precession
+    state = cd.stability
+    shown = np.isfinite(F) & (F <= fmax)
     sc = None
     for prec, (mk, _) in MARKERS.items():
         for unstable in (False, True):
-            sel = (P == prec) & np.isfinite(F) & (F <= fmax) & ((np.nan_to_num(D, nan=1) < 0) == unstable)
+            sel = shown & (P == prec) & (state == ("unstable" if unstable else "stable"))
             if not sel.any():
                 continue
             sc = ax.scatter(S[sel], F[sel], c=np.clip(D[sel], D_MIN, D_MAX), cmap=cmap, norm=norm, marker=mk,
                             s=46 if unstable else 16, edgecolors="k" if unstable else "none",
                             linewidths=0.8 if unstable else 0, zorder=3 if unstable else 2)
+        sel = shown & (P == prec) & (state == "neutral")
+        if sel.any():
+            ax.scatter(S[sel], F[sel], color=NEUTRAL_COLOR, marker=mk, s=16, linewidths=0, zorder=2)
     if whirl:
         _plot_whirl(ax, cd)
     if one_x:
         ax.plot(cd.speeds_rpm / 1e3, cd.speeds_rpm / 60.0, color="0.4", lw=1, ls=":", label="1X")
-    for prec, (mk, _) in MARKERS.items():
-        ax.scatter([], [], marker=mk, c="0.5", s=25, label=prec)
-    ax.scatter([], [], marker="o", facecolors="none", edgecolors="k", s=46, label="unstable (D < 0)")
+    for prec, (mk, _) in MARKERS.items():  # shape = precession (hollow: the fill is the damping colour)
+        ax.scatter([], [], marker=mk, facecolors="none", edgecolors="0.2", s=25, label=prec)
+    ax.scatter([], [], marker="o", color=cmap(norm(-0.5)), edgecolors="k", linewidths=0.8, s=46,
+               label="unstable (D < -round-off bound)")
+    if (shown & (state == "neutral")).any():
+        ax.scatter([], [], marker="s", color=NEUTRAL_COLOR, s=25, label=NEUTRAL_LABEL)
     lo, hi = cd.speeds_rpm.min() / 1e3, cd.speeds_rpm.max() / 1e3
     ax.set_xlim(lo - 0.05 * max(hi, 1.0) if hi == lo else lo, hi + 0.05 * max(hi, 1.0) if hi == lo else hi)
     ax.set_ylim(0, fmax)
     ax.set_xlabel("rotor speed [krpm]")
     ax.set_ylabel("frequency [Hz]")
-    ax.set_title(title or f"Holistic Campbell diagram, method {cd.method} ({cd.meta.get('system', '')})", fontsize=10)
+    ax.set_title(title or f"Holistic Campbell diagram, method {cd.method} ({cd.system_name})", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", ncol=2)
     if sc is not None:
@@ -135,7 +147,8 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
 
 
 def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
-    """Interactive holistic Campbell diagram (plotly); hover shows speed, frequency, D and precession.
+    """Interactive holistic Campbell diagram (plotly); hover shows speed, frequency, D, its stability and the
+    precession. Neutral modes (|D| within its round-off bound) are one grey trace of their own.
 
     Parameters
     ----------
@@ -153,12 +166,14 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
     S = np.repeat(cd.speeds_rpm[:, None], cd.n_modes, axis=1)
     F, D, P, Kd = cd.frequencies_hz, cd.damping, cd.precession, cd.mode_kind
     modes = np.repeat(np.arange(cd.n_modes)[None, :], cd.speeds_rpm.size, axis=0)
+    state = cd.stability
+    shown = np.isfinite(F) & (F <= fmax)
     first = True
     for prec, (_, sym) in MARKERS.items():
-        sel = (P == prec) & np.isfinite(F) & (F <= fmax)
+        sel = shown & (P == prec) & (state != "neutral")
         if not sel.any():
             continue
-        uns = np.nan_to_num(D[sel], nan=1) < 0
+        uns = state[sel] == "unstable"
         fig.add_trace(go.Scatter(
             x=S[sel], y=F[sel], mode="markers", name=prec,
             marker=dict(symbol=sym, size=np.where(uns, 10, 6), color=np.clip(D[sel], D_MIN, D_MAX),
@@ -169,6 +184,15 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
             hovertemplate=("speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>D %{customdata[0]:.4f}<br>" + prec +
                            " precession<br>mode %{customdata[1]} (%{customdata[2]})<extra></extra>")))
         first = False
+    sel = shown & (state == "neutral")
+    if sel.any():
+        symbols = np.array([MARKERS.get(p, MARKERS["mixed"])[1] for p in P[sel]], dtype=object)
+        fig.add_trace(go.Scatter(
+            x=S[sel], y=F[sel], mode="markers", name=NEUTRAL_LABEL,
+            marker=dict(symbol=symbols, size=6, color=NEUTRAL_COLOR_PLOTLY),
+            customdata=np.stack([D[sel], modes[sel], Kd[sel], P[sel]], axis=-1),
+            hovertemplate=("speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>D %{customdata[0]:.2e} (neutral)<br>"
+                           "%{customdata[3]} precession<br>mode %{customdata[1]} (%{customdata[2]})<extra></extra>")))
     if whirl:
         for k, name, sp_, w in whirl_curves(cd):
             fig.add_trace(go.Scatter(x=sp_, y=w, mode="lines", name=f"whirl {name}",
@@ -179,7 +203,7 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True):
     if one_x:
         fig.add_trace(go.Scatter(x=cd.speeds_rpm, y=cd.speeds_rpm / 60, mode="lines", name="1X",
                                  line=dict(dash="dot", color="gray")))
-    fig.update_layout(title=f"Holistic Campbell diagram, method {cd.method} ({cd.meta.get('system', '')})",
+    fig.update_layout(title=f"Holistic Campbell diagram, method {cd.method} ({cd.system_name})",
                       xaxis_title="rotor speed [rpm]", yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
                       template="plotly_white", legend=dict(x=1.12))
     return fig

@@ -1,7 +1,8 @@
 """The paper's Table 2 turbocharger in SI units (physics.md §10)."""
 from __future__ import annotations
 
-from .film import Film
+from .errors import check_real
+from .film import Film, check_model
 from .parameters import FloatingRingBearing, Turbocharger
 from .rotor import Disc, Rotor, ShaftElement
 
@@ -16,8 +17,20 @@ RUNUP_DURATION = 1.0
 
 
 def table2_rotor() -> Rotor:
-    """3 shaft elements (33, 39, 33 mm, d = 11 mm, steel) with the turbine wheel at node 0 and the
-    compressor wheel at node 3."""
+    """The rotor of the paper's Table 2.
+
+    Returns
+    -------
+    Rotor
+        3 shaft elements (33, 39, 33 mm, d = 11 mm, steel) with the turbine wheel at node 0 and the compressor
+        wheel at node 3.
+
+    Examples
+    --------
+    >>> r = table2_rotor()
+    >>> r.n_nodes, [d.name for d in r.discs]
+    (4, ['turbine_wheel', 'compressor_wheel'])
+    """
     d = 11e-3
     shaft = [ShaftElement(l, d, 0.0, 7860.0, 2e11) for l in (33e-3, 39e-3, 33e-3)]
     discs = [Disc(0, 0.326, 8.1e-5, 7.7e-5, "turbine_wheel"), Disc(3, 0.118, 4.4e-5, 3.27e-5, "compressor_wheel")]
@@ -39,6 +52,16 @@ def turbocharger(outer_clearance: float = PAPER_OUTER_CLEARANCES[0], film_model:
     viscosity_turbine, viscosity_compressor : float
         Oil viscosity of both films of the turbine / compressor bearing [Pa s].
 
+    Returns
+    -------
+    Turbocharger
+
+    Raises
+    ------
+    ParameterError
+        An argument that is not a finite real number > 0 (a string such as ``"36e-6"`` is refused, not converted),
+        or an unknown film model; the message names the argument, its value and the valid range.
+
     Notes
     -----
     The ring mass is 7.2e-3 kg: the table's "7.2 kg" is a typo (physics.md §10: a steel ring of these
@@ -50,6 +73,11 @@ def turbocharger(outer_clearance: float = PAPER_OUTER_CLEARANCES[0], film_model:
     >>> tc.bearings[0].outer.clearance
     4.6e-05
     """
+    outer_clearance, inner_clearance, viscosity_turbine, viscosity_compressor = (
+        check_real(name, value, unit, minimum=0.0) for name, value, unit in (
+            ("outer_clearance", outer_clearance, "m"), ("inner_clearance", inner_clearance, "m"),
+            ("viscosity_turbine", viscosity_turbine, "Pa s"), ("viscosity_compressor", viscosity_compressor, "Pa s")))
+    check_model(film_model)
     bearings = []
     for name, node, mu in (("turbine", 1, viscosity_turbine), ("compressor", 2, viscosity_compressor)):
         inner = Film(radius=5.5e-3, length=6.5e-3, clearance=inner_clearance, viscosity=mu)

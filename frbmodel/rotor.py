@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import ParameterError, check_positive
+from .errors import ParameterError, check_real
 
 DOF_PER_NODE = 4
 GRAVITY = 9.81  # [m/s²], physics.md §1
@@ -69,6 +69,17 @@ class ShaftElement:
         Material density [kg/m³].
     youngs_modulus : float
         Young's modulus [Pa].
+
+    Raises
+    ------
+    ParameterError
+        A value that is not a finite real number in its range (strings are refused, not converted).
+
+    Examples
+    --------
+    >>> e = ShaftElement(0.033, 0.011)
+    >>> round(e.mass * 1e3, 2)      # [g]: 7860 kg/m³ · π/4 · (11 mm)² · 33 mm
+    24.65
     """
 
     length: float
@@ -80,8 +91,8 @@ class ShaftElement:
     def __post_init__(self):
         for name, unit in (("length", "m"), ("outer_diameter", "m"), ("density", "kg/m^3"),
                            ("youngs_modulus", "Pa")):
-            object.__setattr__(self, name, check_positive(f"shaft element {name}", getattr(self, name), unit))
-        di = check_positive("shaft element inner_diameter", self.inner_diameter, "m", allow_zero=True)
+            object.__setattr__(self, name, check_real(f"shaft element {name}", getattr(self, name), unit, minimum=0.0))
+        di = check_real("shaft element inner_diameter", self.inner_diameter, "m", minimum=0.0, inclusive=True)
         if di >= self.outer_diameter:
             raise ParameterError(f"shaft element inner_diameter = {di:g} m is invalid: valid range "
                                  f"0 <= inner_diameter < outer_diameter = {self.outer_diameter:g} m")
@@ -103,7 +114,19 @@ class ShaftElement:
         return self.density * self.area * self.length
 
     def matrices(self):
-        """Element ``(M, K, G)`` (8 x 8) in DoF order [v1, w1, θx1, θy1, v2, w2, θx2, θy2]."""
+        """Element matrices of the Euler–Bernoulli element with rotary inertia (physics.md §7).
+
+        Returns
+        -------
+        M, K, G : ndarray (8, 8)
+            Mass, stiffness and gyroscopic matrix (per rad/s) in DoF order [v1, w1, θx1, θy1, v2, w2, θx2, θy2].
+
+        Examples
+        --------
+        >>> M, K, G = ShaftElement(0.1, 0.01).matrices()
+        >>> bool(np.allclose(G, -G.T)), bool(np.allclose(K, K.T))
+        (True, True)
+        """
         l, E, rho = self.length, self.youngs_modulus, self.density
         A, I = self.area, self.second_moment
         kb = E * I / l ** 3 * np.array([[12, 6 * l, -12, 6 * l],
@@ -140,6 +163,7 @@ class ShaftElement:
         return M, K, G
 
     def to_dict(self) -> dict:
+        """The element as plain data [SI]."""
         return asdict(self)
 
 
@@ -159,6 +183,16 @@ class Disc:
         I_d [kg m²]
     name : str
         e.g. ``"turbine_wheel"``.
+
+    Raises
+    ------
+    ParameterError
+        A mass or inertia that is not a finite real number in its range, or a node that is not an integer >= 0.
+
+    Examples
+    --------
+    >>> Disc(0, 0.326, 8.1e-5, 7.7e-5, "turbine_wheel").mass
+    0.326
     """
 
     node: int
@@ -168,16 +202,18 @@ class Disc:
     name: str = "disc"
 
     def __post_init__(self):
-        object.__setattr__(self, "mass", check_positive(f"disc '{self.name}' mass", self.mass, "kg"))
-        object.__setattr__(self, "polar_inertia", check_positive(
-            f"disc '{self.name}' polar_inertia", self.polar_inertia, "kg m^2", allow_zero=True))
-        object.__setattr__(self, "diametral_inertia", check_positive(
-            f"disc '{self.name}' diametral_inertia", self.diametral_inertia, "kg m^2", allow_zero=True))
-        if int(self.node) != self.node or self.node < 0:
+        object.__setattr__(self, "mass", check_real(f"disc '{self.name}' mass", self.mass, "kg", minimum=0.0))
+        object.__setattr__(self, "polar_inertia", check_real(
+            f"disc '{self.name}' polar_inertia", self.polar_inertia, "kg m^2", minimum=0.0, inclusive=True))
+        object.__setattr__(self, "diametral_inertia", check_real(
+            f"disc '{self.name}' diametral_inertia", self.diametral_inertia, "kg m^2", minimum=0.0, inclusive=True))
+        if isinstance(self.node, (bool, str)) or not isinstance(self.node, (int, np.integer, float)) \
+                or int(self.node) != self.node or self.node < 0:
             raise ParameterError(f"disc '{self.name}' node = {self.node!r} is invalid: must be an integer >= 0")
         object.__setattr__(self, "node", int(self.node))
 
     def to_dict(self) -> dict:
+        """The disc as plain data [SI]."""
         return asdict(self)
 
 
@@ -186,6 +222,18 @@ class Rotor:
     """Shaft elements in series (node i to node i+1) plus rigid discs.
 
     Attributes ``M``, ``K``, ``G`` are the assembled global matrices (``4 * n_nodes`` square).
+
+    Parameters
+    ----------
+    shaft : sequence of ShaftElement
+        At least one element; element i joins node i and node i+1.
+    discs : sequence of Disc
+        Rigid discs at nodes 0 .. n_nodes − 1.
+
+    Raises
+    ------
+    ParameterError
+        No shaft element, an item that is not a ShaftElement / Disc, or a disc on a node the shaft lacks.
 
     Examples
     --------
@@ -202,16 +250,23 @@ class Rotor:
         object.__setattr__(self, "discs", tuple(self.discs))
         if len(self.shaft) < 1:
             raise ParameterError("rotor needs at least 1 shaft element; got 0")
+        for what, items, cls in (("shaft", self.shaft, ShaftElement), ("discs", self.discs, Disc)):
+            for i, item in enumerate(items):
+                if not isinstance(item, cls):
+                    raise ParameterError(f"rotor {what}[{i}] = {item!r:.60} is a {type(item).__name__}; expected a "
+                                         f"{cls.__name__}")
         for d in self.discs:
             if d.node >= self.n_nodes:
                 raise ParameterError(f"disc '{d.name}' node = {d.node} is invalid: valid range 0..{self.n_nodes - 1}")
 
     @property
     def n_nodes(self) -> int:
+        """Number of nodes (shaft elements + 1)."""
         return len(self.shaft) + 1
 
     @property
     def n_dof(self) -> int:
+        """Number of DoFs, 4 per node."""
         return DOF_PER_NODE * self.n_nodes
 
     @cached_property
@@ -225,6 +280,21 @@ class Rotor:
         return sum(e.mass for e in self.shaft) + sum(d.mass for d in self.discs)
 
     def disc(self, name: str) -> Disc:
+        """The disc called ``name``.
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        Disc
+
+        Raises
+        ------
+        ParameterError
+            No disc of that name (the message lists the discs).
+        """
         for d in self.discs:
             if d.name == name:
                 return d
@@ -303,8 +373,18 @@ class Rotor:
         return self.M.copy(), omega * self.G, K
 
     def state_matrix(self, omega: float = 0.0, omega_dot: float = 0.0) -> np.ndarray:
-        """First-order state matrix of the free rotor at speed ``omega`` [rad/s] and acceleration ``omega_dot``
-        [rad/s²]: A = [[0, I], [−M⁻¹(K + Ω̇G), −Ω M⁻¹G]] in the state [q; q̇] (2 n_dof square).
+        """First-order state matrix of the free rotor, A = [[0, I], [−M⁻¹(K + Ω̇G), −Ω M⁻¹G]] in the state [q; q̇].
+
+        Parameters
+        ----------
+        omega : float
+            Rotor speed [rad/s].
+        omega_dot : float
+            Rotor acceleration [rad/s²].
+
+        Returns
+        -------
+        ndarray (2 n_dof, 2 n_dof)
 
         Examples
         --------
@@ -316,7 +396,24 @@ class Rotor:
         return first_order_state_matrix(mk + omega_dot * mg, omega * mg)
 
     def gravity_load(self, g: float = GRAVITY) -> np.ndarray:
-        """Consistent nodal gravity load f_g = M a_g [N, N m] with a_g = −g on every w DoF."""
+        """Consistent nodal gravity load f_g = M a_g with a_g = −g on every w DoF.
+
+        Parameters
+        ----------
+        g : float
+            Gravitational acceleration [m/s²] along −y.
+
+        Returns
+        -------
+        ndarray (n_dof,)
+            [N, N m].
+
+        Examples
+        --------
+        >>> r = Rotor([ShaftElement(0.1, 0.01)])
+        >>> round(float(r.gravity_load(10.0)[1::4].sum()), 6) == round(-10.0 * r.mass, 6)
+        True
+        """
         a = np.zeros(self.n_dof)
         a[1::4] = -g
         return self.M @ a
@@ -362,6 +459,18 @@ class Rotor:
         The rotor on two point supports is statically determinate, so the reactions follow from the
         consistent gravity load with the support deflections held at zero (:meth:`static_deflection`).
 
+        Parameters
+        ----------
+        support_nodes : sequence of int
+            The supported nodes.
+        g : float
+            Gravitational acceleration [m/s²] along −y.
+
+        Returns
+        -------
+        ndarray
+            One reaction per support [N].
+
         Examples
         --------
         >>> r = Rotor([ShaftElement(0.1, 0.01)], [Disc(1, 1.0, 1e-3, 5e-4)])
@@ -375,8 +484,20 @@ class Rotor:
         return self.K[cons] @ q - f[cons]
 
     def to_dict(self) -> dict:
+        """The rotor as plain data ``{"shaft": [...], "discs": [...]}`` [SI]."""
         return {"shaft": [e.to_dict() for e in self.shaft], "discs": [d.to_dict() for d in self.discs]}
 
     @classmethod
     def from_dict(cls, d: dict) -> "Rotor":
+        """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            ``{"shaft": [element dicts], "discs": [disc dicts]}`` [SI].
+
+        Returns
+        -------
+        Rotor
+        """
         return cls([ShaftElement(**e) for e in d["shaft"]], [Disc(**x) for x in d.get("discs", [])])

@@ -243,7 +243,7 @@ def test_invalid_film_parameters(field, value):
 
 def test_unknown_film_model():
     with pytest.raises(frb.ParameterError, match="film model"):
-        film_force(TURB_INNER, [0, 0], [0, 0], 1.0, model="long")
+        film_force(TURB_INNER, [0, 0], [0, 0], 1.0, film_model="long")
 
 
 def test_turbine_film_coefficients_physics_11():

@@ -7,6 +7,8 @@ With u_b = C_r,b x_r:  ẋ_r = (A_r + Σ B_r,b D_b C_r,b) x_r + Σ B_r,b C_b x_b
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..errors import ParameterError
@@ -71,36 +73,80 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
     return A[np.ix_(perm, perm)], system
 
 
-def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progress=None):
-    """Holistic Campbell diagram from the FMUs alone (same result type as :func:`frbmodel.campbell`)."""
-    from ..campbell import campbell_from_modes, film_whirl_rows
+def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progress: bool = False):
+    """Holistic Campbell diagram from the FMUs alone (same result type as :func:`frbmodel.campbell`).
+
+    The global state matrix at each speed comes from :func:`linearize` (the FMUs' local matrices, interconnected
+    along the SSP's connections); the film whirl data and the exact whirl onsets are those of the library for the
+    system read from the parameter set (:func:`frbmodel.film_onset_speeds`).
+
+    Parameters
+    ----------
+    ssp : str or Path
+        The SSP archive (``frb build-fmus``).
+    speeds_rpm : array_like
+        Rotor speeds [rpm], > 0, in any order (the result is sorted ascending).
+    method : {"F", "G", "I", "J"}
+        Operating-point method.
+    parameter_set : str
+        SSP parameter set, e.g. ``"co36"``.
+    progress : bool
+        Show a progress bar over the speeds (tqdm, on stderr).
+
+    Returns
+    -------
+    CampbellResult
+        Its ``meta`` records the SSP, the parameter set, the system read from it (``system.to_dict()``), the
+        method and the film model.
+    """
+    from ..campbell import (
+        campbell_from_modes,
+        check_speeds,
+        exact_onsets,
+        film_whirl_rows,
+        progress_enabled,
+        speed_grid_order,
+    )
     from ..equilibrium import bearing_equilibrium
     from ..linear import mass_matrix
+    from ..methods import get_method
     from ..modal import modes_from_state
+    from ..progress import counter_bar
     from ..units import rpm_to_rad_s
+    from ..whirl import film_names
 
-    speeds = np.atleast_1d(np.asarray(speeds_rpm, dtype=float))
-    mode_sets = []
-    system = None
-    rsr = np.full((speeds.size, 2), np.nan)
-    ecc = np.full((speeds.size, 4), np.nan)
-    whirl_hz = np.full((speeds.size, 4), np.nan)
-    margin = np.full((speeds.size, 4), np.nan)
-    for i, s in enumerate(speeds):
-        A, system = linearize(ssp, s, method, parameter_set)
-        mode_sets.append(modes_from_state(A, A.shape[0] // 2))
-        loads = system.bearing_loads
-        eqs = [bearing_equilibrium(b, loads[k], rpm_to_rad_s(s), method, system.film_model, system.gravity)
-               for k, b in enumerate(system.bearings)]
-        rsr[i] = [e.ring_speed_ratio for e in eqs]
-        whirl_hz[i], margin[i], ecc[i] = film_whirl_rows(system, eqs)
-        if progress:
-            progress(i + 1, speeds.size)
-    M, ring_dofs = mass_matrix(system, method)
-    meta = {"system": f"{system.name} (from FMUs: {ssp}, set {parameter_set})", "film_model": system.film_model,
-            "source": "FMU linearization"}
-    return campbell_from_modes(method.upper(), speeds, mode_sets, system.rotor, M, ring_dofs, rsr, ecc, whirl_hz,
-                               margin, meta)
+    m = get_method(method)
+    given = check_speeds(speeds_rpm, True, m.letter)
+    speeds = np.sort(given)
+    mode_sets, system, rows = [], None, []
+    with counter_bar(speeds.size, f"campbell {m.letter} from FMUs", progress_enabled(progress), unit="speed") as bar:
+        for s in speeds:
+            A, system = linearize(ssp, s, m.letter, parameter_set)
+            mode_sets.append(modes_from_state(A, A.shape[0] // 2))
+            omega = rpm_to_rad_s(s)
+
+            def equilibria(letter, system=system, omega=omega):
+                return [bearing_equilibrium(b, w, omega, letter, system.film_model, system.gravity)
+                        for b, w in zip(system.bearings, system.bearing_loads)]
+
+            eqs = equilibria(m.letter)
+            # RSR from the method's equilibria, film whirl from the method-J equilibria (as frbmodel.campbell)
+            rows.append(([e.ring_speed_ratio for e in eqs],
+                         *film_whirl_rows(system, eqs if m.letter == "J" else equilibria("J"))))
+            bar.update(1)
+    rsr = np.array([r[0] for r in rows])
+    whirl_hz, margin, ecc = (np.array([r[k] for r in rows]) for k in (1, 2, 3))
+    M, ring_dofs = mass_matrix(system, m.letter)
+    onsets, onset_source = exact_onsets(system, speeds)
+    meta = {"system_name": f"{system.name} (from FMUs: {ssp}, set {parameter_set})", "system": system.to_dict(),
+            "film_model": system.film_model, "method_title": m.title, "method_options": m.options(),
+            "outer_clearance_m": [b.outer.clearance for b in system.bearings],
+            "films": list(film_names(system)), "bearings": [b.name for b in system.bearings],
+            "source": "FMU linearization", "ssp": str(Path(ssp).resolve()), "parameter_set": parameter_set,
+            "whirl": True, "whirl_onset_source": f"{onset_source}, on the system of the parameter set",
+            "speed_grid_order": speed_grid_order(given)}
+    return campbell_from_modes(m.letter, speeds, mode_sets, system.rotor, M, ring_dofs, rsr, ecc, whirl_hz, margin,
+                               meta, whirl_onset_rpm=onsets)
 
 
 __all__ = ["linearize", "campbell_from_fmu", "system_from_parameters", "CosimStopped"]
