@@ -18,8 +18,9 @@ import numpy as np
 import frbmodel as frb
 from frbmodel.runup import SpeedProfile
 
-#: (label, rtol, atol_scale): default, x0.1, x0.01
-LEVELS = (("default", 1e-6, 1.0), ("x0.1", 1e-7, 0.1), ("x0.01", 1e-8, 0.01))
+#: (label, rtol, atol [m]): the former defaults ("default"), both x0.1 (today's defaults), x0.01, and each alone x0.1
+LEVELS = (("default", 1e-6, 1e-9), ("x0.1", 1e-7, 1e-10), ("x0.01", 1e-8, 1e-11), ("atol0.1", 1e-6, 1e-10),
+          ("rtol0.1", 1e-7, 1e-9))
 CASES = {"main": (36e-6, "ramp", 20e3, 250e3, 1.0, None)}
 CASES.update({f"compare{int(c * 1e6)}": (c, "exponential", 1e3, 250e3, 4.0, 0.1) for c in (36e-6, 40e-6, 42e-6, 46e-6)})
 
@@ -29,7 +30,7 @@ def simulate(out, cases, levels):
         c, kind, lo, hi, dur, _ = CASES[name]
         tc = frb.turbocharger(c)
         prof = SpeedProfile.exponential(lo, hi, dur) if kind == "exponential" else SpeedProfile.ramp(lo, hi, dur)
-        for label, rtol, atol_scale in LEVELS:
+        for label, rtol, atol in LEVELS:
             if label not in levels:
                 continue
             folder = out / name / label
@@ -37,7 +38,7 @@ def simulate(out, cases, levels):
                 continue
             print(f"{name} {label}: {prof.description}", flush=True)
             try:
-                frb.runup(tc, profile=prof, duration=dur, rtol=rtol, atol_scale=atol_scale, out_dir=folder,
+                frb.runup(tc, profile=prof, duration=dur, rtol=rtol, atol=atol, out_dir=folder,
                           progress=True)
             except frb.RunupStopped as exc:
                 print(f"  stopped: {exc}")
@@ -49,16 +50,16 @@ def onsets(folder, segment_s, node="turbine_wheel"):
     return {c.label: c for c in sp.components() if c.label.startswith("sub")}, run.meta.get("wall_time_s")
 
 
-def analyse(out):
-    print("| run | component | onset default [rpm] | x0.1 [rpm] | moved | first detection default | x0.1 | moved |"
-          " f default [Hz] | x0.1 [Hz] |")
+def analyse(out, ref="default", tight="x0.1"):
+    print(f"| run | component | onset {ref} [rpm] | {tight} [rpm] | moved | first detection {ref} | {tight} | moved |"
+          f" f {ref} [Hz] | {tight} [Hz] |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, (_c, _kind, _lo, _hi, dur, seg) in CASES.items():
-        if not (out / name / "default").exists() or not (out / name / "x0.1").exists():
+        if not (out / name / ref).exists() or not (out / name / tight).exists():
             continue
         seg = seg or min(max(dur / 40.0, 0.01), 0.05)
-        a, wa = onsets(out / name / "default", seg)
-        b, wb = onsets(out / name / "x0.1", seg)
+        a, wa = onsets(out / name / ref, seg)
+        b, wb = onsets(out / name / tight, seg)
         for lab in sorted(set(a) | set(b), key=lambda s: int(s[3:])):
             ca, cb = a.get(lab), b.get(lab)
             if ca is None or cb is None:
@@ -78,13 +79,13 @@ def main():
     p.add_argument("phase", choices=["simulate", "analyse"])
     p.add_argument("--out", default="results/convergence")
     p.add_argument("--cases", default=",".join(CASES))
-    p.add_argument("--levels", default="default,x0.1")
+    p.add_argument("--levels", default="default,x0.1", help="levels to simulate, or the pair to compare")
     a = p.parse_args()
     out = Path(a.out)
     if a.phase == "simulate":
         simulate(out, a.cases.split(","), a.levels.split(","))
     else:
-        analyse(out)
+        analyse(out, *a.levels.split(",")[:2])
 
 
 if __name__ == "__main__":

@@ -3,33 +3,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 from .errors import FRBError, ParameterError, check_positive
 from .interrupt import Terminated
-
-
-class Progress:
-    """Minimal terminal progress line on stderr (cases done/total, elapsed, ETA)."""
-
-    def __init__(self, label: str, stream=sys.stderr, min_interval: float = 0.3):
-        self.label, self.stream, self.min_interval = label, stream, min_interval
-        self.t0 = time.perf_counter()
-        self.last = 0.0
-
-    def __call__(self, done: int, total: int):
-        now = time.perf_counter()
-        if done < total and now - self.last < self.min_interval:
-            return
-        self.last = now
-        el = now - self.t0
-        eta = el / done * (total - done) if done else float("nan")
-        end = "\n" if done >= total else "\r"
-        self.stream.write(f"{self.label}: {done}/{total}  elapsed {el:6.1f} s  ETA {eta:6.1f} s{end}")
-        self.stream.flush()
 
 
 def parse_speeds(text: str) -> np.ndarray:
@@ -88,27 +67,29 @@ def cmd_campbell(args):
         from .cosim.linearize import campbell_from_fmu
 
         _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky"))
-        cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set,
-                               progress=Progress(f"campbell {args.method} from FMUs"))
+        cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
     else:
         tc = load_from_args(args)
         kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
-        cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=Progress(f"campbell {args.method}"),
-                      **kw)
+        cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, **kw)
     paths = cd.save(out, fmax_hz=fmax)
     print(f"method {cd.method}: {cd.meta.get('method_title', cd.meta.get('source', ''))}; {speeds.size} speeds")
     if not args.no_whirl:
-        from .whirl import FILM_NAMES
-
-        for name, s in zip(FILM_NAMES, cd.whirl_onset_rpm):
-            print(f"  film whirl onset {name:>17}: " + ("none in range" if not np.isfinite(s) else f"{s:,.0f} rpm"))
+        for _, r in cd.onsets_dataframe().iterrows():
+            s = r["onset [rpm]"]
+            text = ((f"{s:,.0f} rpm" + ("" if r["inside grid"] else " (outside the speed grid)")) if np.isfinite(s)
+                    else "already past it at the grid start" if r["past onset at grid start"] else "none in range")
+            print(f"  film whirl onset {r['film']:>17}: {text}")
+        print(f"  onsets: {cd.meta.get('whirl_onset_source', '')}")
     ur = cd.unstable_ranges()
     if len(ur):
-        print("unstable modes (D < 0):")
+        print("unstable modes (D < -round-off bound):")
         print(ur.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     else:
         print("no unstable mode in the speed range")
     print(f"max. simultaneously unstable modes: {int(cd.n_unstable.max())}")
+    if cd.n_neutral.max():
+        print(f"neutral modes (|D| <= round-off bound, undamped): up to {int(cd.n_neutral.max())} at one speed")
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
 
@@ -137,7 +118,7 @@ def cmd_paper_figures(args):
 
     tc = load_from_args(args)
     writable_dir(args.out)
-    paths = paper_figures(tc, args.out, n_speeds=args.n_speeds, progress=lambda msg: print(msg, flush=True))
+    paths = paper_figures(tc, args.out, n_speeds=args.n_speeds, progress=True)
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {Path(args.out).resolve()}")
 
@@ -206,15 +187,46 @@ def cmd_runup(args):
     out = writable_dir(args.out)
     print(f"{'run-down' if prof.direction == 'down' else 'run-up'}: {prof.description}, film model {tc.film_model}, "
           f"results stream to {out.resolve()}")
-    run, code = _stoppable("runup", lambda: runup(
-        tc, profile=prof, duration=args.duration, unbalance=_parse_unbalance(args.unbalance),
-        output_rate_hz=args.rate, rtol=args.rtol, out_dir=out, progress=True), out)
+    rtol = check_positive("--rtol", args.rtol)
+    atol = check_positive("--atol", args.atol, "m")
+
+    def run_at(tighten, folder):
+        return runup(tc, profile=prof, duration=args.duration, unbalance=_parse_unbalance(args.unbalance),
+                     output_rate_hz=args.rate, rtol=rtol * tighten, atol=atol * tighten, out_dir=folder,
+                     progress=True)
+
+    run, code = _stoppable("runup", lambda: run_at(1.0, out), out)
     if "wall_time_s" in run.meta:
         print(f"wall time {run.meta['wall_time_s']:.1f} s, {run.meta['rhs_evaluations']} RHS and "
               f"{run.meta['jacobian_evaluations']} Jacobian evaluations, {run.time.size} samples")
     _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear",
                 title="run-down" if prof.direction == "down" else "run-up")
+    if args.check_convergence and code == 0:
+        print("convergence check: the same run with rtol and atol tightened tenfold")
+        check_convergence(run, lambda folder: run_at(0.1, folder), out, "tolerances x0.1")
     return code
+
+
+def check_convergence(run, rerun, out, what):
+    """Rerun (``rerun(folder)``) at tightened tolerances into ``out/convergence_check`` and label every component's
+    onset as converged or seeded by round-off: ``convergence_<disc>.csv``, and the columns "converged" and "note"
+    added to ``components_<disc>.csv``."""
+    import pandas as pd
+
+    from .convergence import convergence_table, unconverged_summary
+    from .spectral import spectrogram
+
+    folder = out / "convergence_check"
+    tight, _ = _stoppable("convergence check", lambda: rerun(folder), folder)
+    for node in run.displacement:
+        tab = convergence_table(spectrogram(run, node).components(), spectrogram(tight, node).components())
+        tab.to_csv(out / f"convergence_{node}.csv", index=False)
+        comp_csv = out / f"components_{node}.csv"
+        if comp_csv.exists() and len(tab):
+            comps = pd.read_csv(comp_csv).drop(columns=["converged", "note"], errors="ignore")
+            comps.merge(tab[["component", "converged", "note"]], on="component", how="left").to_csv(comp_csv,
+                                                                                                   index=False)
+        print(f"{node} ({what}): {unconverged_summary(tab) if len(tab) else 'no sub-synchronous component'}")
 
 
 def _on_sigterm(signum, frame):
@@ -342,6 +354,12 @@ def cmd_cosim(args):
               f"{run.meta['step_size_s']:g} s, {run.time.size} samples")
     _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
                 title=f"co-simulated run-up ({args.parameter_set})")
+    if args.check_convergence and code == 0:
+        h = run.meta["step_size_s"] / 2
+        print(f"convergence check: the same co-simulation with half the macro step ({h:g} s)")
+        check_convergence(run, lambda folder: cosimulate(
+            args.ssp, args.parameter_set, args.stop_time, h, folder, progress=True, rollback=args.rollback,
+            unvalidated_step=args.unvalidated_step), out, "macro step / 2")
     return code
 
 
@@ -354,9 +372,9 @@ def cmd_linearize(args):
     md = modes_from_state(A, A.shape[0] // 2)
     print(f"global A from the FMUs: {A.shape[0]} states, method {args.method.upper()} operating point at "
           f"{args.speed_rpm:.0f} rpm ({args.parameter_set})")
-    print(f"{'f [Hz]':>10} {'damping [-]':>12} {'Re(lambda) [1/s]':>17}")
-    for lam in md.eigenvalues:
-        print(f"{lam.imag / (2 * np.pi):10.2f} {-lam.real / abs(lam):12.4f} {lam.real:17.2f}")
+    print(f"{'f [Hz]':>10} {'damping [-]':>12} {'Re(lambda) [1/s]':>17} {'stability':>10}")
+    for lam, st in zip(md.eigenvalues, md.stability):
+        print(f"{lam.imag / (2 * np.pi):10.2f} {-lam.real / abs(lam):12.4f} {lam.real:17.2f} {st:>10}")
     if out is not None:
         p = out / f"A_{args.method.upper()}_{args.speed_rpm:.0f}rpm.csv"
         np.savetxt(p, A, delimiter=",", header=f"global state matrix A [SI], {A.shape[0]} states, method "
@@ -463,6 +481,8 @@ def _add_system(sub):
 
 
 def _add_runup(sub):
+    from .runup import DEFAULT_ATOL_M, DEFAULT_RTOL
+
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
     r.add_argument("--speeds", default="20000:250000", help="START:END [rpm]")
@@ -474,7 +494,12 @@ def _add_runup(sub):
     r.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
                    help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable)")
     r.add_argument("--rate", type=float, default=20e3, help="output sampling rate [Hz]")
-    r.add_argument("--rtol", type=float, default=1e-6, help="integrator relative tolerance")
+    r.add_argument("--rtol", type=float, default=DEFAULT_RTOL, help="integrator relative tolerance [-]")
+    r.add_argument("--atol", type=float, default=DEFAULT_ATOL_M,
+                   help="integrator absolute tolerance on displacements [m]")
+    r.add_argument("--check-convergence", action="store_true",
+                   help="rerun with rtol and atol tightened tenfold and label the onsets that move by > 1 %% as seeded "
+                        "by round-off")
     r.add_argument("--no-figure", action="store_true")
     r.add_argument("--out", default="results/runup")
     _system_args(r)
@@ -510,6 +535,8 @@ def _add_cosim(sub):
     cs.add_argument("--stop-time", type=float, default=None, help="simulated time [s] (default: from the SSP)")
     cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 1e-5)")
     cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
+    cs.add_argument("--check-convergence", action="store_true",
+                    help="rerun with half the macro step and label the onsets that move by > 1 %% as not converged")
     cs.add_argument("--unvalidated-step", action="store_true",
                     help="allow a macro step outside the validated range 1e-7 ... 2e-5 s")
     cs.add_argument("--trace-fmi", action="store_true", help="print every FMI call with its arguments and status")
@@ -626,6 +653,9 @@ def main(argv=None):
         print(f"frb {args.command}: error: this command needs the optional package {top!r}, which is not installed: "
               f"python -m pip install \"frbmodel[{EXTRAS[top]}]\" (or .[{EXTRAS[top]}] in a checkout)", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into `head` etc.: not an error of the computation
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt as exc:  # outside a long run: nothing to keep
         code = 143 if isinstance(exc, Terminated) else 130
         print(f"\nfrb {args.command}: interrupted", file=sys.stderr)

@@ -281,7 +281,7 @@ def _unstable_lines(cd, fmax):
     """(speed_krpm, f_hz) arrays per mode, NaN where the mode is stable."""
     out = []
     for j in range(cd.n_modes):
-        f = np.where(np.nan_to_num(cd.damping[:, j], nan=1.0) < 0, cd.frequencies_hz[:, j], np.nan)
+        f = np.where(cd.unstable[:, j], cd.frequencies_hz[:, j], np.nan)  # D < -round-off bound
         if np.isfinite(f).any() and np.nanmin(f) < fmax:
             out.append((cd.speeds_rpm / 1e3, f, j))
     return out

@@ -33,8 +33,8 @@ from .units import RPM
 #: numerical guard: film forces of trial states beyond this ε are evaluated at this ε (physics.md §2.7)
 EPS_CAP = 0.999
 
-__all__ = ["MAX_SPEED_RPM", "Problem", "RunupResult", "RunupStopped", "SpeedProfile", "Unbalance", "atol_vector",
-           "build_problem", "check_speed", "initial_state", "runup", "static_rotor_state"]
+__all__ = ["DEFAULT_ATOL_M", "DEFAULT_RTOL", "MAX_SPEED_RPM", "Problem", "RunupResult", "RunupStopped", "SpeedProfile",
+           "Unbalance", "atol_vector", "build_problem", "check_speed", "initial_state", "runup", "static_rotor_state"]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -330,14 +330,23 @@ def _speed_bound(problem):
     return w_max
 
 
-def atol_vector(problem, atol_scale=1.0):
-    """LSODA absolute tolerances per state: ``1e-9 m × atol_scale`` on displacements, scaled by a 0.03 m arm for
-    rotations, by the largest rotor speed for velocities, 1e-6 × that speed for the ring speeds and the rotor speed
-    of a torque-driven rotor [rad/s], 1e-6 rad for the rotation angle. Returns (atol, finite-difference scale).
-    The largest speed of a torque-driven run is bounded by the drive torque alone (:func:`_speed_bound`)."""
+#: default integrator tolerances of the run-up: converged for the onsets the figures and tables report (README
+#: "Tolerance convergence": tightening both tenfold moves the onsets that grow out of the equilibrium by < 1 %;
+#: the former 1e-6 / 1e-9 m moved the first whirl onset by 7-11 %)
+DEFAULT_RTOL = 1e-7
+DEFAULT_ATOL_M = 1e-10
+
+
+def atol_vector(problem, atol=DEFAULT_ATOL_M):
+    """LSODA absolute tolerances per state: ``atol`` [m] on displacements, scaled by a 0.03 m arm for rotations,
+    by the largest rotor speed for velocities; ring speeds and the rotor speed of a torque-driven rotor
+    1e-6 × (atol / 1e-9 m) × that speed [rad/s], the rotation angle 1e-6 × (atol / 1e-9 m) rad.
+    Returns (atol, finite-difference scale). The largest speed of a torque-driven run is bounded by the drive
+    torque alone (:func:`_speed_bound`)."""
     n_r = problem.n_rotor
     w_max = _speed_bound(problem)
-    pos_tol = 1e-9 * atol_scale
+    pos_tol = float(atol)
+    atol_scale = pos_tol / 1e-9
     atol = np.empty(problem.n_states)
     atol[:n_r] = pos_tol
     atol[2:n_r:4] = atol[3:n_r:4] = pos_tol / 0.03  # rotations ~ displacement / arm length
@@ -464,7 +473,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
 
 
 def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_model=None, unbalance=(),
-          output_rate_hz=20e3, rtol=1e-6, atol_scale=1.0, perturbation=0.05, out_dir=None, progress=False,
+          output_rate_hz=20e3, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL_M, perturbation=0.05, out_dir=None, progress=False,
           contact_eps=0.98, linear_springs=None, initial="equilibrium", max_step=None, nsteps=500_000):
     """Nonlinear run-up simulation (the monolithic reference).
 
@@ -485,8 +494,9 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
         Per disc, e.g. ``[Unbalance("turbine_wheel", 1e-6, 0.0)]`` (1 g mm).
     output_rate_hz : float
         Sampling rate of the stored results [Hz] (default 20 kHz; the spectra resolve up to half of it).
-    rtol, atol_scale : float
-        LSODA relative tolerance; absolute tolerances are 1e-9 m × atol_scale on displacements (see
+    rtol, atol : float
+        LSODA relative tolerance [-] and absolute tolerance on displacements [m] (the other states' are scaled
+        from it, see
         :func:`atol_vector`).
     perturbation : float
         Initial offset of both journals and rings in +x, as a fraction of their film clearance.
@@ -533,10 +543,11 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
         raise ParameterError(f"contact_eps = {contact_eps!r} is invalid: valid range 0 < contact_eps < 1")
     problem = build_problem(system, profile, model, unbalance, linear_springs)
     y0 = initial_state(problem, initial, perturbation)
-    atol, scale = atol_vector(problem, atol_scale)
+    atol = check_positive("atol", atol, "m")
+    atol_v, scale = atol_vector(problem, atol)
     t_out = np.arange(int(math.floor(duration * output_rate_hz + 1e-9)) + 1) / output_rate_hz
     meta = {"system": system.to_dict(), "film_model": model, "profile": profile.description, "duration_s": duration,
-            "output_rate_hz": output_rate_hz, "rtol": rtol, "atol_displacement_m": 1e-9 * atol_scale,
+            "output_rate_hz": output_rate_hz, "rtol": rtol, "atol_displacement_m": atol,
             "unbalance": [u.__dict__ for u in unbalance], "linear_springs_N_per_m": linear_springs,
             "perturbation_of_clearance": perturbation, "contact_eps": contact_eps, "units": "SI; speed in rpm",
             **({"speed_source": "torque", "polar_inertia_kg_m2": problem.polar_inertia} if problem.torque_driven
@@ -544,7 +555,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     t_wall = time.perf_counter()
     with Recorder(RunupSchema.from_system(system), t_out.size, out_dir, meta) as rec:
         status, message, nfev, njev = _integrate(
-            problem, y0, rec, t_out, {"atol": (atol, scale), "rtol": rtol, "nsteps": nsteps,
+            problem, y0, rec, t_out, {"atol": (atol_v, scale), "rtol": rtol, "nsteps": nsteps,
                                       "max_step": max_step or 0.0}, contact_eps, progress)
         wall = time.perf_counter() - t_wall
         if progress:

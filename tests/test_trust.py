@@ -120,3 +120,32 @@ def test_linearization_works_over_the_speed_range_for_every_parameter_set(built)
             f_fmu = np.sort(lam.imag[lam.imag > 0] / (2 * np.pi))
             # same modes: the FMU matrices are central differences of the same films (h = 1e-6 c): 1e-5 relative
             np.testing.assert_allclose(f_fmu[:f_ref.size], f_ref, rtol=1e-5)
+
+
+def _component(label, onset_rpm, f_hz, direction="forward"):
+    from frbmodel.tracking import Component
+
+    c = Component(label, np.array([onset_rpm, 1.1 * onset_rpm]), np.array([f_hz, 1.1 * f_hz]),
+                  np.array([1e-6, 2e-6]), direction)
+    c.onset_interp_rpm = onset_rpm
+    return c
+
+
+def test_convergence_check_labels_onsets_that_move_as_seeded_by_round_off():
+    """The labels of frb runup --check-convergence: an onset that moves by 0.5 % is converged, one that moves by 8 %
+    (the main job's sub4 between rtol 1e-7/atol 1e-10 and 1e-8/1e-11 moved 2.5 %, the old defaults 8 %) is not, and
+    a component missing from the tightened run is not either; components are matched by direction, onset and
+    f/f_rot, not by their labels (which depend on the order of onsets)."""
+    from frbmodel.convergence import convergence_table
+
+    ref = [_component("sub1", 2000.0, 20.0), _component("sub2", 35000.0, 41.7, "backward"),
+           _component("sub3", 100000.0, 180.0)]
+    tight = [_component("sub1", 2010.0, 20.1), _component("sub2", 108000.0, 194.4),
+             _component("sub3", 35100.0, 41.8, "backward")]
+    tab = convergence_table(ref, tight).set_index("component")
+    assert tab.loc["sub1", "converged"] and tab.loc["sub2", "converged"]
+    assert tab.loc["sub2", "onset tightened [rpm]"] == 35100.0  # matched across labels
+    assert not tab.loc["sub3", "converged"] and "round-off" in tab.loc["sub3", "note"]
+    assert tab.loc["sub3", "onset moved [%]"] == pytest.approx(8.0)
+    tab = convergence_table(ref, tight[:1]).set_index("component")
+    assert not tab.loc["sub2", "converged"] and "not found" in tab.loc["sub2", "note"]
