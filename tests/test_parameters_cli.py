@@ -168,7 +168,7 @@ BAD_FILES = [
     ("missing key", ("viscosity = 0.0049\n", "", 0),
      "bearings[0].inner (film) lacks the required key 'viscosity'; required: radius, length, clearance, viscosity"),
     ("value out of range", ("clearance = 3.6e-05", "clearance = -3.6e-05", 1),
-     "bearings[1].outer: film clearance = -3.6e-05 m is invalid: valid range is finite and > 0 m"),
+     "bearings[1].outer: film clearance = -3.6e-05 m is invalid: valid range is a finite real number > 0 m"),
     ("shaft value out of range", ("length = 0.039", "length = 0.0", 0),
      "rotor.shaft[1]: shaft element length = 0.0 m is invalid"),
 ]
