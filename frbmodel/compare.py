@@ -166,7 +166,7 @@ def comparison_rows(clearance, sp, comps, cd, status):
 
 def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250e3), duration=4.0,
             profile="exponential", node=None, out_dir="results/compare", n_speeds=300, progress=False,
-            runup_kw=None, segment_s=0.1, fmax_hz=1000.0):
+            runup_kw=None, segment_s=0.1, fmax_hz=1000.0, check_convergence=False):
     """Run the run-up (or run-down) and the method-J Campbell diagram per outer clearance; write per clearance the
     run data, the composite figure (PNG + HTML) and the components; return and write the comparison table.
 
@@ -196,6 +196,9 @@ def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250
         Spectrogram segment length [s] (at most duration / 8).
     fmax_hz : float
         Upper frequency limit of the figures [Hz].
+    check_convergence : bool
+        Rerun each case with rtol and atol tightened tenfold and label every component's onset as converged or
+        seeded by round-off (columns "converged", "note").
 
     Returns
     -------
@@ -213,7 +216,8 @@ def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250
     out.mkdir(parents=True, exist_ok=True)
     rows, paths = [], []
     opts = dict(speed_rpm=speed_rpm, duration=duration, profile=profile, node=node, n_speeds=n_speeds,
-                progress=progress, runup_kw=runup_kw, segment_s=segment_s, fmax_hz=fmax_hz)
+                progress=progress, runup_kw=runup_kw, segment_s=segment_s, fmax_hz=fmax_hz,
+                check_convergence=check_convergence)
     with counter_bar(len(clearances), "compare", progress, unit="clearance") as bar:
         for c in clearances:
             r, p = _compare_clearance(system, c, out, **opts)
@@ -231,7 +235,7 @@ def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250
 
 
 def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_speeds, progress, runup_kw, segment_s,
-                       fmax_hz):
+                       fmax_hz, check_convergence):
     """One clearance of :func:`compare`: Campbell diagram, run, spectrogram, figures; (table rows, paths)."""
     from .progress import note
 
@@ -258,7 +262,29 @@ def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_spe
     sp = spectrogram(run, node, segment_s=min(segment_s, duration / 8))
     title = f"c_o = {c * 1e6:.0f} um: {kind} spectrogram ({node}) vs method J"
     paths += write_spectrogram(sp, cd, out / tag, title, "log" if profile == "exponential" else "linear", fmax_hz)
-    return comparison_rows(c, sp, sp.components(), cd, status), paths
+    rows = comparison_rows(c, sp, sp.components(), cd, status)
+    if check_convergence:
+        rows = _label_convergence(rows, sp, tc, prof, duration, out / tag / "convergence_check", node,
+                                  min(segment_s, duration / 8), runup_kw, progress)
+    return rows, paths
+
+
+def _label_convergence(rows, sp, system, profile, duration, folder, node, segment_s, runup_kw, progress):
+    """Rerun with rtol and atol tightened tenfold and add "converged" / "note" to the component rows."""
+    from .convergence import convergence_table
+    from .runup import DEFAULT_ATOL_M, DEFAULT_RTOL
+
+    kw = {"rtol": DEFAULT_RTOL, "atol": DEFAULT_ATOL_M, **(runup_kw or {})}
+    kw.update(rtol=kw["rtol"] / 10, atol=kw["atol"] / 10, progress=bool(progress))
+    try:
+        tight = runup(system, profile=profile, duration=duration, out_dir=folder, **kw)
+    except RunupStopped as exc:
+        tight = exc.result
+    tab = convergence_table(sp.components(), spectrogram(tight, node, segment_s=segment_s).components())
+    labels = tab.set_index("component")[["converged", "note"]].to_dict("index") if len(tab) else {}
+    for r in rows:
+        r.update(labels.get(r.get("component"), {}))
+    return rows
 
 
 def table_markdown(table) -> str:
@@ -276,11 +302,13 @@ def table_markdown(table) -> str:
     """
     cols = ["c_o [um]", "component", "direction", "nonlinear onset [rpm]", "onset estimate", "first detection [rpm]",
             "vanishes at [rpm]", "f at onset [Hz]", "J mode", "linear onset [rpm]", "linear f [Hz]",
-            "rel. difference [-]", "resonance from [rpm]", "resonance to [rpm]"]
+            "rel. difference [-]", "resonance from [rpm]", "resonance to [rpm]", "converged"]
     cols = [c for c in cols if c in table.columns]
     lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
 
     def fmt(v, c):
+        if isinstance(v, (bool, np.bool_)):
+            return "yes" if v else "no: seeded by round-off"
         if isinstance(v, float):
             if math.isnan(v):
                 return ""
