@@ -2,12 +2,22 @@
 
 Thin adapter over :class:`frbmodel.components.BearingComponent`; all physics is in frbmodel.
 """
+import math
+
 import numpy as np
-from _fmu_common import FrbSlaveMixin, finite
+from _fmu_common import FrbSlaveMixin
 from pythonfmu import Fmi2Slave
 
 
 class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
+    """FMI 2.0 co-simulation slave of one floating-ring bearing (one instance per bearing).
+
+    Parameters (all ``fixed``): films, ring mass and inertia, initial ring state, gravity, substep,
+    ``contact_eps``, ``film_model``, ``ring_speed_model``, ``linearization``. Inputs: journal state, rotor speed.
+    Outputs: force on the journal and its interface Jacobian, staggered-coupling values, ring state,
+    eccentricities, optional linearization. FMI behaviour and statuses: :class:`_fmu_common.FrbSlaveMixin`.
+    """
+
     author = "frbmodel"
     description = ("Floating-ring bearing: inner film, free-spinning ring, outer film (short-bearing pi-film, "
                    "half-Sommerfeld). Outputs the force on the journal and its interface Jacobian.")
@@ -17,59 +27,77 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._init_state()
         self._cache = None
         self._lin = None
-        # defaults: the turbine bearing of the paper's Table 2 system (frbmodel.presets) and the component's own
+        self._parameters()
+        for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
+                        ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
+            self._input(f"journal.{q}", f"{d} [{u}]", unit=u)
+        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s")
+        self._outputs()
+        self._linearization_outputs(["m", "m", "m/s", "m/s"], ["m", "m", "m/s", "m/s"], ["N", "N"],
+                                    ("states: ring x, y, vx, vy", "inputs: journal x, y, vx, vy",
+                                     "outputs: force x, y on the journal"))
+
+    def _parameters(self):
+        """Parameters (all ``fixed``) with units and valid ranges; defaults: the turbine bearing of the paper's
+        Table 2 system (frbmodel.presets) and the component's own."""
         from frbmodel.components import BEARING_SUBSTEP, CONTACT_EPS
+        from frbmodel.film import FILM_MODELS
         from frbmodel.presets import turbocharger
 
         tc = turbocharger()
         bearing = tc.bearings[0]
+        positive = dict(low=0.0, low_open=True)
         for name, film in (("inner", bearing.inner), ("outer", bearing.outer)):
-            self._param(f"{name}.radius", film.radius, f"{name} film radius [m]")
-            self._param(f"{name}.length", film.length, f"{name} film length [m]")
-            self._param(f"{name}.clearance", film.clearance, f"{name} film radial clearance [m]")
-            self._param(f"{name}.viscosity", film.viscosity, f"{name} film dynamic viscosity [Pa s]")
-        self._param("ring.mass", bearing.ring_mass, "ring mass [kg]")
-        self._param("ring.inertia", bearing.ring_inertia, "ring polar moment of inertia [kg m2]")
-        self._param("ring.x0", 0.0, "initial ring centre x [m]")
-        self._param("ring.y0", 0.0, "initial ring centre y [m]")
-        self._param("ring.speed0", 0.0, "initial ring speed [rad/s]")
-        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]")
-        self._param("substep", BEARING_SUBSTEP, "ring integration substep [s] (2-stage SDIRK, second order)")
-        self._param("contact_eps", CONTACT_EPS, "eccentricity ratio treated as wall contact (Discard above) [-]")
-        self._param("film_model", tc.film_model, "film model: short | short_corrected", "str")
-        self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str")
+            self._param(f"{name}.radius", film.radius, f"{name} film radius [m]", unit="m", **positive)
+            self._param(f"{name}.length", film.length, f"{name} film length [m]", unit="m", **positive)
+            self._param(f"{name}.clearance", film.clearance, f"{name} film radial clearance [m]", unit="m", **positive)
+            self._param(f"{name}.viscosity", film.viscosity, f"{name} film dynamic viscosity [Pa s]", unit="Pa.s",
+                        **positive)
+        self._param("ring.mass", bearing.ring_mass, "ring mass [kg]", unit="kg", **positive)
+        self._param("ring.inertia", bearing.ring_inertia, "ring polar moment of inertia [kg m2]", unit="kg.m2",
+                    **positive)
+        self._param("ring.x0", 0.0, "initial ring centre x [m]", unit="m")
+        self._param("ring.y0", 0.0, "initial ring centre y [m]", unit="m")
+        self._param("ring.speed0", 0.0, "initial ring speed [rad/s]", unit="rad/s")
+        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2", low=0.0)
+        self._param("substep", BEARING_SUBSTEP, "ring integration substep [s] (2-stage SDIRK, second order)",
+                    unit="s", low=1e-9, high=1e-3)
+        self._param("contact_eps", CONTACT_EPS, "eccentricity ratio treated as wall contact (Discard above) [-]",
+                    unit="1", low=0.01, high=0.9999)
+        self._param("film_model", tc.film_model, "film model: short | short_corrected", "str", choices=FILM_MODELS)
+        self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str",
+                    choices=("free", "rsr_eq6", "rsr_eq7"))
         self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
-        for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
-                        ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
-            self._input(f"journal.{q}", f"{d} [{u}]")
-        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0)
-        self._output("force.x", "film force on the journal, x [N]", lambda: self._out()[0][0])
-        self._output("force.y", "film force on the journal, y [N]", lambda: self._out()[0][1])
+
+    def _outputs(self):
+        """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units)."""
+        self._output("force.x", "film force on the journal, x [N]", lambda: self._out()[0][0], unit="N")
+        self._output("force.y", "film force on the journal, y [N]", lambda: self._out()[0][1], unit="N")
         for i in range(2):
             for k in range(2):
                 self._output(f"stiffness[{i + 1},{k + 1}]", "interface Jacobian -dF/dx_journal [N/m]",
-                             lambda i=i, k=k: self._out()[1][i, k])
+                             lambda i=i, k=k: self._out()[1][i, k], unit="N/m")
                 self._output(f"damping[{i + 1},{k + 1}]", "interface Jacobian -dF/dv_journal [N s/m]",
-                             lambda i=i, k=k: self._out()[2][i, k])
+                             lambda i=i, k=k: self._out()[2][i, k], unit="N.s/m")
         for qi, (q, u) in enumerate((("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))):
             self._output(f"journal_ref.{q}", f"journal {q} at which force and Jacobian were evaluated [{u}]",
-                         lambda qi=qi: self._ref()[qi])
+                         lambda qi=qi: self._ref()[qi], unit=u)
         self._output("force_end.x", "force on the journal at the end of the last step along the extrapolated journal "
-                     "path, x [N] (staggered coupling)", lambda: self._comp.force_end[0])
+                     "path, x [N] (staggered coupling)", lambda: self._comp.force_end[0], unit="N")
         self._output("force_end.y", "force on the journal at the end of the last step, y [N]",
-                     lambda: self._comp.force_end[1])
+                     lambda: self._comp.force_end[1], unit="N")
         self._output("journal_accel.x", "journal acceleration of the quadratic path the ring was integrated on in the "
-                     "last step, x [m/s2] (staggered coupling)", lambda: self._comp.path_accel[0])
-        self._output("journal_accel.y", "journal acceleration of that path, y [m/s2]", lambda: self._comp.path_accel[1])
-        self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0])
-        self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1])
-        self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed())
-        self._output("eps_inner", "inner film eccentricity ratio [-]", lambda: self._out()[3][0])
-        self._output("eps_outer", "outer film eccentricity ratio [-]", lambda: self._out()[3][1])
+                     "last step, x [m/s2] (staggered coupling)", lambda: self._comp.path_accel[0], unit="m/s2")
+        self._output("journal_accel.y", "journal acceleration of that path, y [m/s2]", lambda: self._comp.path_accel[1],
+                     unit="m/s2")
+        self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0], unit="m")
+        self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1], unit="m")
+        self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed(), unit="rad/s")
+        self._output("eps_inner", "inner film eccentricity ratio [-]", lambda: self._out()[3][0], unit="1")
+        self._output("eps_outer", "outer film eccentricity ratio [-]", lambda: self._out()[3][1], unit="1")
         self._output("ring_speed_ratio", "ring speed / rotor speed [-]",
-                     lambda: self._ring_speed() / self._values["rotor_speed"] if self._values["rotor_speed"] else 0.0)
-        self._linearization_outputs(4, 4, 2, ("states: ring x, y, vx, vy", "inputs: journal x, y, vx, vy",
-                                              "outputs: force x, y on the journal"))
+                     lambda: self._ring_speed() / self._values["rotor_speed"] if self._values["rotor_speed"] else 0.0,
+                     unit="1")
 
     # ------------------------------------------------------------------ helpers
     def _journal(self):
@@ -99,46 +127,48 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
             self._lin = {"A": A, "B": B, "C": C, "D": D}
         return self._lin
 
-    # ------------------------------------------------------------------ FMI
-    def exit_initialization_mode(self):
-        self._require_version()
+    # ------------------------------------------------------------------ FMI (FrbSlaveMixin hooks)
+    def _initialize(self):
+        """Build the component from the (range-checked) parameters; raises on an invalid combination."""
         from frbmodel.components import BearingComponent
         from frbmodel.film import Film
         from frbmodel.parameters import FloatingRingBearing as FRB
 
         v = self._values
-        try:
-            films = [Film(v[f"{f}.radius"], v[f"{f}.length"], v[f"{f}.clearance"], v[f"{f}.viscosity"])
-                     for f in ("inner", "outer")]
-            b = FRB(0, films[0], films[1], v["ring.mass"], v["ring.inertia"], self.instance_name)
-            self._comp = BearingComponent(b, v["film_model"], v["ring_speed_model"], finite("gravity", v["gravity"], 0),
-                                          finite("substep", v["substep"], 1e-9, 1e-3, "s"),
-                                          finite("contact_eps", v["contact_eps"], 0.01, 0.9999))
-            self._comp.ring[:] = [finite("ring.x0", v["ring.x0"], unit="m"), finite("ring.y0", v["ring.y0"], unit="m"),
-                                  0.0, 0.0, finite("ring.speed0", v["ring.speed0"], unit="rad/s")]
-        except Exception as exc:  # noqa: BLE001  (report any parameter problem as an FMI error)
-            self._error(f"{self.instance_name}: invalid parameters: {exc}")
-            raise
-        self._comp.force_end[:] = self._comp.outputs(
-            [v["journal.x"], v["journal.y"], v["journal.vx"], v["journal.vy"]], v["rotor_speed"])[0] \
-            if v["rotor_speed"] > 0 and abs(v["journal.x"]) + abs(v["journal.y"]) > 0 else 0.0
-        self._ready = True
-        self._dirty = True
+        self._check_geometry()
+        films = [Film(v[f"{f}.radius"], v[f"{f}.length"], v[f"{f}.clearance"], v[f"{f}.viscosity"])
+                 for f in ("inner", "outer")]
+        b = FRB(0, films[0], films[1], v["ring.mass"], v["ring.inertia"], self.instance_name)
+        comp = BearingComponent(b, v["film_model"], v["ring_speed_model"], float(v["gravity"]), float(v["substep"]),
+                                float(v["contact_eps"]))
+        comp.ring[:] = [v["ring.x0"], v["ring.y0"], 0.0, 0.0, v["ring.speed0"]]
+        j = [v["journal.x"], v["journal.y"], v["journal.vx"], v["journal.vy"]]
+        if math.isfinite(sum(j)) and v["rotor_speed"] > 0 and abs(j[0]) + abs(j[1]) > 0:
+            comp.force_end[:] = comp.outputs(j, v["rotor_speed"])[0]
+        self._comp = comp
 
-    def do_step(self, current_time, step_size):
-        if not self._ready:
-            return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
-        try:
-            self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
-            self._comp.step(self._ref_state, self._values["rotor_speed"], 0.0, step_size, t=current_time)
-        except Exception as exc:  # noqa: BLE001
-            from frbmodel.units import rad_s_to_rpm
+    def _check_geometry(self):
+        """ValueError naming the FMU parameters of a film geometry the model does not cover."""
+        v = self._values
+        for f in ("inner", "outer"):
+            c, r = v[f"{f}.clearance"], v[f"{f}.radius"]
+            if c >= 0.1 * r:
+                raise ValueError(f"{f}.clearance = {c!r} m is invalid for {f}.radius = {r!r} m: valid range "
+                                 f"(0, {0.1 * r:g}) m (the thin-film theory needs clearance < 0.1 radius)")
+        bore = v["inner.radius"] + v["inner.clearance"]
+        if bore >= v["outer.radius"]:
+            raise ValueError(f"inner.radius + inner.clearance = {bore:g} m (the ring's bore) is invalid: valid range "
+                             f"< outer.radius = {v['outer.radius']!r} m")
 
-            self._ready = False
-            return self._error(f"{self.instance_name} at t = {current_time:.6g} s, rotor speed "
-                               f"{rad_s_to_rpm(self._values['rotor_speed']):.0f} rpm: {exc}")
-        self._dirty = True
-        return True
+    def _advance(self, current_time, step_size):
+        self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
+        self._comp.step(self._ref_state, self._values["rotor_speed"], 0.0, step_size, t=current_time)
+
+    def _step_context(self):
+        from frbmodel.units import rad_s_to_rpm
+
+        w = self._values["rotor_speed"]
+        return f"rotor speed {rad_s_to_rpm(w):.0f} rpm: " if math.isfinite(w) else ""
 
     def _component_state(self):
         c = self._comp

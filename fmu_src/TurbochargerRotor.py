@@ -2,82 +2,130 @@
 
 Thin adapter over :class:`frbmodel.components.RotorComponent`; the bearing forces arrive linearized at the
 communication point (force, stiffness, damping per bearing) and are applied linear-implicitly over the step.
+
+The rotor system is fixed when the FMU is built (:mod:`frbmodel.cosim.fmu_system`; ``frb build-fmus
+--rotor-file FILE``, default: the paper's Table 2 system): its discs name the outputs ``<disc>.x/y`` and the
+unbalance parameters, its bearings the inputs and outputs ``<bearing>_bearing.*``, and its node count sizes the
+state and the linearization matrices. The ``rotor_file`` parameter may select another system of the same
+structure at run time; a system of another structure is refused at initialization with the differences named.
 """
+import math
+
 import numpy as np
-from _fmu_common import FrbSlaveMixin, finite
+from _fmu_common import FrbSlaveMixin
 from pythonfmu import Fmi2Slave
 
-BEARINGS = ("turbine_bearing", "compressor_bearing")
-WHEELS = ("turbine_wheel", "compressor_wheel")
+#: journal state quantities and their units, in the order of the outputs and of the journal_ref inputs
+JOURNAL = (("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))
 
 
 class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
+    """FMI 2.0 co-simulation slave of the FE rotor built into the FMU (see the module description).
+
+    Parameters (all ``fixed``): ``rotor_file``, speed ramp, unbalance per disc, initial journal positions per
+    bearing, gravity, substep, ``linearization``, ``force_interpolation``. Inputs per bearing: force, end-of-step
+    force and path acceleration, reference journal state, interface Jacobian. Outputs: rotor speed, journal
+    states per bearing, disc centres per disc, optional linearization. FMI behaviour and statuses:
+    :class:`_fmu_common.FrbSlaveMixin`.
+    """
+
     author = "frbmodel"
-    description = "Turbocharger rotor, FE model (paper Table 2 by default), prescribed speed ramp."
+    description = ("Turbocharger rotor, FE model of the system built into the FMU (paper Table 2 by default), "
+                   "prescribed speed ramp.")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._init_state()
-        self._param("rotor_file", "", "frbmodel system description (.toml/.json, see frb system) whose rotor, bearing "
-                    "nodes and gravity are used; empty = the bundled paper Table 2 rotor", "str")
-        # defaults: the paper's Table 2 system and the default run-up of frbmodel.presets
+        from frbmodel.cosim.fmu_system import rotor_system
+
+        self._built_for = rotor_system(self.resources)  # the system the variables are made for
+        self._bearings = [f"{b.name}_bearing" for b in self._built_for.bearings]
+        self._discs = [d.name for d in self._built_for.rotor.discs]
+        self._parameters()
+        self._inputs()
+        self._outputs()
+
+    # ------------------------------------------------------------------ variables
+    def _parameters(self):
+        """Parameters (all ``fixed``) with units and valid ranges; defaults: the built-in system and the default
+        run-up of frbmodel.presets."""
         from frbmodel.components import ROTOR_SUBSTEP
-        from frbmodel.presets import RUNUP_DURATION, RUNUP_SPEED_RPM, turbocharger
+        from frbmodel.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
         from frbmodel.units import rpm_to_rad_s
 
-        tc = turbocharger()
-        self._param("speed_start", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), "rotor speed at t = 0 [rad/s]")
-        self._param("speed_end", rpm_to_rad_s(RUNUP_SPEED_RPM[1]), "rotor speed after the ramp [rad/s]")
-        self._param("ramp_time", RUNUP_DURATION, "duration of the linear speed ramp [s]")
-        for w in WHEELS:
-            self._param(f"{w}.unbalance", 0.0, f"{w} unbalance (mass x eccentricity) [kg m]")
-            self._param(f"{w}.unbalance_phase", 0.0, f"{w} unbalance phase from +x [rad]")
-        for b in BEARINGS:
-            self._param(f"{b}.journal_x0", 0.0, f"initial journal centre x at the {b} [m]")
-            self._param(f"{b}.journal_y0", 0.0, f"initial journal centre y at the {b} [m]")
-        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]")
-        self._param("substep", ROTOR_SUBSTEP, "trapezoidal substep [s]")
+        self._param("rotor_file", "", "frbmodel system description (.toml/.json, see frb system) whose rotor, bearing "
+                    "nodes and gravity are used; it must have the structure this FMU was built for (node count, disc "
+                    "names, bearing names); empty = the system built into the FMU", "str")
+        self._param("speed_start", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), "rotor speed at t = 0 [rad/s]", unit="rad/s",
+                    low=0.0)
+        self._param("speed_end", rpm_to_rad_s(RUNUP_SPEED_RPM[1]), "rotor speed after the ramp [rad/s]",
+                    unit="rad/s", low=0.0)
+        self._param("ramp_time", RUNUP_DURATION, "duration of the linear speed ramp [s]", unit="s", low=0.0)
+        for w in self._discs:
+            self._param(f"{w}.unbalance", 0.0, f"{w} unbalance (mass x eccentricity) [kg m]", unit="kg.m", low=0.0)
+            self._param(f"{w}.unbalance_phase", 0.0, f"{w} unbalance phase from +x [rad]", unit="rad")
+        for b in self._bearings:
+            self._param(f"{b}.journal_x0", 0.0, f"initial journal centre x at the {b} [m]", unit="m")
+            self._param(f"{b}.journal_y0", 0.0, f"initial journal centre y at the {b} [m]", unit="m")
+        self._param("gravity", self._built_for.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2",
+                    low=0.0)
+        self._param("substep", ROTOR_SUBSTEP, "trapezoidal substep [s]", unit="s", low=1e-9, high=1e-3)
         self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
         self._param("force_interpolation", False, "interpolate the bearing force between force and force_end over the "
                     "step (staggered masters that step the bearings first); false for Jacobi masters", "bool")
-        for b in BEARINGS:
-            self._input(f"{b}.force.x", "bearing force on the journal, x [N]")
-            self._input(f"{b}.force.y", "bearing force on the journal, y [N]")
-            self._input(f"{b}.force_end.x", "bearing force at the end of the step, x [N] (force_interpolation)")
-            self._input(f"{b}.force_end.y", "bearing force at the end of the step, y [N] (force_interpolation)")
+
+    def _inputs(self):
+        """Per bearing: force, end-of-step force and path acceleration, reference journal state, Jacobian."""
+        self._keys = {}
+        for b in self._bearings:
+            self._input(f"{b}.force.x", "bearing force on the journal, x [N]", unit="N")
+            self._input(f"{b}.force.y", "bearing force on the journal, y [N]", unit="N")
+            self._input(f"{b}.force_end.x", "bearing force at the end of the step, x [N] (force_interpolation)",
+                        unit="N")
+            self._input(f"{b}.force_end.y", "bearing force at the end of the step, y [N] (force_interpolation)",
+                        unit="N")
             self._input(f"{b}.journal_accel.x", "journal acceleration of the bearing's extrapolated path, x [m/s2] "
-                        "(force_interpolation)")
+                        "(force_interpolation)", unit="m/s2")
             self._input(f"{b}.journal_accel.y", "journal acceleration of the bearing's extrapolated path, y [m/s2] "
-                        "(force_interpolation)")
-            for q, u in (("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s")):
-                self._input(f"{b}.journal_ref.{q}", f"journal {q} at which the bearing force was evaluated [{u}]")
+                        "(force_interpolation)", unit="m/s2")
+            for q, u in JOURNAL:
+                self._input(f"{b}.journal_ref.{q}", f"journal {q} at which the bearing force was evaluated [{u}]",
+                            unit=u)
             for i in range(2):
                 for k in range(2):
-                    self._input(f"{b}.stiffness[{i + 1},{k + 1}]", "bearing interface stiffness [N/m]")
-                    self._input(f"{b}.damping[{i + 1},{k + 1}]", "bearing interface damping [N s/m]")
-        self._output("rotor_speed", "rotor spin speed [rad/s]", lambda: self._comp.speed(self._comp.t)[0])
-        for bi, b in enumerate(BEARINGS):
-            for qi, (q, u) in enumerate((("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))):
-                self._output(f"{b}.journal.{q}", f"journal {q} [{u}]", lambda bi=bi, qi=qi: self._comp.journal(bi)[qi])
-        for w in WHEELS:
+                    self._input(f"{b}.stiffness[{i + 1},{k + 1}]", "bearing interface stiffness [N/m]", unit="N/m")
+                    self._input(f"{b}.damping[{i + 1},{k + 1}]", "bearing interface damping [N s/m]", unit="N.s/m")
+            self._keys[b] = ([f"{b}.force.x", f"{b}.force.y"],
+                             [f"{b}.stiffness[{i},{k}]" for i in (1, 2) for k in (1, 2)],
+                             [f"{b}.damping[{i},{k}]" for i in (1, 2) for k in (1, 2)],
+                             [f"{b}.journal_ref.{q}" for q, _ in JOURNAL],
+                             [f"{b}.force_end.x", f"{b}.force_end.y"],
+                             [f"{b}.journal_accel.x", f"{b}.journal_accel.y"])
+
+    def _outputs(self):
+        """Speed, journal states per bearing, disc centres per disc, linearization sized by the node count."""
+        self._output("rotor_speed", "rotor spin speed [rad/s]", lambda: self._comp.rotor_speed, unit="rad/s")
+        for bi, b in enumerate(self._bearings):
+            for qi, (q, u) in enumerate(JOURNAL):
+                self._output(f"{b}.journal.{q}", f"journal {q} [{u}]", lambda bi=bi, qi=qi: self._comp.journal(bi)[qi],
+                             unit=u)
+        for w in self._discs:
             for qi, q in enumerate("xy"):
                 self._output(f"{w}.{q}", f"{w} centre {q} [m]",
-                             lambda w=w, qi=qi: self._comp.node_xy(self._node[w])[qi])
-        self._linearization_outputs(32, 4, 8, ("states: q, dq/dt", "inputs: bearing forces x, y per bearing",
-                                                "outputs: journal x, y, vx, vy per bearing"))
+                             lambda w=w, qi=qi: self._comp.node_xy(self._node[w])[qi], unit="m")
+        n_nodes, nb = self._built_for.rotor.n_nodes, len(self._bearings)
+        x_units = ["m", "m", "rad", "rad"] * n_nodes + ["m/s", "m/s", "rad/s", "rad/s"] * n_nodes
+        self._linearization_outputs(x_units, ["N", "N"] * nb, [u for _ in range(nb) for _, u in JOURNAL],
+                                    ("states: q, dq/dt (per node x, y, rotation about x, about y)",
+                                     "inputs: bearing forces x, y per bearing",
+                                     "outputs: journal x, y, vx, vy per bearing"))
 
-    _KEYS = {b: ([f"{b}.force.x", f"{b}.force.y"],
-                 [f"{b}.stiffness[{i},{k}]" for i in (1, 2) for k in (1, 2)],
-                 [f"{b}.damping[{i},{k}]" for i in (1, 2) for k in (1, 2)],
-                 [f"{b}.journal_ref.{q}" for q in ("x", "y", "vx", "vy")],
-                 [f"{b}.force_end.x", f"{b}.force_end.y"],
-                 [f"{b}.journal_accel.x", f"{b}.journal_accel.y"]) for b in BEARINGS}
-
+    # ------------------------------------------------------------------ helpers
     def _bearing_inputs(self):
         v = self._values
         F, K, C, self._refs, self._fend, self._acc = [], [], [], [], [], []
-        for b in BEARINGS:
-            kf, kk, kc, kr, ke, ka = self._KEYS[b]
+        for b in self._bearings:
+            kf, kk, kc, kr, ke, ka = self._keys[b]
             F.append(np.array([v[k] for k in kf]))
             K.append(np.array([v[k] for k in kk]).reshape(2, 2))
             C.append(np.array([v[k] for k in kc]).reshape(2, 2))
@@ -88,62 +136,61 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
 
     def _linear(self):
         if not self._values["linearization"]:
-            return {"A": np.zeros((32, 32)), "B": np.zeros((32, 4)), "C": np.zeros((8, 32)), "D": np.zeros((8, 4))}
+            nx, nb = 2 * self._built_for.rotor.n_dof, len(self._bearings)
+            return {"A": np.zeros((nx, nx)), "B": np.zeros((nx, 2 * nb)), "C": np.zeros((4 * nb, nx)),
+                    "D": np.zeros((4 * nb, 2 * nb))}
         from frbmodel.components import rotor_state_space
 
         return rotor_state_space(self._comp)
 
-    def exit_initialization_mode(self):
-        self._require_version()
+    # ------------------------------------------------------------------ FMI (FrbSlaveMixin hooks)
+    def _initialize(self):
+        """Build the component from the (range-checked) parameters and the system of ``rotor_file`` (the built-in
+        one when empty); raises when that system's structure differs from the one the FMU was built for."""
         import frbmodel as frb
         from frbmodel.components import RotorComponent, ramp_speed
+        from frbmodel.cosim.fmu_system import structure_differences
         from frbmodel.units import rad_s_to_rpm
 
         v = self._values
-        try:
-            tc = frb.load_system(v["rotor_file"]) if v["rotor_file"] else frb.turbocharger()
-            tc = tc.with_(gravity=finite("gravity", v["gravity"], 0.0, unit="m/s2"))
-            w0 = finite("speed_start", v["speed_start"], 0.0, unit="rad/s")
-            w1 = finite("speed_end", v["speed_end"], 0.0, unit="rad/s")
-            ramp = finite("ramp_time", v["ramp_time"], 0.0, unit="s")
-            unb = [frb.Unbalance(w, finite(f"{w}.unbalance", v[f"{w}.unbalance"], 0.0, unit="kg m"),
-                             finite(f"{w}.unbalance_phase", v[f"{w}.unbalance_phase"])) for w in WHEELS
-                   if v[f"{w}.unbalance"] > 0]
-            self._comp = RotorComponent(tc, ramp_speed(rad_s_to_rpm(w0), rad_s_to_rpm(w1), ramp), unb,
-                                        finite("substep", v["substep"], 1e-9, 1e-3, "s"))
-            journals = [(finite(f"{b}.journal_x0", v[f"{b}.journal_x0"]),
-                         finite(f"{b}.journal_y0", v[f"{b}.journal_y0"])) for b in BEARINGS]
-            nodes = [b.node for b in tc.bearings]
-            self._comp.y[:self._comp.n] = tc.rotor.static_deflection(nodes, journals, tc.gravity)
-            self._node = {d.name: d.node for d in tc.rotor.discs}
-        except Exception as exc:  # noqa: BLE001
-            self._error(f"{self.instance_name}: invalid parameters: {exc}")
-            raise
-        self._ready = True
+        tc = frb.load_system(v["rotor_file"]) if v["rotor_file"] else self._built_for
+        diff = structure_differences(self._built_for, tc)
+        if diff:
+            raise ValueError(f"rotor_file = {v['rotor_file']!r} does not fit this FMU's variables: "
+                             f"{'; '.join(diff)}. Build an FMU for that system: frb build-fmus --rotor-file FILE")
+        tc = tc.with_(gravity=float(v["gravity"]))
+        unb = [frb.Unbalance(w, float(v[f"{w}.unbalance"]), float(v[f"{w}.unbalance_phase"])) for w in self._discs
+               if v[f"{w}.unbalance"] > 0]
+        speed = ramp_speed(rad_s_to_rpm(float(v["speed_start"])), rad_s_to_rpm(float(v["speed_end"])),
+                           float(v["ramp_time"]))
+        comp = RotorComponent(tc, speed, unb, float(v["substep"]))
+        journals = [(float(v[f"{b}.journal_x0"]), float(v[f"{b}.journal_y0"])) for b in self._bearings]
+        comp.y[:comp.n] = tc.rotor.static_deflection([b.node for b in tc.bearings], journals, tc.gravity)
+        self._node = {d.name: d.node for d in tc.rotor.discs}
+        self._comp = comp
 
-    def do_step(self, current_time, step_size):
-        if not self._ready:
-            return self._error(f"{self.instance_name}: doStep called before initialization (or after a failure)")
-        try:
-            F, K, C = self._bearing_inputs()
-            if not np.isfinite(np.concatenate(F + [k.ravel() for k in K] + [c.ravel() for c in C] + self._refs)).all():
-                raise ValueError(f"bearing inputs are not finite: force {F}, stiffness {K}, damping {C}, "
-                                 f"journal_ref {self._refs}")
-            path = None
-            if self._values["force_interpolation"]:
-                path = (self._fend, self._acc)
-                if not np.isfinite(np.concatenate(self._fend + self._acc)).all():
-                    raise ValueError(f"bearing force_end / journal_accel inputs are not finite: {self._fend!r}, "
-                                     f"{self._acc!r}")
-            self._comp.step(step_size, F, K, C, self._refs, path=path)
-        except Exception as exc:  # noqa: BLE001
-            self._ready = False
-            return self._error(f"{self.instance_name} at t = {current_time:.6g} s: {exc}")
-        return True
+    def _advance(self, current_time, step_size):
+        F, K, C = self._bearing_inputs()
+        if not np.isfinite(np.concatenate(F + [k.ravel() for k in K] + [c.ravel() for c in C] + self._refs)).all():
+            raise ValueError(f"bearing inputs are not finite: force {F}, stiffness {K}, damping {C}, "
+                             f"journal_ref {self._refs}")
+        path = None
+        if self._values["force_interpolation"]:
+            path = (self._fend, self._acc)
+            if not np.isfinite(np.concatenate(self._fend + self._acc)).all():
+                raise ValueError(f"bearing force_end / journal_accel inputs are not finite: {self._fend!r}, "
+                                 f"{self._acc!r}")
+        self._comp.step(step_size, F, K, C, self._refs, path=path)
+
+    def _step_context(self):
+        from frbmodel.units import rad_s_to_rpm
+
+        w = self._comp.rotor_speed
+        return f"rotor speed {rad_s_to_rpm(w):.0f} rpm: " if math.isfinite(w) else ""
 
     def _component_state(self):
         return {"y": [float(x) for x in self._comp.y], "phi": self._comp.phi, "t": self._comp.t}
 
     def _set_component_state(self, st):
-        self._comp.y[:] = st["y"]
+        self._comp.y = np.array(st["y"], dtype=float)
         self._comp.phi, self._comp.t = st["phi"], st["t"]

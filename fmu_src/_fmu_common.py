@@ -1,4 +1,5 @@
-"""Helpers shared by the frbmodel FMU slaves (bundled into each FMU next to the slave script)."""
+"""Helpers shared by the frbmodel FMU slaves (bundled into each FMU next to the slave script): variable
+registration with units, the FMI 2.0 state machine and status protocol (:class:`FrbSlaveMixin`)."""
 import math
 import re
 from pathlib import Path
@@ -6,129 +7,337 @@ from pathlib import Path
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Initial, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
+#: modes of the FMI 2.0 co-simulation state machine (FMI 2.0 section 4.2.4) tracked by the slaves
+INSTANTIATED, INITIALIZATION, STEP, TERMINATED, ERROR = ("the instantiated state", "initialization mode",
+                                                         "step mode", "the terminated state", "the error state")
+#: marker file in the FMU's resources: the FMU binary (the frbmodel loader) returns for each FMI call the worst of
+#: pythonfmu's status and the statuses of the messages the slave logged during the call
+STATUS_FROM_LOG = "frb_status_from_log"
+
 
 class FrbSlaveMixin:
-    """Variable registration with explicit getters/setters, version check and error logging."""
+    """FMI 2.0 co-simulation behaviour shared by the frbmodel slaves.
+
+    - Variables: ``_param`` / ``_input`` / ``_output`` register each variable with its unit (every Real has one:
+      :meth:`to_xml` writes it and the UnitDefinitions) and, for parameters, its valid range or values.
+    - State machine (FMI 2.0 section 4.2.4): instantiated -> initialization mode -> step mode -> terminated, and
+      an error state after a failed initialization. Parameters are ``fixed``: setting one after
+      fmi2ExitInitializationMode is refused (fmi2Error, the value stays). Inputs may be set until terminate.
+    - doStep: refused (fmi2Error) outside step mode or with a step size that is not finite and > 0; discarded
+      (fmi2Discard, nothing of the step is kept) when the inputs are not finite or the component fails, e.g. a
+      film reaching its wall; the next doStep with valid inputs continues from the unchanged state.
+    - Outputs that cannot be evaluated read NaN with an fmi2Discard message, never a silent NaN.
+
+    Statuses: every FMI entry point returns normally and logs each refusal with the status the call must return
+    (:meth:`_refuse`: fmi2Error, :meth:`_discard`: fmi2Discard). pythonfmu's own binary returns fmi2Discard for
+    ``do_step() -> False`` and fmi2Fatal for an exception (after which it has released the Python object), nothing
+    else; the frbmodel loader in front of it returns the worst of that and the statuses logged during the call.
+    Without the loader's :data:`STATUS_FROM_LOG` marker, a failed initialization raises as before (fmi2Fatal), the
+    only way pythonfmu's binary can refuse it.
+    """
 
     def _init_state(self):
-        """Common slave state: variable values, readiness, last failure, output cache flag, the component."""
+        """Common slave state: variable values, FMI mode, output cache flag, the component, variable tables."""
         self._values = {}
-        self._ready = False
-        self._failed = None
+        self._mode = INSTANTIATED
         self._dirty = True
         self._comp = None
+        self._units = {}  # variable name -> unit of every Real variable (written by to_xml)
+        self._checks = {}  # parameter name -> (unit, low, high, low_open, choices)
+        self._kind = {}  # value reference -> "parameter" | "input" | "output"
         self._raw_get = {}  # value reference -> raw getter of a Real variable (fast path of get_real)
-        self._set_name = {}  # value reference -> name in self._values of a Real input or parameter
+        self._input_name = {}  # value reference -> name in self._values of a Real input
+        self._status_from_log = bool(self.resources) and (Path(self.resources) / STATUS_FROM_LOG).is_file()
 
-    def _param(self, name, value, desc, kind="real"):
+    # ------------------------------------------------------------------ registration
+    def _register(self, var, kind, unit):
+        if isinstance(var, Real):
+            if not unit:
+                raise ValueError(f"{type(self).__name__}: Real variable {var.name!r} is registered without a unit")
+            self._units[var.name] = unit
+        self.register_variable(var, nested=False)
+        self._kind[var.value_reference] = kind
+        return var.value_reference
+
+    def _param(self, name, value, desc, kind="real", unit=None, low=-math.inf, high=math.inf, low_open=False,
+               choices=None):
+        """Register a ``fixed`` parameter; ``low``/``high`` (``low_open``: low excluded) or ``choices`` are
+        checked at fmi2ExitInitializationMode (:meth:`_check_parameters`)."""
         self._values[name] = value
         cls = {"real": Real, "int": Integer, "bool": Boolean, "str": String}[kind]
         var = cls(name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed, description=desc,
                   getter=lambda n=name: self._values[n], setter=lambda v, n=name: self._set_param(n, v))
-        self.register_variable(var, nested=False)
+        vr = self._register(var, "parameter", unit)
         if kind == "real":
-            self._raw_get[var.value_reference] = var.getter
-            self._set_name[var.value_reference] = name
+            self._raw_get[vr] = var.getter
+            self._checks[name] = (unit, low, high, low_open, None)
+        elif choices is not None:
+            self._checks[name] = (None, None, None, False, tuple(choices))
 
-    def _set_param(self, name, v):
-        self._values[name] = v
-        self._dirty = True
-
-    def _input(self, name, desc, start=0.0):
+    def _input(self, name, desc, start=0.0, unit=None):
         self._values[name] = start
         var = Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous, description=desc,
                    getter=lambda n=name: self._values[n], setter=lambda v, n=name: self._set_input(n, v))
-        self.register_variable(var, nested=False)
-        self._raw_get[var.value_reference] = var.getter
-        self._set_name[var.value_reference] = name
+        vr = self._register(var, "input", unit)
+        self._raw_get[vr] = var.getter
+        self._input_name[vr] = name
+
+    def _output(self, name, desc, fn, kind="real", unit=None):
+        if kind == "int":
+            var = Integer(name, causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
+                          initial=Fmi2Initial.exact, description=desc,
+                          getter=lambda f=fn, n=name: self._evaluate(n, f, int, 0))
+        else:
+            var = Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
+                       initial=Fmi2Initial.exact, description=desc,
+                       getter=lambda f=fn, n=name: self._evaluate(n, f, float, math.nan))
+        vr = self._register(var, "output", unit)
+        if kind != "int":
+            self._raw_get[vr] = fn
+
+    def _linearization_outputs(self, x_units, u_units, y_units, what):
+        """Integer outputs nx, nu, ny and Real outputs A[i,j], B[i,j], C[i,j], D[i,j] (1-based, row-major) read
+        from ``self._linear()`` for states, inputs and outputs of the units ``x_units``, ``u_units``,
+        ``y_units`` (each entry's unit follows: A[i,j] = unit(x_i)/(s unit(x_j)), ...); ``what`` = (states,
+        inputs, outputs) descriptions."""
+        from frbmodel.cosim.units import ratio
+
+        for name, n, desc in (("nx", len(x_units), what[0]), ("nu", len(u_units), what[1]),
+                              ("ny", len(y_units), what[2])):
+            self._output(name, f"linearization: number of {desc}", lambda n=n: n, "int")
+        for name, rows, cols, tp in (("A", x_units, x_units, -1), ("B", x_units, u_units, -1),
+                                     ("C", y_units, x_units, 0), ("D", y_units, u_units, 0)):
+            for i, ru in enumerate(rows):
+                for k, cu in enumerate(cols):
+                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
+                                 lambda name=name, i=i, k=k: self._linear()[name][i, k], unit=ratio(ru, cu, tp))
+
+    def to_xml(self, model_options=None):
+        """pythonfmu's model description plus the declared units (``unit`` of each Real, UnitDefinitions)."""
+        from frbmodel.cosim.units import declare_units
+
+        return declare_units(super().to_xml(model_options or {}), self._units)
+
+    # ------------------------------------------------------------------ status protocol
+    def _refuse(self, msg):
+        """Log ``msg`` with fmi2Error: the current FMI call is refused."""
+        self.log(f"{self.instance_name}: {msg}", Fmi2Status.error)
+
+    def _discard(self, msg):
+        """Log ``msg`` with fmi2Discard: the current step or output cannot be computed from these inputs."""
+        self.log(f"{self.instance_name}: {msg}", Fmi2Status.discard)
+
+    # ------------------------------------------------------------------ set
+    def _set_param(self, name, v):
+        if self._mode not in (INSTANTIATED, INITIALIZATION):
+            self._refuse(f"parameter {name} = {v!r} refused in {self._mode}: its variability is 'fixed', so it can "
+                         f"only be set before fmi2ExitInitializationMode; it keeps its value {self._values[name]!r}")
+            return
+        self._values[name] = v
+        self._dirty = True
 
     def _set_input(self, name, v):
+        if self._mode in (TERMINATED, ERROR):
+            self._refuse(f"input {name} = {v!r} refused in {self._mode}")
+            return
         self._values[name] = float(v)
         self._dirty = True
 
-    def _output(self, name, desc, fn, kind="real"):
-        if kind == "int":
-            var = Integer(name, causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
-                          initial=Fmi2Initial.exact, description=desc, getter=lambda f=fn: int(self._safe(f)))
-        else:
-            var = Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                       initial=Fmi2Initial.exact, description=desc, getter=lambda f=fn: float(self._safe(f)))
-        self.register_variable(var, nested=False)
-        if kind != "int":
-            self._raw_get[var.value_reference] = fn
-
-    # Fast paths for the per-macro-step traffic (pythonfmu's generic loop checks types and goes through the
-    # guarded getters one by one): read all requested values with the raw getters while the slave is healthy, and
-    # fall back to the guarded per-variable path (zeros before initialization, logging + NaN on failure) otherwise.
-    def get_real(self, vrs):
-        if self._ready and self._failed is None:
-            try:
-                raw = self._raw_get
-                return [float(raw[vr]()) for vr in vrs]
-            except Exception:  # noqa: BLE001  (the guarded path below logs it)
-                pass
-        return super().get_real(vrs)
-
     def set_real(self, vrs, values):
-        try:
-            names = [self._set_name[vr] for vr in vrs]
-        except KeyError:  # an output or unknown reference: pythonfmu reports it
-            return super().set_real(vrs, values)
-        for n, v in zip(names, values):
-            self._values[n] = float(v)
-        self._dirty = True
+        if self._mode == STEP:  # fast path of the per-step traffic: inputs only
+            try:
+                names = [self._input_name[vr] for vr in vrs]
+            except KeyError:
+                names = None
+            if names is not None:
+                for n, v in zip(names, values):
+                    self._values[n] = float(v)
+                self._dirty = True
+                return
+        self._set_each(vrs, values, Real)
 
-    def _linearization_outputs(self, nx, nu, ny, what):
-        """Integer outputs nx, nu, ny and Real outputs A[i,j], B[i,j], C[i,j], D[i,j] (1-based, row-major) read
-        from ``self._linear()``; ``what`` = (states, inputs, outputs) descriptions."""
-        for name, n, desc in (("nx", nx, what[0]), ("nu", nu, what[1]), ("ny", ny, what[2])):
-            self._output(name, f"linearization: number of {desc}", lambda n=n: n, "int")
-        for name, (nr, nc) in (("A", (nx, nx)), ("B", (nx, nu)), ("C", (ny, nx)), ("D", (ny, nu))):
-            for i in range(nr):
-                for k in range(nc):
-                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
-                                 lambda name=name, i=i, k=k: self._linear()[name][i, k])
+    def set_integer(self, vrs, values):
+        self._set_each(vrs, values, Integer)
 
-    def _safe(self, fn):
-        """Evaluate an output. Before initialization outputs read 0; if the evaluation fails (e.g. a film at
-        its wall) the error is logged and the output reads NaN — an exception here would make pythonfmu report
-        fmi2Fatal — and the next doStep returns Discard."""
-        if not getattr(self, "_ready", False):
-            return 0
+    def set_boolean(self, vrs, values):
+        self._set_each(vrs, values, Boolean)
+
+    def set_string(self, vrs, values):
+        self._set_each(vrs, values, String)
+
+    def _set_each(self, vrs, values, cls):
+        for vr, v in zip(vrs, values):
+            var = self.vars.get(vr)
+            if not isinstance(var, cls) or self._kind.get(vr) not in ("parameter", "input"):
+                what = (f"no variable has value reference {vr}" if var is None else
+                        f"{var.name} is not a {cls.__name__} variable" if not isinstance(var, cls) else
+                        f"{var.name} is an output and cannot be set")
+                self._refuse(f"set{cls.__name__} refused: {what}")
+                continue
+            var.setter(v)
+
+    # ------------------------------------------------------------------ get
+    def get_real(self, vrs):
+        if self._comp is not None and self._mode in (STEP, TERMINATED):
+            try:  # fast path: raw getters while every value is finite (otherwise the guarded path reports)
+                raw = self._raw_get
+                out = [float(raw[vr]()) for vr in vrs]
+                if math.isfinite(sum(out)):
+                    return out
+            except Exception:  # noqa: BLE001  (the guarded path below reports it)
+                pass
+        return self._get_each(vrs, Real, math.nan)
+
+    def get_integer(self, vrs):
+        return self._get_each(vrs, Integer, 0)
+
+    def get_boolean(self, vrs):
+        return self._get_each(vrs, Boolean, False)
+
+    def get_string(self, vrs):
+        return self._get_each(vrs, String, "")
+
+    def _get_each(self, vrs, cls, default):
+        out = []
+        for vr in vrs:
+            var = self.vars.get(vr)
+            if not isinstance(var, cls):
+                what = f"no variable has value reference {vr}" if var is None else f"{var.name} is not a " \
+                                                                                   f"{cls.__name__} variable"
+                self._refuse(f"get{cls.__name__} refused: {what}")
+                out.append(default)
+            else:
+                out.append(var.getter())
+        return out
+
+    def _evaluate(self, name, fn, cast, failed):
+        """Value of the output ``name`` = ``fn()``: the start value 0 before the component exists (build time,
+        initialization mode); after an error or when the evaluation fails or gives a non-finite value, ``failed``
+        with the reason logged (fmi2Error / fmi2Discard), never a silent NaN."""
+        if self._mode == ERROR:
+            self._refuse(f"output {name} is not available: the instance failed (see the messages above)")
+            return failed
+        if self._comp is None:
+            return cast(0)
         try:
-            return fn()
+            value = cast(fn())
         except Exception as exc:  # noqa: BLE001
-            if self._failed is None:
-                self._error(f"{self.instance_name}: output evaluation failed: {exc}")
-            self._ready = False
-            return math.nan
+            self._discard(f"output {name} cannot be evaluated at the current inputs: {exc}")
+            return failed
+        if cast is float and not math.isfinite(value):
+            self._discard(f"output {name} = {value} is not finite at the current inputs")
+        return value
 
-    # FMU state (fmi2GetFMUstate / SetFMUstate, used for rollback): the variable values, the health flags and the
+    # ------------------------------------------------------------------ state machine
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        if self._mode != INSTANTIATED:
+            self._refuse(f"fmi2SetupExperiment called in {self._mode}; it is only allowed after fmi2Instantiate")
+
+    def enter_initialization_mode(self):
+        if self._mode != INSTANTIATED:
+            self._refuse(f"fmi2EnterInitializationMode called in {self._mode}; it is only allowed once, after "
+                         "fmi2Instantiate")
+            return
+        self._mode = INITIALIZATION
+
+    def exit_initialization_mode(self):
+        """Check the version and the parameters and build the component (the slave's ``_initialize``). A failure
+        leaves the instance in the error state with the reason logged (fmi2Error); it can still be freed."""
+        if self._mode != INITIALIZATION:
+            self._refuse(f"fmi2ExitInitializationMode called in {self._mode}; call fmi2EnterInitializationMode "
+                         "first")
+            return
+        try:
+            msg = self._check_version()
+            if msg is None:
+                self._check_parameters()
+                self._initialize()
+        except Exception as exc:  # noqa: BLE001  (any parameter problem is an FMI error, not a crash)
+            msg = f"invalid parameters: {exc}"
+        if msg is None:
+            self._mode = STEP
+            self._dirty = True
+            return
+        self._mode, self._comp = ERROR, None
+        self._refuse(msg)
+        if not self._status_from_log:
+            raise RuntimeError(msg)
+
+    def _check_parameters(self):
+        """ValueError naming each parameter outside its declared range or values (quantity, value, range)."""
+        bad = []
+        for name, (unit, low, high, low_open, choices) in self._checks.items():
+            v = self._values[name]
+            if choices is not None:
+                if v not in choices:
+                    bad.append(f"{name} = {v!r} is invalid: valid values {', '.join(map(repr, choices))}")
+                continue
+            try:
+                x = float(v)
+            except (TypeError, ValueError):
+                x = math.nan
+            if not (math.isfinite(x) and (x > low if low_open else x >= low) and x <= high):
+                rng = f"{'(' if low_open else '['}{low:g}, {high:g}{']' if math.isfinite(high) else ')'}"
+                u = "" if unit == "1" else f" {unit}"
+                bad.append(f"{name} = {v!r}{u} is invalid: valid range {rng}{u}")
+        if bad:
+            raise ValueError("; ".join(bad))
+
+    def terminate(self):
+        if self._mode != ERROR:
+            self._mode = TERMINATED
+
+    def do_step(self, current_time, step_size):
+        """One communication step: refused (fmi2Error) or discarded (fmi2Discard, the state is restored) with the
+        reason logged, see the class description. The slave's ``_advance(t, h)`` does the step."""
+        why = self._step_refusal(current_time, step_size)
+        if why is not None:
+            self._refuse(why)
+            return False
+        saved = self._component_state()
+        try:
+            self._advance(current_time, step_size)
+        except Exception as exc:  # noqa: BLE001
+            self._set_component_state(saved)
+            self._dirty = True
+            self._discard(f"doStep from t = {current_time:.6g} s by {step_size:.3g} s discarded, the state stays at "
+                          f"t = {current_time:.6g} s: {self._step_context()}{exc}")
+            return False
+        self._dirty = True
+        return True
+
+    def _step_refusal(self, t, h):
+        """Why a doStep at ``t`` by ``h`` [s] is refused, or None."""
+        if self._mode != STEP:
+            return {INSTANTIATED: "doStep called before initialization (fmi2ExitInitializationMode)",
+                    INITIALIZATION: "doStep called in initialization mode (call fmi2ExitInitializationMode first)",
+                    TERMINATED: "doStep called after fmi2Terminate",
+                    ERROR: "doStep called after the instance failed (see the messages above)"}[self._mode]
+        if not (math.isfinite(h) and h > 0):
+            return f"doStep communicationStepSize = {h!r} s is invalid: valid range (0, inf) s"
+        if not math.isfinite(t):
+            return f"doStep currentCommunicationPoint = {t!r} s is invalid: it must be finite"
+        return None
+
+    def _step_context(self):
+        """Prefix of a discard message (e.g. the rotor speed); empty by default."""
+        return ""
+
+    # FMU state (fmi2GetFMUstate / SetFMUstate, used for rollback): the variable values, the mode and the
     # component's own state — not pythonfmu's default, which calls every getter (all outputs, all linearization
     # matrices) and cannot bring a slave back after a failed step.
     def _get_fmu_state(self):
-        state = {"_values": dict(self._values), "_ready": self._ready, "_failed": self._failed}
+        state = {"_values": dict(self._values), "_mode": self._mode}
         if self._comp is not None:
             state["_component"] = self._component_state()
         return state
 
     def _set_fmu_state(self, state):
         self._values = dict(state["_values"])
-        self._ready, self._failed = state["_ready"], state["_failed"]
+        self._mode = state["_mode"]
         if self._comp is not None and state.get("_component") is not None:
             self._set_component_state(state["_component"])
         self._dirty = True
-
-    def _error(self, msg):
-        self.log(msg, Fmi2Status.error)
-        self._failed = msg
-        return False
-
-    def _require_version(self):
-        msg = self._check_version()
-        if msg:
-            self._error(msg)
-            raise RuntimeError(msg)
 
     def _check_version(self):
         """Refuse to start if the imported frbmodel is not the bundled version (pythonfmu slaves share the
@@ -146,10 +355,3 @@ class FrbSlaveMixin:
                     f"frbmodel {frbmodel.__version__} from {Path(frbmodel.__file__).parent}; use the same version "
                     "(rebuild the FMUs or run them in a process without another frbmodel)")
         return None
-
-
-def finite(name, v, lo=-math.inf, hi=math.inf, unit=""):
-    v = float(v)
-    if not (math.isfinite(v) and lo <= v <= hi):
-        raise ValueError(f"{name} = {v!r} {unit} is invalid: valid range [{lo:g}, {hi:g}] {unit}".replace("  ", " "))
-    return v
