@@ -348,10 +348,76 @@ class FrbSlaveMixin:
         if self.resources:
             init = Path(self.resources) / "frbmodel" / "__init__.py"
             if init.exists():
-                m = re.search(r'__version__\s*=\s*"([^"]+)"', init.read_text())
+                m = re.search(r'__version__\s*=\s*"([^"]+)"', init.read_text(encoding="utf-8"))
                 bundled = m.group(1) if m else None
         if bundled is not None and bundled != frbmodel.__version__:
             return (f"frbmodel version mismatch: this FMU bundles frbmodel {bundled} but the process imported "
                     f"frbmodel {frbmodel.__version__} from {Path(frbmodel.__file__).parent}; use the same version "
                     "(rebuild the FMUs or run them in a process without another frbmodel)")
         return None
+
+
+def import_bundled_package_from_stable_copy(name="frbmodel"):
+    """Make ``import frbmodel`` use a per-user copy of this FMU's bundled package that outlives the extraction.
+
+    Hosts unzip an FMU into a new folder at every start; numba finds its cached kernels by the source file's path
+    and modification time, so a package imported from the fresh folder recompiles every kernel (8-12 s) at every
+    start. The copy ``$XDG_CACHE_HOME/frbmodel/fmu-pkg/<version>-<content hash>/<name>`` (default ``~/.cache``)
+    is made once per package content and reused afterwards together with the numba cache numba writes into it.
+    Nothing changes when ``name`` is already imported (a Python host with its own frbmodel; ``_check_version``
+    compares the versions) or when the copy cannot be made or does not match (e.g. a read-only home): the
+    bundled folder is then imported as before, with a warning.
+
+    Parameters
+    ----------
+    name : str
+        The package bundled next to this file in the FMU's resources folder.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The folder put first on ``sys.path``, or None if nothing was changed.
+    """
+    import hashlib
+    import os
+    import shutil
+    import sys
+    import tempfile
+    import warnings
+
+    src = Path(__file__).resolve().parent / name
+    if name in sys.modules or not (src / "__init__.py").is_file():
+        return None
+
+    def digest(root):  # the package's sources, not the caches written into it
+        h = hashlib.sha256()
+        for f in sorted(root.rglob("*")):
+            rel = f.relative_to(root)
+            if f.is_file() and "__pycache__" not in rel.parts and f.suffix not in (".pyc", ".nbi", ".nbc"):
+                h.update(rel.as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+        return h.hexdigest()[:16]
+
+    try:
+        m = re.search(r'__version__\s*=\s*"([^"]+)"', (src / "__init__.py").read_text(encoding="utf-8"))
+        content = digest(src)
+        cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "frbmodel" / "fmu-pkg"
+        dest = cache / f"{m.group(1) if m else 'unknown'}-{content}"
+        if not (dest / name / "__init__.py").is_file():
+            cache.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}-", dir=cache))
+            shutil.copytree(src, tmp / name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc"))
+            try:
+                os.rename(tmp, dest)  # atomic: concurrent first starts never see a half-made copy
+            except OSError:  # another process made it first
+                shutil.rmtree(tmp, ignore_errors=True)
+        if digest(dest / name) != content:
+            raise OSError(f"{dest / name} differs from the bundled {name}")
+    except (OSError, RuntimeError, KeyError) as exc:
+        warnings.warn(f"{name}: no stable copy outside the FMU ({exc}); importing the bundled copy, whose numba "
+                      "kernels recompile at every start", RuntimeWarning, stacklevel=2)
+        return None
+    sys.path.insert(0, str(dest))
+    return dest
+
+
+import_bundled_package_from_stable_copy()
