@@ -335,7 +335,7 @@ def cmd_losses(args):
 def cmd_build_fmus(args):
     from .cosim.build import build_fmus
 
-    build_fmus(args.out, args.src)
+    build_fmus(args.out, args.src, rotor_file=args.rotor_file)
     print(f"results in {Path(args.out).resolve()}")
 
 
@@ -525,8 +525,12 @@ def _add_compare(sub):
 def _add_build_fmus(sub):
     bf = sub.add_parser("build-fmus", formatter_class=_Formatter,
                        help="build the bearing and rotor FMUs and pack build/turbocharger.ssp")
-    bf.add_argument("--out", default="build")
-    bf.add_argument("--src", default=None, help="checkout holding fmu_src/ and ssp/ (default: auto)")
+    bf.add_argument("--out", default="build", help="output folder")
+    bf.add_argument("--src", default=None, help="folder holding fmu_src/ and ssp/ (default: this checkout, else the "
+                    "copies shipped in the installed package)")
+    bf.add_argument("--rotor-file", default=None, metavar="FILE",
+                    help="system file (frb system) the rotor FMU is built for: its discs, bearings and node count "
+                         "define the rotor FMU's variables (default: Table 2)")
     bf.set_defaults(func=cmd_build_fmus)
 
 

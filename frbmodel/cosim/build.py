@@ -88,7 +88,7 @@ def _pack_ssp(ssp, ssp_src, fmus):
             z.write(fmu, f"resources/{fmu.name}")
 
 
-def build_fmus(out_dir="build", src=None, progress=print):
+def build_fmus(out_dir="build", src=None, progress=print, rotor_file=None):
     """Build the two FMUs (each bundling this frbmodel) and the SSP archive.
 
     Parameters
@@ -100,14 +100,23 @@ def build_fmus(out_dir="build", src=None, progress=print):
         Folder with ``fmu_src/`` and ``ssp/`` (see :func:`find_source`).
     progress : callable, optional
         Called with one message per written file.
+    rotor_file : Turbocharger or str or Path, optional
+        The system the rotor FMU is built for (a file written by ``frb system``): its discs, bearings and node
+        count define the rotor FMU's variables. Default: the Table 2 turbocharger.
 
     Returns
     -------
     list of Path
         The two FMUs and the SSP archive.
+
+    Each FMU gets the loader of :mod:`frbmodel.cosim.loader` in front of pythonfmu's binary, so that it runs in
+    non-Python hosts too (skipped with a warning where no C compiler or shared libpython is found).
     """
     src = find_source(src)  # before importing pythonfmu: a missing source is named even without the fmi extra
     from pythonfmu import FmuBuilder
+
+    from .fmu_system import write_rotor_system
+    from .loader import install_loader
 
     out = Path(out_dir)
     (out / "fmus").mkdir(parents=True, exist_ok=True)
@@ -115,11 +124,14 @@ def build_fmus(out_dir="build", src=None, progress=print):
     with tempfile.TemporaryDirectory(prefix="frb_fmu_") as tmp:
         bundle = Path(tmp) / "frbmodel"
         shutil.copytree(PACKAGE, bundle, ignore=_bundle_ignore)
+        extra = {"TurbochargerRotor": [write_rotor_system(rotor_file, tmp)]} if rotor_file is not None else {}
         for name in FMUS:
             fmu = FmuBuilder.build_FMU(src / "fmu_src" / f"{name}.py", dest=out / "fmus",
-                                       project_files=[bundle, src / "fmu_src" / "_fmu_common.py"],
+                                       project_files=[bundle, src / "fmu_src" / "_fmu_common.py",
+                                                      *extra.get(name, [])],
                                        canGetAndSetFMUstate=True, canSerializeFMUstate=False,
                                        needsExecutionTool=True)
+            install_loader(fmu, src=src, progress=progress)
             paths.append(Path(fmu))
             progress(f"built {fmu} (bundles frbmodel {frbmodel.__version__})")
     ssp = out / "turbocharger.ssp"

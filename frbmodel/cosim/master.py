@@ -15,6 +15,7 @@ import math
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -38,9 +39,10 @@ BEARING_RECORD = ("ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer")
 BEARING_LOSSES = ("journal_torque", "power_loss")
 
 
-def system_from_parameters(params):
-    """The frbmodel Turbocharger described by an SSP parameter set: the rotor's ``rotor_file`` (empty: Table 2)
-    with each bearing's film and ring parameters taken from the bearing component of the same name."""
+def system_from_parameters(params, default=None):
+    """The frbmodel Turbocharger described by an SSP parameter set: the rotor's ``rotor_file`` (empty: ``default``,
+    the system the rotor FMU was built for, else Table 2) with each bearing's film and ring parameters taken from
+    the bearing component of the same name."""
     from dataclasses import replace
 
     from ..film import Film
@@ -48,7 +50,7 @@ def system_from_parameters(params):
     from ..presets import turbocharger
 
     sys_file = params.get("rotor", {}).get("rotor_file", ("String", ""))[1]
-    tc = load_system(sys_file) if sys_file else turbocharger()
+    tc = load_system(sys_file) if sys_file else (default if default is not None else turbocharger())
     bs = []
     for b in tc.bearings:
         p = {k: v[1] for k, v in params.get(b.name, {}).items()}
@@ -116,9 +118,20 @@ class Master:
                                  "coupling error was measured there; larger steps give wrong orbits without failing). "
                                  "Use --unvalidated-step (unvalidated_step=True) to run it anyway")
         self.rollback, self.max_halvings, self.trace = bool(rollback), int(max_halvings), trace
-        self.system = system_from_parameters(self.params)
+        self.system = system_from_parameters(self.params, self._rotor_system())
         self.fmi_time_s = 0.0
         self.rejected_steps = 0
+
+    def _rotor_system(self):
+        """The system the SSP's rotor FMU was built for (None if the SSP has no rotor FMU file to read)."""
+        import zipfile
+
+        from .fmu_system import rotor_system_of_fmu
+
+        for path in self.ssp.components.values():
+            if ROTOR_FMU in Path(path).name and zipfile.is_zipfile(path):  # (FMU errors are reported at setup)
+                return rotor_system_of_fmu(path)
+        return None
 
     # ------------------------------------------------------------------ set-up
     def setup(self):
