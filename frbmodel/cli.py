@@ -12,7 +12,28 @@ from .interrupt import Terminated
 
 
 def parse_speeds(text: str) -> np.ndarray:
-    """``"start:stop:count"`` (inclusive linspace) or a comma-separated list, in rpm."""
+    """Rotor speeds [rpm] from ``"start:stop:count"`` (inclusive linspace) or a comma-separated list.
+
+    Parameters
+    ----------
+    text : str
+        The ``--speeds`` option value, in rpm.
+
+    Returns
+    -------
+    ndarray
+        Speeds [rpm].
+
+    Raises
+    ------
+    ParameterError
+        Naming the option and the two accepted forms.
+
+    Examples
+    --------
+    >>> parse_speeds("10000:30000:3").tolist(), parse_speeds("5e4,1e5").tolist()
+    ([10000.0, 20000.0, 30000.0], [50000.0, 100000.0])
+    """
     try:
         if ":" in text:
             a, b, n = text.split(":")
@@ -26,6 +47,25 @@ def parse_speeds(text: str) -> np.ndarray:
 
 
 def load_from_args(args):
+    """The system of a command: ``--system FILE`` or the Table 2 system, with ``--outer-clearance`` and
+    ``--film-model`` applied.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments with ``outer_clearance`` [m] (or None) and optionally ``system`` (a path) and
+        ``film_model``.
+
+    Returns
+    -------
+    Turbocharger
+
+    Examples
+    --------
+    >>> args = build_parser().parse_args(["equilibrium", "--outer-clearance", "40e-6"])
+    >>> [b.outer.clearance for b in load_from_args(args).bearings]
+    [4e-05, 4e-05]
+    """
     from .parameters import load_system
     from .presets import turbocharger
 
@@ -58,6 +98,7 @@ def _system_args(p):
 
 
 def cmd_campbell(args):
+    """``frb campbell``: Campbell diagram of one method (from the library or the FMUs), saved and summarised."""
     from .campbell import campbell
 
     speeds = parse_speeds(args.speeds)
@@ -95,6 +136,7 @@ def cmd_campbell(args):
 
 
 def cmd_equilibrium(args):
+    """``frb equilibrium``: static equilibrium of both bearings at one speed, printed (and written as CSV)."""
     from .equilibrium import equilibrium
 
     tc = load_from_args(args)
@@ -108,12 +150,14 @@ def cmd_equilibrium(args):
 
 
 def cmd_system(args):
+    """``frb system``: write the system description to a .toml or .json file."""
     tc = load_from_args(args)
     p = tc.save(args.out)
     print(f"wrote {Path(p).resolve()} (edit it and pass it with --system)")
 
 
 def cmd_paper_figures(args):
+    """``frb paper-figures``: regenerate the paper's linear figures 4-11."""
     from .paper import paper_figures
 
     tc = load_from_args(args)
@@ -159,7 +203,24 @@ def _speed_pair(text):
 
 
 def write_composites(run, system, out, xscale="linear", title="run-up"):
-    """Composite figures (PNG + HTML) and component tables of both wheels, with the method-J Campbell diagram."""
+    """Composite figures (PNG + HTML) and component tables of every disc, with the method-J Campbell diagram.
+
+    Writes ``composite_<disc>.png``, ``composite_<disc>.html`` and ``components_<disc>.csv`` into ``out`` and
+    prints the component tables.
+
+    Parameters
+    ----------
+    run : RunupResult
+        The run (at least 64 samples, for the spectrogram).
+    system : Turbocharger
+        The run's system (for the Campbell overlay over the run's speed range).
+    out : Path
+        Output folder (must exist).
+    xscale : {"linear", "log"}
+        Speed axis scale of the figures.
+    title : str
+        Figure title prefix (e.g. ``"run-down"``).
+    """
     import matplotlib.pyplot as plt
 
     from .campbell import campbell
@@ -180,6 +241,7 @@ def write_composites(run, system, out, xscale="linear", title="run-up"):
 
 
 def cmd_runup(args):
+    """``frb runup``: monolithic nonlinear run-up or run-down, streamed to a folder, with figures; exit code."""
     from .runup import runup
 
     tc = load_from_args(args)
@@ -210,7 +272,20 @@ def cmd_runup(args):
 def check_convergence(run, rerun, out, what):
     """Rerun (``rerun(folder)``) at tightened tolerances into ``out/convergence_check`` and label every component's
     onset as converged or seeded by round-off: ``convergence_<disc>.csv``, and the columns "converged" and "note"
-    added to ``components_<disc>.csv``."""
+    added to ``components_<disc>.csv``.
+
+    Parameters
+    ----------
+    run : RunupResult
+        The run at the normal tolerances.
+    rerun : callable
+        ``rerun(folder) -> RunupResult``: the same run at tightened tolerances (or a smaller macro step),
+        streamed into ``folder``.
+    out : Path
+        Output folder of ``run``.
+    what : str
+        What was tightened, for the printed summary (e.g. ``"tolerances x0.1"``).
+    """
     import pandas as pd
 
     from .convergence import convergence_table, unconverged_summary
@@ -262,7 +337,30 @@ def _finish_run(args, run, system, out, **figure_kw):
 
 def writable_dir(path, option="--out"):
     """Create folder ``path`` and check that files can be written there — before any computing starts.
-    Raises ParameterError naming the option, the path and the reason."""
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder (created with its parents).
+    option : str
+        Command-line option that gave it, named in the error.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, the path and the reason.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     print(writable_dir(Path(tmp) / "a" / "b").is_dir())
+    True
+    """
     import tempfile
 
     p = Path(path)
@@ -276,6 +374,7 @@ def writable_dir(path, option="--out"):
 
 
 def cmd_compare(args):
+    """``frb compare``: run-ups vs method-J stability per outer clearance (figures and onset table)."""
     from .compare import compare
 
     tc = load_from_args(args)
@@ -333,6 +432,7 @@ def cmd_losses(args):
 
 
 def cmd_build_fmus(args):
+    """``frb build-fmus``: build the bearing and rotor FMUs and the SSP into a folder."""
     from .cosim.build import build_fmus
 
     build_fmus(args.out, args.src, rotor_file=args.rotor_file)
@@ -340,6 +440,7 @@ def cmd_build_fmus(args):
 
 
 def cmd_cosim(args):
+    """``frb cosim``: co-simulated run-up of an SSP system, streamed to a folder, with figures; exit code."""
     from .cosim.master import cosimulate
     from .parameters import Turbocharger
 
@@ -364,6 +465,7 @@ def cmd_cosim(args):
 
 
 def cmd_linearize(args):
+    """``frb linearize``: global state matrix from the FMUs at one operating point; prints its modes."""
     from .cosim.linearize import linearize
     from .modal import modes_from_state
 
@@ -383,6 +485,7 @@ def cmd_linearize(args):
 
 
 def cmd_sweep(args):
+    """``frb sweep``: parameter study (on Dask or serial) and its stability map; exit code 4 if a case failed."""
     from .sweep import example_cases, grid, plot_stability_map, run_study, stability_map
 
     if args.example:
@@ -616,6 +719,18 @@ def _add_plot(sub):
 
 
 def build_parser():
+    """The ``frb`` argument parser with all subcommands.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+
+    Examples
+    --------
+    >>> args = build_parser().parse_args(["runup", "--speeds", "250000:20000", "--duration", "2"])
+    >>> args.command, args.speeds, args.duration, args.func.__name__
+    ('runup', '250000:20000', 2.0, 'cmd_runup')
+    """
     from . import __version__
 
     p = argparse.ArgumentParser(prog="frb", description="Rotordynamics of turbochargers on floating-ring bearings "
@@ -642,6 +757,24 @@ EXTRAS = {"fmpy": "fmi", "pythonfmu": "fmi", "libcosimpy": "fmi", "dask": "dist"
 
 
 def main(argv=None):
+    """Entry point of ``frb``: parse the arguments, run the command and turn errors into exit codes.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit code: 0 success, 2 bad input or a missing optional package (message on stderr), 3 a run stopped early
+        (results kept), 4 a study with failed cases, 130 Ctrl-C, 143 SIGTERM.
+
+    Notes
+    -----
+    Installs a SIGTERM handler (SIGTERM ends a run like Ctrl-C, keeping its results) and sets ``MPLBACKEND=Agg``
+    unless set, so it is meant to be called once per process, as the ``frb`` script does.
+    """
     import os
     import signal
 

@@ -186,6 +186,21 @@ class JournalHistory:
     over the last step) removes that error to O(H³) and is insensitive to the journal's high-frequency content,
     unlike the instantaneous acceleration. Needs only the bearing's own inputs, so it works with any master.
     A first call, a gap longer than ``max_gap`` steps or a non-increasing time give zero (linear path).
+
+    Parameters
+    ----------
+    max_gap : float
+        Largest time between two communication points, in macro steps ``H``, over which the backward difference
+        is still used.
+
+    Examples
+    --------
+    >>> h = JournalHistory()
+    >>> h.acceleration(0.0, [0.0, 0.0, 1e-3, 0.0], 1e-5)  # first call: linear path
+    array([0., 0.])
+    >>> h.update(0.0, [0.0, 0.0, 1e-3, 0.0])
+    >>> h.acceleration(1e-5, [0.0, 0.0, 2e-3, 0.0], 1e-5)  # (2e-3 - 1e-3) m/s / 1e-5 s
+    array([100.,   0.])
     """
 
     def __init__(self, max_gap=4.0):
@@ -194,19 +209,57 @@ class JournalHistory:
         self.v = None
 
     def acceleration(self, t, journal, H):
-        """Journal acceleration [m/s²] (2,) at time ``t`` [s] for the input ``journal`` (x, y, vx, vy)."""
+        """Journal acceleration [m/s²] (2,) at time ``t`` [s] for the input ``journal`` (x, y, vx, vy).
+
+        Parameters
+        ----------
+        t : float
+            Time of the communication point [s].
+        journal : array_like (4,)
+            Journal x, y [m], vx, vy [m/s] at ``t``.
+        H : float
+            Macro step [s] (sets the largest gap, ``max_gap * H``).
+
+        Returns
+        -------
+        ndarray (2,)
+            a_x, a_y [m/s²]; zero without a usable previous point.
+        """
         if self.t is None or not (0.0 < t - self.t <= self.max_gap * H):
             return np.zeros(2)
         return (np.asarray(journal[2:4], dtype=float) - self.v) / (t - self.t)
 
     def update(self, t, journal):
+        """Remember the journal velocity at time ``t`` [s] for the next :meth:`acceleration`.
+
+        Parameters
+        ----------
+        t : float
+            Time of the communication point [s].
+        journal : array_like (4,)
+            Journal x, y [m], vx, vy [m/s] at ``t``.
+        """
         self.t = float(t)
         self.v = np.array(journal[2:4], dtype=float)
 
     def state(self):
+        """The history as plain data (for FMU get/set state).
+
+        Returns
+        -------
+        list of float or None
+            ``[t [s], vx [m/s], vy [m/s]]``, or None for an empty history.
+        """
         return None if self.t is None else [self.t, float(self.v[0]), float(self.v[1])]
 
     def set_state(self, st):
+        """Restore a state from :meth:`state`.
+
+        Parameters
+        ----------
+        st : list of float or None
+            ``[t [s], vx [m/s], vy [m/s]]``, or None for an empty history.
+        """
         if st is None:
             self.t, self.v = None, None
         else:
@@ -219,14 +272,32 @@ class BearingComponent:
     Parameters
     ----------
     bearing : FloatingRingBearing
+        The bearing (films, ring mass and inertia).
     film_model : {"short", "short_corrected"}
+        Film model.
     ring_speed_model : {"free", "rsr_eq6", "rsr_eq7"}
         "free": ring speed is a state driven by the film torques (method J in the linear analysis);
         "rsr_eq6": ω_FR = RSR(6)·ω_R; "rsr_eq7": eq. (7) at the current ε's (evaluated per step).
-    gravity : float [m/s²]
+    gravity : float
+        Gravitational acceleration on the ring [m/s²].
     substep : float
         Ring integration substep [s] of the 2-stage SDIRK method (default 5e-6: at 150 krpm in the developed whirl
         the limit cycle changes by < 0.1 % between 5e-6 and 1e-6; backward Euler needed < 5e-7 for that).
+    contact_eps : float
+        Eccentricity ratio [-] treated as wall contact by :meth:`step`.
+
+    Examples
+    --------
+    At the method-J equilibrium the film force on the journal carries the journal's static load:
+
+    >>> import frbmodel as frb
+    >>> from frbmodel.units import rpm_to_rad_s
+    >>> tc = frb.turbocharger()
+    >>> bc = BearingComponent(tc.bearings[0])
+    >>> x, y = bc.initialize_equilibrium(tc.bearing_loads[0], rpm_to_rad_s(100e3))
+    >>> force, K, C, eps = bc.outputs([x, y, 0.0, 0.0], rpm_to_rad_s(100e3))
+    >>> bool(abs(force[1] - tc.bearing_loads[0]) < 1e-9 * tc.bearing_loads[0]), K.shape
+    (True, (2, 2))
     """
 
     def __init__(self, bearing, film_model="short", ring_speed_model="free", gravity=GRAVITY, substep=BEARING_SUBSTEP,
@@ -252,8 +323,20 @@ class BearingComponent:
         self.newton_max_iter = NEWTON_MAX_ITER
 
     def initialize_equilibrium(self, load, omega_rotor):
-        """Ring at the method-J equilibrium for vertical journal ``load`` [N] at ``omega_rotor`` [rad/s].
-        Returns the journal position [m] of that equilibrium."""
+        """Put the ring at the method-J equilibrium for a vertical journal load at a rotor speed.
+
+        Parameters
+        ----------
+        load : float
+            Static journal load [N] (downward, as ``Turbocharger.bearing_loads``).
+        omega_rotor : float
+            Rotor speed [rad/s].
+
+        Returns
+        -------
+        ndarray (2,)
+            The journal position x, y [m] of that equilibrium.
+        """
         from .equilibrium import bearing_equilibrium
 
         eq = bearing_equilibrium(self.bearing, load, omega_rotor, "J", self.film_model, self.gravity)
@@ -281,9 +364,33 @@ class BearingComponent:
         return ring
 
     def outputs(self, journal, omega_rotor):
-        """Force on the journal [N] (2,), K [N/m] (2,2), C [N s/m] (2,2), ε (inner, outer) at the current inputs.
+        """Force on the journal and interface Jacobians at the current inputs and ring state.
 
-        Raises FilmContactError when an ε reaches 1."""
+        Parameters
+        ----------
+        journal : array_like (4,)
+            Journal x, y [m], vx, vy [m/s].
+        omega_rotor : float
+            Rotor speed [rad/s].
+
+        Returns
+        -------
+        force : ndarray (2,)
+            Film force on the journal [N].
+        K : ndarray (2, 2)
+            −∂F/∂(x, y) of the journal [N/m] (ring held).
+        C : ndarray (2, 2)
+            −∂F/∂(vx, vy) of the journal [N s/m] (ring held).
+        eps : tuple of float
+            Eccentricity ratios (inner, outer) [-].
+
+        Raises
+        ------
+        ParameterError
+            Non-finite inputs.
+        FilmContactError
+            When an ε reaches 1.
+        """
         j = self._check(journal, omega_rotor)
         ring = self._ring_for_force(omega_rotor)
         fx, fy, ei, eo = _bearing_force(*self._args(), j, ring, float(omega_rotor), math.inf)
@@ -327,14 +434,38 @@ class BearingComponent:
         return float(t_j), float(p_i + p_o)
 
     def step(self, journal, omega_rotor, omega_rotor_dot, H, t=None, accel=None):
-        """Advance the ring by ``H`` [s] with the journal extrapolated quadratically from ``journal``
-        (x, y, vx, vy) [m, m/s] and the acceleration ``accel`` [m/s²]; by default the acceleration is the
-        :class:`JournalHistory` estimate at time ``t`` [s] (zero, i.e. a linear path, when ``t`` is None).
-        Afterwards ``force_end`` [N] is the force on the journal at the end of the step on that path and
-        ``path_accel`` [m/s²] the acceleration used.
+        """Advance the ring by ``H`` [s] with the journal extrapolated quadratically from ``journal``.
+
+        By default the journal acceleration is the :class:`JournalHistory` estimate at time ``t`` (zero, i.e. a
+        linear path, when ``t`` is None). Afterwards ``force_end`` [N] is the force on the journal at the end of
+        the step on that path and ``path_accel`` [m/s²] the acceleration used.
+
+        Parameters
+        ----------
+        journal : array_like (4,)
+            Journal x, y [m], vx, vy [m/s] at the start of the step.
+        omega_rotor : float
+            Rotor speed at the start of the step [rad/s].
+        omega_rotor_dot : float
+            Rotor angular acceleration over the step [rad/s²].
+        H : float
+            Macro step [s].
+        t : float, optional
+            Time at the start of the step [s] (for the :class:`JournalHistory`).
+        accel : array_like (2,), optional
+            Journal acceleration [m/s²] of the path (overrides the history estimate).
+
+        Returns
+        -------
+        float
+            Largest eccentricity ratio [-] of both films during the step.
 
         Raises
         ------
+        ParameterError
+            Non-finite inputs.
+        IntegrationError
+            The ring state became non-finite (left at the start of the step).
         ConvergenceError
             The ring integrator's Newton iteration did not converge (the ring state is left unchanged; an FMU
             reports Discard, so that a master can retry with a smaller step).
@@ -385,9 +516,29 @@ class BearingComponent:
         return eps_max
 
     def linearization(self, journal, omega_rotor):
-        """Local state space of the bearing at the current state (ring speed held, as the linear methods do):
-        states x = (ring x, y, vx, vy), inputs u = (journal x, y, vx, vy), outputs y = force on the journal.
-        Returns (A, B, C, D) by central differences of the same kernels."""
+        """Local state space of the bearing at the current state (ring speed held, as the linear methods do).
+
+        States x = (ring x, y, vx, vy), inputs u = (journal x, y, vx, vy), outputs y = force on the journal;
+        central differences of the same kernels.
+
+        Parameters
+        ----------
+        journal : array_like (4,)
+            Journal x, y [m], vx, vy [m/s].
+        omega_rotor : float
+            Rotor speed [rad/s].
+
+        Returns
+        -------
+        A : ndarray (4, 4)
+            ∂ẋ/∂x [SI].
+        B : ndarray (4, 4)
+            ∂ẋ/∂u [SI].
+        C : ndarray (2, 4)
+            ∂F/∂x [N/m, N s/m].
+        D : ndarray (2, 4)
+            ∂F/∂u [N/m, N s/m].
+        """
         j = self._check(journal, omega_rotor)
         ring = self._ring_for_force(omega_rotor)
         A = np.zeros((4, 4))
@@ -517,8 +668,9 @@ class RotorComponent:
     speed : callable t -> (Ω [rad/s], Ω̇ [rad/s²]), optional
         The prescribed speed of ``speed_source="ramp"`` (e.g. :func:`ramp_speed`).
     unbalance : sequence of Unbalance
+        Rotating unbalances (:class:`frbmodel.runup.Unbalance`: disc name, m e [kg m], phase [rad]).
     substep : float
-        Trapezoidal substep [s] (default: the macro step itself, at most 5e-6 s).
+        Trapezoidal substep [s] (default 5e-6 s; a macro step is split into ceil(H / substep) substeps).
     speed_source : {"ramp", "input", "torque"}
         Where the rotor speed comes from. "ramp": ``speed(t)``. "input": the ``speed_in`` argument of every
         :meth:`step` [rad/s], held with the rate of the last two inputs (backward difference, zero at the first
@@ -536,6 +688,20 @@ class RotorComponent:
         Current rotor speed [rad/s] (output ``rotor_speed`` of the rotor FMU).
     phi : float
         Current rotor rotation angle [rad] (output ``rotor_angle``).
+
+    Examples
+    --------
+    Without bearing forces the rotor falls freely: after one step of 10 µs the journals move down by g t²/2
+    (the trapezoidal rule is exact for a constant acceleration):
+
+    >>> import frbmodel as frb
+    >>> tc = frb.turbocharger()
+    >>> rc = RotorComponent(tc, speed=ramp_speed(50e3, 100e3, 1.0))
+    >>> zeros = np.zeros((2, 2))
+    >>> rc.step(1e-5, zeros, [zeros, zeros], [zeros, zeros])
+    >>> x, y, vx, vy = rc.journal(0)
+    >>> round(float(y) / (-tc.gravity * 1e-5**2 / 2), 9), round(float(vy) / (-tc.gravity * 1e-5), 9)
+    (1.0, 1.0)
     """
 
     def __init__(self, system, speed=None, unbalance=(), substep=ROTOR_SUBSTEP, speed_source="ramp",
@@ -571,10 +737,32 @@ class RotorComponent:
         self._last_input = None  # (t, speed_in) of the previous step ("input")
 
     def journal(self, b):
-        """(x, y, vx, vy) of bearing ``b``'s journal [m, m/s]."""
+        """(x, y, vx, vy) of bearing ``b``'s journal [m, m/s].
+
+        Parameters
+        ----------
+        b : int
+            Bearing index (order of ``system.bearings``).
+
+        Returns
+        -------
+        ndarray (4,)
+        """
         return self.y[self._jidx[b]]
 
     def node_xy(self, node):
+        """Lateral displacement (x, y) [m] of rotor node ``node``.
+
+        Parameters
+        ----------
+        node : int
+            Rotor node index.
+
+        Returns
+        -------
+        ndarray (2,)
+            A copy.
+        """
         return self.y[4 * node:4 * node + 2].copy()
 
     @property
@@ -583,7 +771,15 @@ class RotorComponent:
         return float(self.speed(self.t)[0]) if self.speed_source == "ramp" else float(self.omega)
 
     def current_speed(self):
-        """``(Ω [rad/s], Ω̇ [rad/s²])`` at the current time (the rate of the last step for "input"/"torque")."""
+        """Rotor speed and acceleration at the current time (the rate of the last step for "input"/"torque").
+
+        Returns
+        -------
+        omega : float
+            Ω [rad/s].
+        omega_dot : float
+            Ω̇ [rad/s²].
+        """
         if self.speed_source == "ramp":
             w, wd = self.speed(self.t)
             return float(w), float(wd)
@@ -623,6 +819,27 @@ class RotorComponent:
         ``journal_torques`` (per bearing, the film torques on the journals [N m]) ("torque"). Over the step the speed
         is Ω(τ) = Ω0 + Ω̇ τ.
 
+        Parameters
+        ----------
+        H : float
+            Macro step [s].
+        forces : array_like (nb, 2)
+            F0: bearing force on each journal [N].
+        Ks : array_like (nb, 2, 2)
+            K = −∂F/∂x of each bearing [N/m].
+        Cs : array_like (nb, 2, 2)
+            C = −∂F/∂v of each bearing [N s/m].
+        refs : array_like (nb, 4), optional
+            Journal states (x, y [m], vx, vy [m/s]) at which F0 was evaluated.
+        path : tuple (F1, a), optional
+            F1 (nb, 2) [N] and a (nb, 2) [m/s²] of the staggered coupling (see above).
+        speed_in : float, optional
+            Rotor speed [rad/s] ("input").
+        drive_torque : float
+            Net drive torque [N m] ("torque").
+        journal_torques : array_like (nb,), optional
+            Film torques on the journals [N m] ("torque").
+
         Raises
         ------
         ParameterError
@@ -659,13 +876,26 @@ class RotorComponent:
         self.omega, self.omega_dot = float(w0 + wd * H), float(wd)
 
     def state(self):
-        """The component's state as plain data (for FMU get/set state): rotor DoFs, angle, time, speed."""
+        """The component's state as plain data (for FMU get/set state): rotor DoFs, angle, time, speed.
+
+        Returns
+        -------
+        dict
+            ``y`` (q [m, rad], q̇ [m/s, rad/s]), ``phi`` [rad], ``t`` [s], ``omega`` [rad/s], ``omega_dot``
+            [rad/s²] and ``last_input`` (time [s], speed [rad/s] of the last "input" step, or None); JSON-safe.
+        """
         return {"y": [float(x) for x in self.y], "phi": float(self.phi), "t": float(self.t),
                 "omega": float(self.omega), "omega_dot": float(self.omega_dot),
                 "last_input": None if self._last_input is None else list(self._last_input)}
 
     def set_state(self, st):
-        """Restore a state from :meth:`state`."""
+        """Restore a state from :meth:`state`.
+
+        Parameters
+        ----------
+        st : dict
+            A :meth:`state` (``omega``, ``omega_dot`` and ``last_input`` may be missing, as in older states).
+        """
         self.y[:] = st["y"]
         self.phi, self.t = float(st["phi"]), float(st["t"])
         self.omega, self.omega_dot = float(st.get("omega", self.omega)), float(st.get("omega_dot", 0.0))
@@ -674,7 +904,26 @@ class RotorComponent:
 
 
 def ramp_speed(start_rpm, end_rpm, ramp_time):
-    """Speed function t -> (Ω, Ω̇) of a linear ramp (constant after ``ramp_time``) [rad/s, rad/s²]."""
+    """Speed function t -> (Ω, Ω̇) of a linear ramp (constant after ``ramp_time``) [rad/s, rad/s²].
+
+    Parameters
+    ----------
+    start_rpm, end_rpm : float
+        Rotor speed at t = 0 and at the end of the ramp [rpm].
+    ramp_time : float
+        Duration of the ramp [s]; <= 0 gives a constant ``end_rpm``.
+
+    Returns
+    -------
+    callable
+        ``speed(t)`` -> ``(Ω [rad/s], Ω̇ [rad/s²])`` for a time ``t`` [s].
+
+    Examples
+    --------
+    >>> speed = ramp_speed(0.0, 60e3 / (2 * np.pi), 2.0)  # 0 -> 1000 rad/s in 2 s
+    >>> [round(v, 9) for v in speed(1.0)], [round(v, 9) for v in speed(3.0)]
+    ([500.0, 500.0], [1000.0, 0.0])
+    """
     w0, w1 = rpm_to_rad_s(start_rpm), rpm_to_rad_s(end_rpm)
     a = (w1 - w0) / ramp_time if ramp_time > 0 else 0.0
 
@@ -692,6 +941,7 @@ def rotor_state_space(rotor_comp):
     Parameters
     ----------
     rotor_comp : RotorComponent
+        The rotor component (its current speed and acceleration set the gyroscopic terms).
 
     Returns
     -------
@@ -700,6 +950,13 @@ def rotor_state_space(rotor_comp):
         inputs u = bearing forces (Fx, Fy per bearing) [N] and the outputs y = journal (x, y, vx, vy per bearing)
         [m, m/s]. The bearing coupling terms are *not* included (they come from the bearings' own matrices when
         the system is assembled).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ss = rotor_state_space(RotorComponent(frb.turbocharger(), speed=ramp_speed(50e3, 100e3, 1.0)))
+    >>> {k: v.shape for k, v in ss.items()}
+    {'A': (32, 32), 'B': (32, 4), 'C': (8, 32), 'D': (8, 4)}
     """
     n = rotor_comp.n
     w, wd = rotor_comp.current_speed()

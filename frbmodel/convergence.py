@@ -38,7 +38,33 @@ def _onset(c):
 def match_components(ref, tight):
     """Pair each sub-synchronous component of ``ref`` with the same-direction component of ``tight`` that is closest
     in onset speed and first-detection frequency ratio (log distance, at most :data:`MATCH_LOG_TOL`); each component
-    of ``tight`` is used once. Returns a list of (ref component, tight component or None)."""
+    of ``tight`` is used once.
+
+    Parameters
+    ----------
+    ref : list of Component
+        Components of the run (``SpectrogramResult.components()``); only the ``"sub..."`` ones are paired.
+    tight : list of Component
+        Components of the same run at tightened tolerances.
+
+    Returns
+    -------
+    list of tuple
+        One ``(ref component, tight component or None)`` per sub-synchronous component of ``ref``, in its order.
+
+    Examples
+    --------
+    >>> from frbmodel.tracking import Component
+    >>> def sub(onset_rpm, f_hz, direction="forward"):
+    ...     c = Component("sub1", np.array([onset_rpm]), np.array([f_hz]), np.array([1e-6]), direction)
+    ...     c.onset_interp_rpm = onset_rpm
+    ...     return c
+    >>> a = sub(60e3, 400.0)
+    >>> [b is not None for _, b in match_components([a], [sub(61e3, 405.0)])]
+    [True]
+    >>> [b is not None for _, b in match_components([a], [sub(61e3, 405.0, "backward")])]
+    [False]
+    """
     cands = [c for c in tight if c.label.startswith("sub")]
     pairs = []
     for a in (c for c in ref if c.label.startswith("sub")):
@@ -70,6 +96,12 @@ def convergence_table(ref, tight, rel=CONVERGED_REL):
     Returns
     -------
     pandas.DataFrame
+        Columns ``component``, ``whirl direction``, ``onset [rpm]``, ``onset tightened [rpm]``, ``f at onset [Hz]``,
+        ``f at onset tightened [Hz]``, ``onset moved [%]``, ``f moved [%]``, ``converged`` and ``note``.
+
+    Examples
+    --------
+    See the module docstring.
     """
     import pandas as pd
 
@@ -97,7 +129,24 @@ def convergence_table(ref, tight, rel=CONVERGED_REL):
 
 
 def unconverged_summary(table):
-    """One line naming the components whose onset is not converged (or saying that all are)."""
+    """One line naming the components whose onset is not converged (or saying that all are).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A :func:`convergence_table`.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> unconverged_summary(pd.DataFrame({"component": ["sub1"], "onset moved [%]": [4.0], "converged": [False],
+    ...                                   "note": [""]}))
+    'onsets seeded by round-off (not a property of the model): sub1 (+4.0 %)'
+    """
     bad = table[~table["converged"]] if len(table) else table
     if not len(bad):
         return "every reported onset is converged (moves < 1 % when the tolerances are tightened tenfold)"

@@ -23,7 +23,22 @@ from .losses import journal_torque_kernel
 
 @njit(cache=True)
 def interp_uniform(t, tg, yg):
-    """Linear interpolation of ``yg`` on the uniform grid ``tg`` at ``t`` (held constant outside the grid)."""
+    """Linear interpolation of ``yg`` on the uniform grid ``tg`` at ``t`` (held constant outside the grid).
+
+    Parameters
+    ----------
+    t : float
+        Time [s] (or any abscissa in the unit of ``tg``).
+    tg : ndarray (nt,)
+        Uniform, ascending grid [s], nt >= 2.
+    yg : ndarray (nt,)
+        Values on the grid (any unit, e.g. rotor speed [rad/s]).
+
+    Returns
+    -------
+    float
+        The interpolated value, in the unit of ``yg``.
+    """
     if t <= tg[0]:
         return yg[0]
     if t >= tg[-1]:
@@ -39,7 +54,23 @@ def interp_uniform(t, tg, yg):
 @njit(cache=True)
 def add_unbalance_forces(f, phi, w, wd, unb_node, unb_me, unb_phase):
     """Add the rotating unbalance forces m e (Ω² cos θ + Ω̇ sin θ, Ω² sin θ − Ω̇ cos θ), θ = φ + phase, to the
-    nodal load vector ``f`` [N] (the one implementation; run-up and rotor FMU both call it)."""
+    nodal load vector ``f`` [N] (the one implementation; run-up and rotor FMU both call it).
+
+    Parameters
+    ----------
+    f : ndarray (n,)
+        Nodal load vector [N, N m], 4 DoFs (x, y, θx, θy) per node; modified in place.
+    phi : float
+        Rotation angle φ of the rotor [rad].
+    w, wd : float
+        Rotor speed Ω [rad/s] and acceleration Ω̇ [rad/s²].
+    unb_node : ndarray (nu,) of int
+        Rotor node of each unbalance.
+    unb_me : ndarray (nu,)
+        Unbalance m e [kg m] of each.
+    unb_phase : ndarray (nu,)
+        Angular position of each unbalance at φ = 0 [rad].
+    """
     for d in range(unb_node.size):
         th = phi + unb_phase[d]
         c, s = math.cos(th), math.sin(th)
@@ -108,6 +139,12 @@ def rotor_polar_inertia(rotor):
     Parameters
     ----------
     rotor : Rotor
+        The rotor.
+
+    Returns
+    -------
+    float
+        J_p [kg m²].
 
     Examples
     --------
@@ -133,6 +170,11 @@ def spin_acceleration(drive_torque, journal_torques, polar_inertia):
         :func:`frbmodel.losses.journal_torque_kernel`.
     polar_inertia : float
         Rotor polar moment of inertia J_p [kg m²] (:func:`rotor_polar_inertia`).
+
+    Returns
+    -------
+    float
+        Ω̇ [rad/s²].
     """
     total = drive_torque
     for b in range(journal_torques.size):
@@ -182,14 +224,51 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
     """dy/dt of the monolithic model for the state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds,
     rotation angle (, rotor speed)], written into ``out`` and returned.
 
-    ``eom`` = (M⁻¹, M⁻¹K, M⁻¹G) (:attr:`Rotor.acceleration_matrices`); ``f_grav`` the nodal gravity load [N];
-    ``jn`` the bearing nodes; ``geom`` (2, 2, 4): (bearing, film, [R, L, c, μ]); ``polys`` (2, 2, 2, 5):
-    correction polynomials; ``unb_*`` the unbalances (:func:`add_unbalance_forces`); ``tg, wg, wdg`` the speed
-    profile (uniform grid [s], Ω [rad/s], Ω̇ [rad/s²]); ``springs`` > 0: journals on isotropic linear springs of
-    that stiffness [N/m] instead of films (rings idle). ``diag`` (4,) receives the film eccentricity ratios
-    (turbine inner, outer, compressor inner, outer).
-    Torque-driven rotor: ``drive_torque`` (the drive torque [N m] on the grid ``tg``) and ``polar_inertia`` J_p
-    [kg m²]; the rotor speed is then the last state, with rate :func:`spin_acceleration` (``wg``, ``wdg`` unused).
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y : ndarray (N,)
+        State: q [m, rad], q̇ [m/s, rad/s] (n_r each), ring_b x, y [m], vx, vy [m/s] for b = 0, 1, ring speeds
+        [rad/s] (2), rotation angle φ [rad] and, torque-driven, the rotor speed Ω [rad/s]; N = 2 n_r + 11 (+ 1).
+    out : ndarray (N,)
+        Receives dy/dt.
+    eom : tuple of ndarray (n_r, n_r)
+        (M⁻¹, M⁻¹K, M⁻¹G) (:attr:`Rotor.acceleration_matrices`).
+    f_grav : ndarray (n_r,)
+        Nodal gravity load [N].
+    n_r : int
+        Number of rotor DoFs (4 per node).
+    jn : ndarray (2,) of int
+        Rotor node of each bearing's journal.
+    geom : ndarray (2, 2, 4)
+        (bearing, film, [R, L, c, μ]) [m, m, m, Pa s].
+    polys : ndarray (2, 2, 2, 5)
+        Film correction polynomials (bearing, film, radial/tangential, coefficients).
+    ring_m, ring_i : ndarray (2,)
+        Ring mass [kg] and polar moment of inertia [kg m²] of each bearing.
+    grav : float
+        Gravitational acceleration on the rings [m/s²] (along −y).
+    unb_node, unb_me, unb_phase : ndarray (nu,)
+        Unbalances: node (int), m e [kg m] and phase [rad] (:func:`add_unbalance_forces`).
+    tg, wg, wdg : ndarray (nt,)
+        Speed profile on a uniform grid: time [s], Ω [rad/s], Ω̇ [rad/s²] (unused when torque-driven, except ``tg``).
+    springs : float
+        > 0: journals on isotropic linear springs of this stiffness [N/m] instead of films (rings idle); 0: films.
+    eps_cap : float
+        Eccentricity ratio [-] at which film positions are capped.
+    diag : ndarray (4,)
+        Receives the film eccentricity ratios [-] (turbine inner, outer, compressor inner, outer).
+    polar_inertia : float
+        Rotor polar moment of inertia J_p [kg m²] (torque-driven only).
+    drive_torque : ndarray (nt,), optional
+        Drive torque [N m] on the grid ``tg``; given, the rotor is torque-driven and its speed is the last state,
+        with rate :func:`spin_acceleration`.
+
+    Returns
+    -------
+    ndarray (N,)
+        ``out``, holding dy/dt (SI units: the time derivative of each state's unit).
     """
     fb = np.zeros(n_r)
     if drive_torque is None:
@@ -218,7 +297,30 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
 def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
                    unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, polar_inertia=0.0, drive_torque=None):
     """Forward-difference Jacobian of :func:`monolithic_rhs` into ``jac`` (all in compiled code: one RHS call per
-    state; step 1.5e-8 · max(|y_k|, scale_k))."""
+    state; step 1.5e-8 · max(|y_k|, scale_k)).
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y : ndarray (N,)
+        State (as in :func:`monolithic_rhs`).
+    jac : ndarray (N, N)
+        Receives ∂(dy/dt)/∂y (SI units).
+    f0, work : ndarray (N,)
+        Work arrays: dy/dt at ``y`` and at the perturbed state.
+    scale : ndarray (N,)
+        Typical magnitude of each state (its unit), the floor of the difference step.
+    eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav
+        As in :func:`monolithic_rhs`.
+    unb_node, unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, polar_inertia, drive_torque
+        As in :func:`monolithic_rhs`.
+
+    Returns
+    -------
+    ndarray (N, N)
+        ``jac``.
+    """
     n = y.size
     monolithic_rhs(t, y, f0, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
                    tg, wg, wdg, springs, eps_cap, diag, polar_inertia, drive_torque)

@@ -7,7 +7,17 @@ import math
 
 
 class FRBError(Exception):
-    """Base class of all frbmodel errors."""
+    """Base class of all frbmodel errors.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> try:
+    ...     frb.turbocharger(outer_clearance=-1e-6)
+    ... except frb.FRBError as exc:
+    ...     print(type(exc).__name__, isinstance(exc, ValueError))
+    ParameterError True
+    """
 
 
 class ParameterError(FRBError, ValueError):
@@ -30,7 +40,23 @@ class IntegrationError(FRBError, ArithmeticError):
 class RunStopped(FRBError):
     """A long run (run-up, co-simulation) ended before its end time: wall contact, integrator failure, an FMU
     failure or an interruption. ``.result`` holds what was computed up to there; the files written so far stay on
-    disk with their status in ``runup.json``."""
+    disk with their status in ``runup.json``.
+
+    Parameters
+    ----------
+    message : str
+        What stopped the run, and when.
+    result : object, optional
+        The partial result (e.g. a :class:`~frbmodel.recorder.RunupResult`), or None.
+
+    Examples
+    --------
+    >>> try:
+    ...     raise RunupStopped("wall contact at t = 0.1 s", result="partial")
+    ... except RunStopped as exc:
+    ...     print(exc, "|", exc.result)
+    wall contact at t = 0.1 s | partial
+    """
 
     def __init__(self, message, result=None):
         super().__init__(message)
@@ -46,7 +72,43 @@ class CosimStopped(RunStopped):
 
 
 def check_positive(name, value, unit="", allow_zero=False):
-    """Return ``float(value)`` or raise :class:`ParameterError` naming ``name``, its value and the range."""
+    """Return ``float(value)`` or raise :class:`ParameterError` naming ``name``, its value and the range.
+
+    Lenient: anything ``float()`` accepts (also a numeric string) is converted; see :func:`check_real` for the
+    strict check of API arguments.
+
+    Parameters
+    ----------
+    name : str
+        The quantity's name, used in the message.
+    value : object
+        The value to check.
+    unit : str
+        Unit for the message (e.g. ``"m"``).
+    allow_zero : bool
+        Accept 0 (range ``>= 0`` instead of ``> 0``).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If ``value`` is not a number, not finite, negative, or zero without ``allow_zero``.
+
+    Examples
+    --------
+    >>> check_positive("viscosity", 0.005, "Pa s")
+    0.005
+    >>> check_positive("speed_rpm", 0, "rpm", allow_zero=True)
+    0.0
+    >>> try:
+    ...     check_positive("outer_clearance", -1e-6, "m")
+    ... except ParameterError as exc:
+    ...     print(exc)
+    outer_clearance = -1e-06 m is invalid: valid range is finite and > 0 m
+    """
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -61,7 +123,36 @@ def check_positive(name, value, unit="", allow_zero=False):
 
 
 def check_finite(name, value, unit=""):
-    """Return ``float(value)`` or raise :class:`ParameterError` if it is not a finite number."""
+    """Return ``float(value)`` or raise :class:`ParameterError` if it is not a finite number.
+
+    Parameters
+    ----------
+    name : str
+        The quantity's name, used in the message.
+    value : object
+        The value to check (anything ``float()`` accepts).
+    unit : str
+        Unit for the message.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If ``value`` is not a number or is NaN or infinite.
+
+    Examples
+    --------
+    >>> check_finite("gravity", -9.81, "m/s^2")
+    -9.81
+    >>> try:
+    ...     check_finite("gravity", float("nan"), "m/s^2")
+    ... except ParameterError as exc:
+    ...     print(exc)
+    gravity = nan m/s^2 is invalid: it must be finite
+    """
     try:
         v = float(value)
     except (TypeError, ValueError):

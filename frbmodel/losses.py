@@ -47,7 +47,9 @@ def film_arrays(bearing, film_model="short"):
     Parameters
     ----------
     bearing : FloatingRingBearing
+        The bearing.
     film_model : {"short", "short_corrected"}
+        Film model; "short" gives zero correction polynomials.
 
     Returns
     -------
@@ -55,6 +57,18 @@ def film_arrays(bearing, film_model="short"):
         [R, L, c, μ] of the inner and the outer film [m, m, m, Pa s].
     polys : ndarray (2, 2, 5)
         Correction polynomials (film, radial/tangential, coefficients highest power first).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown film model.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> geom, polys = film_arrays(frb.turbocharger().bearings[0])
+    >>> geom.shape, polys.shape
+    ((2, 4), (2, 2, 5))
     """
     model = check_model(film_model)
     films = (bearing.inner, bearing.outer)
@@ -82,6 +96,7 @@ def journal_torque_kernel(inner_geom, rx, ry, fx, fy, omega_rotor, omega_ring, e
     omega_rotor, omega_ring : float
         Journal and ring spin speeds [rad/s].
     eps_cap : float
+        Eccentricity ratio [-] at which positions are capped; ``inf`` for no cap.
 
     Returns
     -------
@@ -158,6 +173,7 @@ def bearing_loss(bearing, journal, ring, omega_rotor, film_model="short"):
     Parameters
     ----------
     bearing : FloatingRingBearing
+        The bearing.
     journal : array_like (..., 4)
         Journal x, y [m] and vx, vy [m/s] relative to the housing.
     ring : array_like (..., 5)
@@ -165,6 +181,7 @@ def bearing_loss(bearing, journal, ring, omega_rotor, film_model="short"):
     omega_rotor : float or array_like (...)
         Rotor speed ω_R [rad/s].
     film_model : {"short", "short_corrected"}
+        Film model.
 
     Returns
     -------
@@ -212,6 +229,7 @@ def bearing_losses(system, speed_rpm, method="J"):
     Parameters
     ----------
     system : Turbocharger
+        The system (e.g. :func:`frbmodel.turbocharger`).
     speed_rpm : float or sequence of float
         Rotor speed(s) [rpm], > 0.
     method : {"C", "D", "F", "G", "I", "J"}
@@ -224,6 +242,13 @@ def bearing_losses(system, speed_rpm, method="J"):
         One row per speed and bearing: ``speed [rpm]``, ``bearing``, ``method``, ``journal torque [N m]``,
         ``power loss [W]``, ``power loss inner [W]``, ``power loss outer [W]``, ``ring speed [rad/s]``,
         ``eps inner [-]``, ``eps outer [-]``.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> df = bearing_losses(frb.turbocharger(36e-6), [50e3, 100e3])
+    >>> len(df), bool((df["power loss [W]"] > 0).all() and (df["journal torque [N m]"] < 0).all())
+    (4, True)
     """
     import pandas as pd
 
@@ -249,7 +274,20 @@ def plot_bearing_losses(table, run=None, title=None):
     """Power loss vs rotor speed per bearing: the equilibrium curve of :func:`bearing_losses` and, optionally,
     the recorded power loss of a run-up or co-simulation (:class:`~frbmodel.recorder.RunupResult`).
 
-    Returns a matplotlib Figure (the backend is left to the caller).
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A :func:`bearing_losses` table (columns ``bearing``, ``speed [rpm]``, ``power loss [W]``, ``method``).
+    run : RunupResult, optional
+        A run whose ``power_loss[bearing]`` [W] is drawn over its ``speed_rpm`` [rpm]; bearings it does not
+        record are skipped.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (the backend is left to the caller; matplotlib is imported only here).
     """
     import matplotlib.pyplot as plt
 

@@ -8,7 +8,29 @@ from __future__ import annotations
 
 
 def simulation_bar(total_s, desc, enabled):
-    """A tqdm bar over simulated time [s] (postfix: e.g. the rotor speed); a no-op bar when not ``enabled``."""
+    """A tqdm bar over simulated time [s] (postfix: e.g. the rotor speed); a no-op bar when not ``enabled``.
+
+    Parameters
+    ----------
+    total_s : float
+        Simulated time the bar runs to [s].
+    desc : str
+        Label in front of the bar (e.g. ``"run-up"``).
+    enabled : bool
+        Show the bar; when False the bar is disabled and prints nothing.
+
+    Returns
+    -------
+    tqdm.tqdm
+        The bar; advance it with ``bar.update(dt_s)`` and close it (or use it as a context manager).
+
+    Examples
+    --------
+    >>> with simulation_bar(0.5, "run-up", enabled=False) as bar:
+    ...     bar.update(0.25)
+    ...     print(bar.disable)
+    True
+    """
     from tqdm.auto import tqdm
 
     return tqdm(total=float(total_s), disable=not enabled, desc=desc, leave=False,
@@ -16,14 +38,51 @@ def simulation_bar(total_s, desc, enabled):
 
 
 def counter_bar(total, desc, enabled, unit="item"):
-    """A tqdm bar over ``total`` items (speeds, cases, ...)."""
+    """A tqdm bar over ``total`` items (speeds, cases, ...).
+
+    Parameters
+    ----------
+    total : int
+        Number of items.
+    desc : str
+        Label in front of the bar.
+    enabled : bool
+        Show the bar; when False the bar is disabled and prints nothing.
+    unit : str
+        Name of one item, shown in the rate (e.g. ``"speed"``, ``"case"``).
+
+    Returns
+    -------
+    tqdm.tqdm
+        The bar; advance it with ``bar.update()``.
+
+    Examples
+    --------
+    >>> with counter_bar(3, "cases", enabled=False, unit="case") as bar:
+    ...     for _ in range(3):
+    ...         _ = bar.update()
+    ...     print(bar.total, bar.disable)
+    3 True
+    """
     from tqdm.auto import tqdm
 
     return tqdm(total=int(total), disable=not enabled, desc=desc, unit=unit, leave=False)
 
 
 def note(message, enabled=True):
-    """Print a status line on stderr without breaking an active bar."""
+    """Print a status line on stderr without breaking an active bar.
+
+    Parameters
+    ----------
+    message : object
+        The line to print (converted with ``str``).
+    enabled : bool
+        Print only if True, so callers can pass their ``progress`` flag through.
+
+    Examples
+    --------
+    >>> note("not shown", enabled=False)
+    """
     if enabled:
         from tqdm.auto import tqdm
 

@@ -45,6 +45,17 @@ class RunupSchema:
         Bearing names in the system's order (e.g. ``("turbine", "compressor")``).
     discs : tuple of str
         Disc names whose displacement is recorded (e.g. ``("turbine_wheel", "compressor_wheel")``).
+
+    Examples
+    --------
+    >>> schema = RunupSchema(bearings=("front",), discs=("wheel",))
+    >>> row = schema.row(0.5, 60e3 / (2 * np.pi), ring_speed=[300.0], journal=[[1e-6, -2e-6]], ring=[[0.0, -1e-6]],
+    ...                  eps=[[0.2, 0.3]], discs=[[3e-6, 0.0]])
+    >>> dict(zip(schema.columns, row.round(9).tolist()))  # doctest: +NORMALIZE_WHITESPACE
+    {'time [s]': 0.5, 'speed [rpm]': 9549.296585514, 'ring speed front [rad/s]': 300.0, 'RSR front [-]': 0.3,
+     'journal front x [m]': 1e-06, 'journal front y [m]': -2e-06, 'ring front x [m]': 0.0, 'ring front y [m]': -1e-06,
+     'eps front inner [-]': 0.2, 'eps front outer [-]': 0.3, 'wheel x [m]': 3e-06, 'wheel y [m]': 0.0,
+     'journal torque front [N m]': nan, 'power loss front [W]': nan}
     """
 
     bearings: tuple
@@ -52,12 +63,37 @@ class RunupSchema:
 
     @classmethod
     def from_system(cls, system):
-        """Schema of a :class:`~frbmodel.parameters.Turbocharger`: its bearings and the rotor's discs."""
+        """Schema of a :class:`~frbmodel.parameters.Turbocharger`: its bearings and the rotor's discs.
+
+        Parameters
+        ----------
+        system : Turbocharger
+            The system.
+
+        Returns
+        -------
+        RunupSchema
+
+        Examples
+        --------
+        >>> import frbmodel as frb
+        >>> RunupSchema.from_system(frb.turbocharger()).bearings
+        ('turbine', 'compressor')
+        """
         return cls(tuple(b.name for b in system.bearings), tuple(d.name for d in system.rotor.discs))
 
     @classmethod
     def from_columns(cls, columns):
         """Schema read back from a CSV header (inverse of :attr:`columns`).
+
+        Parameters
+        ----------
+        columns : sequence of str
+            Column names, as in :attr:`columns` (the journal torque and power loss columns may be missing).
+
+        Returns
+        -------
+        RunupSchema
 
         Raises
         ------
@@ -105,10 +141,32 @@ class RunupSchema:
         return cols
 
     def row(self, time_s, speed_rpm, ring_speed, journal, ring, eps, discs, journal_torque=None, power_loss=None):
-        """One row by name: ``ring_speed`` (nb,) [rad/s]; ``journal``, ``ring`` (nb, 2) [m] relative to the housing;
-        ``eps`` (nb, 2) inner/outer film eccentricity ratios; ``discs`` (nd, 2) disc displacements [m];
-        ``journal_torque`` (nb,) film torques on the journals [N m] and ``power_loss`` (nb,) the bearings' friction
-        power [W] (NaN when not given). The RSR is ring speed / rotor speed (NaN at zero rotor speed)."""
+        """One row by name; the RSR is computed as ring speed / rotor speed (NaN at zero rotor speed).
+
+        Parameters
+        ----------
+        time_s : float
+            Time [s].
+        speed_rpm : float
+            Rotor speed [rpm].
+        ring_speed : array_like (nb,)
+            Ring spin speeds [rad/s], bearings in :attr:`bearings` order.
+        journal, ring : array_like (nb, 2)
+            Journal and ring centre x, y [m] relative to the housing.
+        eps : array_like (nb, 2)
+            Inner and outer film eccentricity ratios [-].
+        discs : array_like (nd, 2)
+            Disc displacements x, y [m], discs in :attr:`discs` order.
+        journal_torque : array_like (nb,), optional
+            Film torques on the journals about +z [N m] (NaN when not given).
+        power_loss : array_like (nb,), optional
+            Friction power of each bearing [W] (NaN when not given).
+
+        Returns
+        -------
+        ndarray (len(columns),)
+            The row, in the order of :attr:`columns` (see the class example).
+        """
         nb, nd = len(self.bearings), len(self.discs)
         ring_speed = np.asarray(ring_speed, dtype=float).reshape(nb)
         omega = speed_rpm * RPM
@@ -123,7 +181,18 @@ class RunupSchema:
                                np.column_stack([torque.reshape(nb), power.reshape(nb)]).ravel()])
 
     def eps_slice(self):
-        """Slice of the eccentricity columns in a row."""
+        """Slice of the eccentricity columns in a row.
+
+        Returns
+        -------
+        slice
+
+        Examples
+        --------
+        >>> s = RunupSchema(("a", "b"), ())
+        >>> s.columns[s.eps_slice()]
+        ['eps a inner [-]', 'eps a outer [-]', 'eps b inner [-]', 'eps b outer [-]']
+        """
         start = 2 + 6 * len(self.bearings)
         return slice(start, start + 2 * len(self.bearings))
 
@@ -138,6 +207,7 @@ class Recorder:
     Parameters
     ----------
     schema : RunupSchema
+        Column layout of the rows.
     capacity : int
         Number of rows expected (grows if exceeded).
     out_dir : path, optional
@@ -153,6 +223,21 @@ class Recorder:
     >>> rec.append(rec.schema.row(0.0, 1000.0, [50.0], [[0, 0]], [[0, 0]], [[0.1, 0.2]], [[1e-6, 0]]))
     >>> rec.close("finished").eccentricity.tolist()
     [[0.1, 0.2]]
+
+    Streamed to a folder, the status is ``"stopped"`` when the block ends by an exception:
+
+    >>> import json, tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     try:
+    ...         with Recorder(RunupSchema(("b",), ()), out_dir=tmp) as rec:
+    ...             rec.append(rec.schema.row(0.25, 1000.0, [50.0], [[0, 0]], [[0, 0]], [[0.1, 0.2]], []))
+    ...             raise RuntimeError("FMU failed")
+    ...     except RuntimeError:
+    ...         pass
+    ...     meta = json.loads((Path(tmp) / "runup.json").read_text())
+    ...     lines = (Path(tmp) / "runup.csv").read_text().splitlines()
+    >>> meta["status"], meta["message"], len(lines)
+    ('stopped', 'RuntimeError: FMU failed at t = 0.25 s; results up to there are kept', 2)
     """
 
     def __init__(self, schema, capacity=1024, out_dir=None, meta=None, flush_rows=2000):
@@ -174,7 +259,13 @@ class Recorder:
             self._write_meta("running", "")
 
     def append(self, row):
-        """Add one row (from :meth:`RunupSchema.row`); streams every ``flush_rows`` rows."""
+        """Add one row; streams every ``flush_rows`` rows.
+
+        Parameters
+        ----------
+        row : ndarray (len(schema.columns),)
+            A row from :meth:`RunupSchema.row`.
+        """
         if self.n == self.rows.shape[0]:
             self.rows = np.vstack([self.rows, np.full_like(self.rows, np.nan)])
         self.rows[self.n] = row
@@ -202,7 +293,26 @@ class Recorder:
         os.replace(tmp, self.json)
 
     def close(self, status, message="", **meta):
-        """Flush, write the final status (one of :data:`STATUSES`) and return the :class:`RunupResult`."""
+        """Flush, write the final status and return the :class:`RunupResult`.
+
+        Parameters
+        ----------
+        status : {"running", "finished", "stopped", "interrupted"}
+            Final status (one of :data:`STATUSES`).
+        message : str
+            Human-readable note (why the run stopped).
+        **meta
+            More metadata for ``runup.json`` (e.g. ``wall_time_s``).
+
+        Returns
+        -------
+        RunupResult
+
+        Raises
+        ------
+        ParameterError
+            For an unknown status.
+        """
         if status not in STATUSES:
             raise ParameterError(f"status = {status!r} is unknown; valid: {STATUSES}")
         self.status = status
@@ -215,7 +325,12 @@ class Recorder:
         return self.result()
 
     def result(self):
-        """The recorded rows as a :class:`RunupResult`."""
+        """The recorded rows as a :class:`RunupResult` (also while the run is going on).
+
+        Returns
+        -------
+        RunupResult
+        """
         return RunupResult.from_rows(self.schema, self.rows[:self.n], self.meta)
 
     def __enter__(self):
@@ -235,21 +350,46 @@ class Recorder:
 class RunupResult:
     """Sampled result of a run-up or co-simulation (SI units; speeds also in rpm).
 
+    Usually made by :func:`frbmodel.runup`, the co-simulation or :meth:`load`; see :meth:`from_rows` to build one
+    from rows of a :class:`RunupSchema`.
+
     Attributes
     ----------
-    time : (n,) [s]
-    speed_rpm : (n,) rotor speed [rpm]
-    ring_speed : (n, nb) ring spin speeds [rad/s], bearings in the system's order
-    journal, ring : dict bearing name -> (n, 2) positions [m] relative to the housing
-    eccentricity : (n, 2 nb) ε of the films, in the order of :attr:`film_labels`
-    displacement : dict disc name -> (n, 2) [m]
-    journal_torque : dict bearing name -> (n,) film torque on the journal about +z [N m] (negative: braking)
-    power_loss : dict bearing name -> (n,) friction power of both films of the bearing [W]
-        (NaN where the run did not record them: linear springs, results of older versions, FMUs without the
-        outputs)
+    time : ndarray (n,)
+        Sample times [s].
+    speed_rpm : ndarray (n,)
+        Rotor speed [rpm].
+    ring_speed : ndarray (n, nb)
+        Ring spin speeds [rad/s], bearings in the system's order.
+    journal, ring : dict of str to ndarray (n, 2)
+        Bearing name -> journal / ring centre x, y [m] relative to the housing.
+    eccentricity : ndarray (n, 2 nb)
+        Film eccentricity ratios [-], in the order of :attr:`film_labels`.
+    displacement : dict of str to ndarray (n, 2)
+        Disc name -> displacement x, y [m].
+    status : str
+        Run status (one of :data:`STATUSES`).
     message : str
+        Why the run stopped (empty if it finished).
     meta : dict
         Metadata of the run (system, tolerances, wall time, ...), as in ``runup.json``.
+    journal_torque : dict of str to ndarray (n,)
+        Bearing name -> film torque on the journal about +z [N m] (negative: braking).
+    power_loss : dict of str to ndarray (n,)
+        Bearing name -> friction power of both films of the bearing [W] (NaN where the run did not record them:
+        linear springs, results of older versions, FMUs without the outputs).
+
+    Examples
+    --------
+    >>> schema = RunupSchema(("front",), ("wheel",))
+    >>> rows = [schema.row(t, 60e3 / (2 * np.pi), [500.0], [[0, 0]], [[0, 0]], [[0.1, 0.2]], [[0, 0]])
+    ...         for t in (0.0, 0.5)]
+    >>> res = RunupResult.from_rows(schema, rows)
+    >>> res.time.tolist(), res.ring_speed_ratio[:, 0].round(12).tolist(), res.film_labels
+    ([0.0, 0.5], [0.5, 0.5], ('front inner', 'front outer'))
+    >>> df = res.to_dataframe()
+    >>> RunupResult.from_dataframe(df).schema == schema
+    True
     """
 
     time: np.ndarray
@@ -272,6 +412,7 @@ class RunupResult:
 
     @property
     def bearing_names(self):
+        """Bearing names, in the system's order (the keys of :attr:`journal`)."""
         return tuple(self.journal)
 
     @property
@@ -285,7 +426,13 @@ class RunupResult:
         return self.ring_speed / (self.speed_rpm * RPM)[:, None]
 
     def to_dataframe(self):
-        """One row per sample; units in the column names (the layout of ``runup.csv``)."""
+        """One row per sample; units in the column names (the layout of ``runup.csv``).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns of :attr:`RunupSchema.columns` (see the class example).
+        """
         import pandas as pd
 
         return pd.DataFrame(self._rows(), columns=self.schema.columns)
@@ -306,8 +453,33 @@ class RunupResult:
 
     @classmethod
     def load(cls, path):
-        """Read a result written by :func:`frbmodel.runup` or :func:`frbmodel.cosim.cosimulate` (``runup.csv`` +
-        ``runup.json`` in a folder, or the CSV itself)."""
+        """Read a result written by :func:`frbmodel.runup` or :func:`frbmodel.cosim.cosimulate`.
+
+        Parameters
+        ----------
+        path : str or Path
+            A folder with ``runup.csv`` (and ``runup.json``), or the CSV itself.
+
+        Returns
+        -------
+        RunupResult
+
+        Raises
+        ------
+        ParameterError
+            If there is no ``runup.csv`` or it is not a run-up result.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     rec = Recorder(RunupSchema(("b",), ()), out_dir=tmp, meta={"profile": "test"})
+        ...     rec.append(rec.schema.row(0.0, 1000.0, [50.0], [[0, 0]], [[0, 0]], [[0.1, 0.2]], []))
+        ...     _ = rec.close("finished")
+        ...     res = RunupResult.load(tmp)
+        >>> res.status, res.meta["profile"], res.eccentricity.tolist()
+        ('finished', 'test', [[0.1, 0.2]])
+        """
         import pandas as pd
 
         path = Path(path)
@@ -320,14 +492,39 @@ class RunupResult:
 
     @classmethod
     def from_dataframe(cls, df, meta=None):
-        """Result from a table with the columns of :attr:`RunupSchema.columns` (the journal torque and power loss
-        columns may be missing: NaN then)."""
+        """Result from a table with the columns of :attr:`RunupSchema.columns`.
+
+        Parameters
+        ----------
+        df : pandas.DataFrame
+            The table; the journal torque and power loss columns may be missing (NaN then).
+        meta : dict, optional
+            Metadata (its ``status`` and ``message`` are taken over).
+
+        Returns
+        -------
+        RunupResult
+        """
         schema = RunupSchema.from_columns(df.columns)
         return cls.from_rows(schema, df.reindex(columns=schema.columns).to_numpy(dtype=float), meta)
 
     @classmethod
     def from_rows(cls, schema, rows, meta=None):
-        """Result from rows laid out by ``schema`` (see :meth:`RunupSchema.row`)."""
+        """Result from rows laid out by ``schema`` (see :meth:`RunupSchema.row`).
+
+        Parameters
+        ----------
+        schema : RunupSchema
+            The column layout.
+        rows : array_like (n, len(schema.columns))
+            The rows.
+        meta : dict, optional
+            Metadata (its ``status`` and ``message`` are taken over; defaults ``"finished"`` and ``""``).
+
+        Returns
+        -------
+        RunupResult
+        """
         meta = dict(meta or {})
         rows = np.asarray(rows, dtype=float).reshape(-1, len(schema.columns))
         nb = len(schema.bearings)

@@ -46,7 +46,34 @@ MAX_SPEED_RPM = 1e6
 
 def check_speed(name, speed_rpm):
     """Return ``float(speed_rpm)`` or raise :class:`ParameterError`: rotor speeds must be finite, > 0 and at most
-    :data:`MAX_SPEED_RPM` rpm."""
+    :data:`MAX_SPEED_RPM` rpm.
+
+    Parameters
+    ----------
+    name : str
+        The quantity's name, used in the message (e.g. ``"start speed"``).
+    speed_rpm : float
+        Rotor speed [rpm].
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If the speed is not a finite number in 0 < speed <= :data:`MAX_SPEED_RPM`.
+
+    Examples
+    --------
+    >>> check_speed("start speed", 20e3)
+    20000.0
+    >>> try:
+    ...     check_speed("end speed", 2e6)
+    ... except ParameterError as exc:
+    ...     print(exc)
+    end speed = 2000000.0 rpm is invalid: valid range 0 < speed <= 1e+06 rpm (the model is verified for 1 ... 250 krpm)
+    """
     v = check_positive(name, speed_rpm, "rpm")
     if v > MAX_SPEED_RPM:
         raise ParameterError(f"{name} = {speed_rpm!r} rpm is invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm "
@@ -63,11 +90,26 @@ class SpeedProfile:
     speed a state instead: J_p Ω̇ = T_drive(t) + Σ T_J (physics.md §7.3); then ``omega`` holds only the start speed
     and ``drive_torque`` the drive torque [N m] on the grid ``t``.
 
+    Parameters
+    ----------
+    t : ndarray (nt,)
+        Uniform time grid [s], from 0 to the duration.
+    omega : ndarray (nt,)
+        Rotor speed Ω on the grid [rad/s] (torque-driven: the start speed everywhere).
+    omega_dot : ndarray (nt,)
+        Rotor acceleration Ω̇ on the grid [rad/s²] (torque-driven: zeros, unused).
+    description : str
+        Human-readable description (written to the result's metadata).
+    drive_torque : ndarray (nt,), optional
+        Drive torque [N m] on the grid ``t`` of a torque-driven rotor; None for a prescribed speed.
+
     Examples
     --------
     >>> p = SpeedProfile.ramp(250e3, 20e3, 1.0)
     >>> p.direction, p.description
     ('down', 'linear run-down 250000 -> 20000 rpm in 1 s')
+    >>> round(float(p(0.5)) * 60 / (2 * np.pi))  # speed at t = 0.5 s [rpm]
+    135000
     """
 
     t: np.ndarray  # [s], uniform grid
@@ -97,7 +139,25 @@ class SpeedProfile:
 
     @classmethod
     def ramp(cls, start_rpm, end_rpm, duration):
-        """Linear ramp from ``start_rpm`` to ``end_rpm`` [rpm] in ``duration`` [s] (a run-down if end < start)."""
+        """Linear ramp from ``start_rpm`` to ``end_rpm`` [rpm] in ``duration`` [s] (a run-down if end < start).
+
+        Parameters
+        ----------
+        start_rpm, end_rpm : float
+            Start and end rotor speed [rpm], each in 0 < speed <= :data:`MAX_SPEED_RPM`.
+        duration : float
+            Ramp time [s], > 0.
+
+        Returns
+        -------
+        SpeedProfile
+
+        Examples
+        --------
+        >>> p = SpeedProfile.ramp(20e3, 80e3, 2.0)
+        >>> round(float(p.omega_dot[0]) * 60 / (2 * np.pi))  # acceleration [rpm/s]
+        30000
+        """
         start_rpm, end_rpm, duration = cls._checked(start_rpm, end_rpm, duration)
         t = np.array([0.0, duration])
         w = np.array([start_rpm, end_rpm]) * RPM
@@ -107,7 +167,24 @@ class SpeedProfile:
 
     @classmethod
     def constant(cls, speed_rpm, duration):
-        """Constant speed [rpm] for ``duration`` [s]."""
+        """Constant speed for a duration.
+
+        Parameters
+        ----------
+        speed_rpm : float
+            Rotor speed [rpm].
+        duration : float
+            Simulated time [s], > 0.
+
+        Returns
+        -------
+        SpeedProfile
+
+        Examples
+        --------
+        >>> SpeedProfile.constant(100e3, 0.1).direction
+        'constant'
+        """
         speed_rpm, _, duration = cls._checked(speed_rpm, speed_rpm, duration)
         return cls(np.array([0.0, duration]), np.full(2, speed_rpm * RPM), np.zeros(2),
                    f"constant {speed_rpm:.0f} rpm")
@@ -115,7 +192,27 @@ class SpeedProfile:
     @classmethod
     def exponential(cls, start_rpm, end_rpm, duration, n=20001):
         """Constant relative acceleration: Ω(t) = Ω0 (Ω1/Ω0)^(t/T) — equal time per speed octave, so low-speed
-        onsets get as many vibration periods as high-speed ones."""
+        onsets get as many vibration periods as high-speed ones.
+
+        Parameters
+        ----------
+        start_rpm, end_rpm : float
+            Start and end rotor speed [rpm].
+        duration : float
+            Duration T [s], > 0.
+        n : int
+            Number of grid points of the table.
+
+        Returns
+        -------
+        SpeedProfile
+
+        Examples
+        --------
+        >>> p = SpeedProfile.exponential(10e3, 40e3, 2.0, n=5)
+        >>> (p.omega * 60 / (2 * np.pi)).round(6).tolist()  # one octave per second
+        [10000.0, 14142.135624, 20000.0, 28284.271247, 40000.0]
+        """
         start_rpm, end_rpm, duration = cls._checked(start_rpm, end_rpm, duration)
         t = np.linspace(0.0, duration, n)
         rate = math.log(end_rpm / start_rpm) / duration
@@ -125,7 +222,32 @@ class SpeedProfile:
 
     @classmethod
     def from_function(cls, fun, duration, n=20001):
-        """``fun(t [s]) -> speed [rpm]``, tabulated on ``n`` points; Ω̇ by central differences."""
+        """A speed profile from a function, tabulated on ``n`` points; Ω̇ by central differences.
+
+        Parameters
+        ----------
+        fun : callable
+            ``fun(t [s]) -> speed [rpm]``, in 0 < speed <= :data:`MAX_SPEED_RPM` for 0 <= t <= duration.
+        duration : float
+            Duration [s], > 0.
+        n : int
+            Number of grid points of the table.
+
+        Returns
+        -------
+        SpeedProfile
+
+        Raises
+        ------
+        ParameterError
+            If ``fun`` gives a speed out of range (naming the time).
+
+        Examples
+        --------
+        >>> p = SpeedProfile.from_function(lambda t: 1000.0 + 500.0 * t, 2.0, n=5)
+        >>> p.direction, (p.omega * 60 / (2 * np.pi)).round(9).tolist()
+        ('up', [1000.0, 1250.0, 1500.0, 1750.0, 2000.0])
+        """
         duration = check_positive("duration", duration, "s")
         t = np.linspace(0.0, duration, n)
         rpm = np.array([float(fun(x)) for x in t])
@@ -149,7 +271,18 @@ class SpeedProfile:
         start_rpm : float
             Initial rotor speed [rpm].
         duration : float
-            [s]
+            Simulated time [s], > 0.
+        n : int
+            Number of grid points of a tabulated drive torque function.
+
+        Returns
+        -------
+        SpeedProfile
+
+        Raises
+        ------
+        ParameterError
+            If the start speed or duration is out of range or the drive torque is not finite.
 
         Examples
         --------
@@ -174,13 +307,40 @@ class SpeedProfile:
                    f"torque-driven from {start_rpm:.0f} rpm, drive torque {text}, {duration:g} s", tq)
 
     def __call__(self, t):
-        """Prescribed rotor speed [rad/s] at ``t`` [s] (for a torque-driven profile: the start speed)."""
+        """Prescribed rotor speed [rad/s] at ``t`` [s] (for a torque-driven profile: the start speed).
+
+        Parameters
+        ----------
+        t : float or array_like
+            Time [s].
+
+        Returns
+        -------
+        float or ndarray
+            Ω [rad/s], linearly interpolated in the table.
+        """
         return np.interp(t, self.t, self.omega)
 
 
 @dataclass
 class Unbalance:
-    """Unbalance of one wheel: ``amount`` [kg m] (mass × eccentricity) at ``phase`` [rad] (from +x, CCW)."""
+    """Unbalance of one wheel: ``amount`` [kg m] (mass × eccentricity) at ``phase`` [rad] (from +x, CCW).
+
+    Parameters
+    ----------
+    disc : str
+        Name of the rotor disc that carries it (e.g. ``"turbine_wheel"``).
+    amount : float
+        Unbalance m e [kg m], >= 0 (1e-6 kg m = 1 g mm).
+    phase : float
+        Angular position at rotation angle 0 [rad], from +x, counter-clockwise.
+
+    Examples
+    --------
+    >>> u = Unbalance("turbine_wheel", 1e-6)
+    >>> u.amount * 1e6, u.phase  # [g mm], [rad]
+    (1.0, 0.0)
+    """
 
     disc: str
     amount: float
@@ -193,6 +353,38 @@ class Problem:
 
     State y = [q (n_r), q̇ (n_r), ring_b (x, y, vx, vy) for each bearing, ring speeds, rotation angle] and, for a
     torque-driven rotor, the rotor speed [rad/s] last. Build with :func:`build_problem`.
+
+    Parameters
+    ----------
+    system : Turbocharger
+        The system (two bearings).
+    profile : SpeedProfile
+        Rotor speed profile.
+    film_model : str
+        Film model (``"short"`` or ``"short_corrected"``).
+    args : tuple
+        Trailing arguments of :func:`frbmodel.dynamics.monolithic_rhs` / ``monolithic_jac``.
+    n_rotor : int
+        Number of rotor DoFs n_r (4 per node).
+    springs : float
+        Linear journal spring stiffness [N/m] instead of the films; 0 for films.
+    diag : ndarray (4,)
+        Filled by each RHS call with the films' eccentricity ratios [-].
+    polar_inertia : float
+        Rotor polar moment of inertia J_p [kg m²].
+    geom : ndarray (2, 2, 4), optional
+        Film data per bearing (:func:`frbmodel.losses.film_arrays`) [m, m, m, Pa s].
+    polys : ndarray (2, 2, 2, 5), optional
+        Correction polynomials per bearing.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> p = build_problem(frb.turbocharger(), SpeedProfile.constant(100e3, 0.1), "short")
+    >>> p.n_rotor, p.n_states, p.ring_index(1), p.ring_speed_index(0), p.speed_index
+    (16, 43, 36, 40, None)
+    >>> round(p.speed(0.05) * 60 / (2 * np.pi))  # [rpm]
+    100000
     """
 
     system: object
@@ -208,10 +400,12 @@ class Problem:
 
     @property
     def torque_driven(self):
+        """True if the rotor speed is a state (:meth:`SpeedProfile.torque`)."""
         return self.profile.torque_driven
 
     @property
     def n_states(self):
+        """Length of the state vector: 2 n_r + 11 (+ 1 for a torque-driven rotor)."""
         return 2 * self.n_rotor + 11 + (1 if self.torque_driven else 0)
 
     @property
@@ -220,17 +414,67 @@ class Problem:
         return 2 * self.n_rotor + 11 if self.torque_driven else None
 
     def ring_index(self, b):
-        """Index of bearing ``b``'s ring x in the state."""
+        """Index of bearing ``b``'s ring x in the state (followed by y, vx, vy).
+
+        Parameters
+        ----------
+        b : int
+            Bearing index (order of ``system.bearings``).
+
+        Returns
+        -------
+        int
+        """
         return 2 * self.n_rotor + 4 * b
 
     def ring_speed_index(self, b):
+        """Index of bearing ``b``'s ring spin speed [rad/s] in the state.
+
+        Parameters
+        ----------
+        b : int
+            Bearing index (order of ``system.bearings``).
+
+        Returns
+        -------
+        int
+        """
         return 2 * self.n_rotor + 8 + b
 
     def rhs(self, t, y, out):
+        """dy/dt of the compiled model (:func:`frbmodel.dynamics.monolithic_rhs`); also fills :attr:`diag`.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : ndarray (n_states,)
+            State (SI units).
+        out : ndarray (n_states,)
+            Receives dy/dt.
+
+        Returns
+        -------
+        ndarray (n_states,)
+            ``out``.
+        """
         return _rhs(t, y, out, *self.args)
 
     def speed(self, t, y=None):
-        """Rotor speed [rad/s] at time ``t`` [s] (torque-driven: from the state ``y``)."""
+        """Rotor speed [rad/s] at time ``t`` [s] (torque-driven: from the state ``y``).
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : ndarray (n_states,), optional
+            State; needed for a torque-driven rotor.
+
+        Returns
+        -------
+        float
+            Ω [rad/s].
+        """
         if self.torque_driven:
             return float(y[self.speed_index])
         return float(np.interp(t, self.profile.t, self.profile.omega))
@@ -244,10 +488,27 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     system : Turbocharger
         Two bearings (the compiled RHS's layout).
     profile : SpeedProfile
+        Rotor speed profile (uniform time grid).
     film_model : {"short", "short_corrected"}
+        Film model.
     unbalance : sequence of Unbalance
+        Rotating unbalances.
     linear_springs : float, optional
         Isotropic journal springs [N/m] instead of the films (method A's bearing, for verification).
+
+    Returns
+    -------
+    Problem
+
+    Raises
+    ------
+    ParameterError
+        Not two bearings, a negative unbalance or spring stiffness, a non-uniform time grid, or a torque-driven
+        rotor without polar inertia.
+
+    Examples
+    --------
+    See :class:`Problem`.
     """
     if len(system.bearings) != 2:
         raise ParameterError(f"the run-up needs exactly 2 bearings, the system has {len(system.bearings)}")
@@ -280,7 +541,38 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
 def initial_state(problem, initial="equilibrium", perturbation=0.05):
     """Initial state y0: the method-J static equilibrium at the start speed (``initial="equilibrium"``) or centred
     members (``"centred"``), both journals and rings offset in +x by ``perturbation`` × their clearances; with
-    linear springs the static deflection on the springs."""
+    linear springs the static deflection on the springs.
+
+    Parameters
+    ----------
+    problem : Problem
+        The run-up problem (:func:`build_problem`).
+    initial : {"equilibrium", "centred"}
+        Start from the static equilibrium or from centred journals and rings (ring speeds by eq. (6)).
+    perturbation : float
+        Offset in +x [-], as a fraction of the clearance: the ring by its outer clearance, the journal by the sum
+        of both (so that the inner film is offset by its clearance fraction too).
+
+    Returns
+    -------
+    ndarray (problem.n_states,)
+        y0 in SI units.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown ``initial``.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> tc = frb.turbocharger()
+    >>> p = build_problem(tc, SpeedProfile.constant(100e3, 0.1), "short")
+    >>> y0 = initial_state(p, "centred", perturbation=0.05)
+    >>> b = tc.bearings[0]
+    >>> bool(np.isclose(y0[4 * b.node], 0.05 * (b.inner.clearance + b.outer.clearance), rtol=1e-12, atol=0))
+    True
+    """
     from .bearing import ring_speed_ratio
 
     system, rotor, n_r = problem.system, problem.system.rotor, problem.n_rotor
@@ -341,8 +633,30 @@ def atol_vector(problem, atol=DEFAULT_ATOL_M):
     """LSODA absolute tolerances per state: ``atol`` [m] on displacements, scaled by a 0.03 m arm for rotations,
     by the largest rotor speed for velocities; ring speeds and the rotor speed of a torque-driven rotor
     1e-6 × (atol / 1e-9 m) × that speed [rad/s], the rotation angle 1e-6 × (atol / 1e-9 m) rad.
-    Returns (atol, finite-difference scale). The largest speed of a torque-driven run is bounded by the drive
-    torque alone (:func:`_speed_bound`)."""
+    The largest speed of a torque-driven run is bounded by the drive torque alone (films only brake).
+
+    Parameters
+    ----------
+    problem : Problem
+        The run-up problem.
+    atol : float
+        Absolute tolerance on displacements [m].
+
+    Returns
+    -------
+    atol : ndarray (problem.n_states,)
+        Absolute tolerance per state (in each state's unit).
+    scale : ndarray (problem.n_states,)
+        Floor of the finite-difference step per state (:func:`frbmodel.dynamics.monolithic_jac`).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> p = build_problem(frb.turbocharger(), SpeedProfile.constant(100e3, 0.1), "short")
+    >>> atol, scale = atol_vector(p, 1e-10)
+    >>> atol[:2].tolist(), round(float(atol[2]) * 0.03 / 1e-10, 9)  # x, y [m]; a rotation [rad] x 0.03 m arm
+    ([1e-10, 1e-10], 1.0)
+    """
     n_r = problem.n_rotor
     w_max = _speed_bound(problem)
     pos_tol = float(atol)
@@ -367,6 +681,26 @@ def static_rotor_state(system, journal_positions):
 
     The rotor on two supports is statically determinate, so prescribing both journals fixes q and the
     gravity load is carried by exactly the bearing reactions of :attr:`Turbocharger.bearing_loads`.
+
+    Parameters
+    ----------
+    system : Turbocharger
+        The system (its rotor, bearing nodes and gravity).
+    journal_positions : sequence of (float, float)
+        Journal centre (x, y) [m] of each bearing, in the order of ``system.bearings``.
+
+    Returns
+    -------
+    ndarray (n_r,)
+        Rotor DoFs q [m, rad].
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> tc = frb.turbocharger()
+    >>> q = static_rotor_state(tc, [(0.0, -1e-6), (0.0, -2e-6)])
+    >>> [q[4 * b.node:4 * b.node + 2].round(12).tolist() for b in tc.bearings]
+    [[0.0, -1e-06], [0.0, -2e-06]]
     """
     return system.rotor.static_deflection([b.node for b in system.bearings], journal_positions, system.gravity)
 
@@ -480,6 +814,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     Parameters
     ----------
     system : Turbocharger
+        The system (two bearings).
     speed_rpm : (float, float)
         Start and end speed [rpm] of a linear ramp (ignored if ``profile`` is given).
     duration : float

@@ -54,7 +54,24 @@ def _distributed():
 
 @dataclass
 class Case:
-    """One case of a study: ``params`` {name: value (SI)}, ``analysis`` and its ``options``."""
+    """One case of a study: ``params`` {name: value (SI)}, ``analysis`` and its ``options``.
+
+    Parameters
+    ----------
+    params : dict
+        Study parameter (a key of :data:`PARAMETERS`) -> value in SI units (see its unit there).
+    analysis : str
+        One of :data:`ANALYSES`.
+    options : dict
+        Options of the analysis (see :func:`check_options`); ``"system"`` may hold a system dict
+        (:meth:`Turbocharger.to_dict`) to vary instead of the Table 2 system.
+
+    Examples
+    --------
+    >>> case = Case({"outer_clearance": 40e-6}, "campbell", {"methods": ["J"]})
+    >>> case.case_id  # doctest: +ELLIPSIS
+    'campbell_outer_clearance=4e-05_...'
+    """
 
     params: dict
     analysis: str
@@ -62,6 +79,7 @@ class Case:
 
     @property
     def case_id(self) -> str:
+        """File-name-safe, unique id: analysis, parameters and a hash of parameters, analysis and options."""
         key = json.dumps({"p": self.params, "a": self.analysis, "o": self.options}, sort_keys=True)
         readable = "_".join(f"{k}={v:.4g}" for k, v in sorted(self.params.items())) or "base"
         return f"{self.analysis}_{readable}_{hashlib.sha1(key.encode()).hexdigest()[:8]}".replace("/", "-")
@@ -129,6 +147,18 @@ def grid(params: dict, analysis="campbell", **options):
     Returns
     -------
     list of Case
+
+    Raises
+    ------
+    ParameterError
+        An unknown parameter, analysis or option value.
+
+    Examples
+    --------
+    >>> cases = grid({"outer_clearance": [36e-6, 40e-6], "viscosity_scale": [1.0, 2.0]}, "runup",
+    ...              speed_rpm=(250e3, 20e3), duration=1.0)
+    >>> len(cases), cases[-1].params
+    (4, {'outer_clearance': 4e-05, 'viscosity_scale': 2.0})
     """
     names = list(params)
     for n in names:
@@ -168,18 +198,27 @@ def build_case_system(params, base=None):
     Parameters
     ----------
     params : dict
+        Study parameter (a key of :data:`PARAMETERS`) -> value in SI units.
     base : Turbocharger, optional
         Default: the Table 2 system. Bearing and disc parameters refer to its bearing and disc names.
 
     Returns
     -------
     system : Turbocharger
+        ``base`` with the parameters applied.
     unbalance : list of Unbalance
+        One per non-zero ``unbalance_<disc>`` parameter (phase 0).
 
     Raises
     ------
     ParameterError
         An unknown parameter, or one that names a bearing or disc the system does not have.
+
+    Examples
+    --------
+    >>> tc, unb = build_case_system({"outer_clearance": 40e-6, "unbalance_turbine": 1e-6})
+    >>> [b.outer.clearance for b in tc.bearings], unb
+    ([4e-05, 4e-05], [Unbalance(disc='turbine_wheel', amount=1e-06, phase=0.0)])
     """
     from dataclasses import replace
 
@@ -297,11 +336,30 @@ def run_case(case: Case, out_dir) -> dict:
 
     The case's system is the Table 2 system, or ``case.options["system"]`` (a dict as
     :meth:`Turbocharger.to_dict` writes it), with the case's parameters applied (:func:`build_case_system`).
+    An exception inside the case is not raised: the case is recorded as failed, with the error and a traceback.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    out_dir : str or Path
+        Study folder; the case file goes to ``<out_dir>/cases/<case_id>.json``.
 
     Returns
     -------
     dict
         ``case_id``, ``status`` ("finished" or "failed"), ``error``, ``wall_time_s``.
+
+    Examples
+    --------
+    A case with a broken system description fails, and its file says why:
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     res = run_case(Case({}, "campbell", {"system": {"rotr": {}}}), tmp)
+    ...     on_disk = json.loads((Path(tmp) / "cases" / f"{res['case_id']}.json").read_text())
+    >>> res["status"], on_disk["status"], on_disk["error"]  # doctest: +ELLIPSIS
+    ('failed', 'failed', "ParameterError: unknown key 'rotr'...")
     """
     out = Path(out_dir)
     (out / "cases").mkdir(parents=True, exist_ok=True)
@@ -350,7 +408,29 @@ def _load(out):
 
 def write_index(cases, out):
     """Write ``<out>/index.csv`` (one row per case: parameters, status, error, wall time, file) and
-    ``<out>/study.json`` (the cases); returns the index as a pandas DataFrame."""
+    ``<out>/study.json`` (the cases); returns the index as a pandas DataFrame.
+
+    Parameters
+    ----------
+    cases : list of Case
+        All cases of the study (a case without a file is "pending").
+    out : str or Path
+        Study folder (must exist).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The index.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> cases = grid({"outer_clearance": [36e-6, 40e-6]}, "campbell")
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     index = write_index(cases, tmp)
+    >>> index[["outer_clearance [m]", "status"]].to_dict("list")
+    {'outer_clearance [m]': [3.6e-05, 4e-05], 'status': ['pending', 'pending']}
+    """
     import pandas as pd
 
     recs = _load(out)
@@ -390,7 +470,9 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
     Parameters
     ----------
     cases : list of Case
-    out_dir : path
+        The study (e.g. :func:`grid`); ids must be unique.
+    out_dir : str or Path
+        Study folder (created); cases with a file there are skipped.
     scheduler : None | "serial" | str
         None: a new dask.distributed LocalCluster with ``n_workers`` processes (default: one per core);
         "serial": in this process, no Dask; otherwise the address of an existing Dask scheduler
@@ -415,6 +497,16 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
         Duplicate cases, ``n_workers`` < 1, or an unreachable ``scheduler``.
     ModuleNotFoundError
         ``dask`` / ``distributed`` missing (the ``[dist]`` extra) for a scheduler other than "serial".
+
+    Examples
+    --------
+    In this process, without Dask; the failing case is recorded and the study goes on:
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     index = run_study([Case({}, "campbell", {"system": {"rotr": {}}})], tmp, scheduler="serial")
+    >>> index["status"].tolist()
+    ['failed']
     """
     from .progress import counter_bar, note
 
@@ -472,7 +564,27 @@ def _run_on_dask(todo, out, scheduler, n_workers, report, say):
 
 def stability_map(out_dir):
     """Long table of onsets per finished case: swept parameters, linear (method-mode) and nonlinear
-    (sub-synchronous component) onsets [rpm] and frequencies [Hz]."""
+    (sub-synchronous component) onsets [rpm] and frequencies [Hz].
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Folder of a study (:func:`run_study`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per onset: ``case_id``, ``analysis``, the swept parameters with units, ``kind`` ("linear" or
+        "nonlinear"), ``method``, ``item`` (mode or component), ``onset [rpm]``, ``f at onset [Hz]``, ...;
+        empty if no case has finished.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     print(stability_map(tmp).empty)
+    True
+    """
     import pandas as pd
 
     rows = []
@@ -557,10 +669,21 @@ def example_cases(name):
     Parameters
     ----------
     name : str
+        A key of :data:`EXAMPLES`, e.g. ``"outer-clearance"``.
 
     Returns
     -------
     list of Case
+
+    Raises
+    ------
+    ParameterError
+        For an unknown name.
+
+    Examples
+    --------
+    >>> sorted({c.analysis for c in example_cases("outer-clearance")}), len(example_cases("outer-clearance"))
+    (['campbell', 'runup'], 12)
     """
     if name not in EXAMPLES:
         raise ParameterError(f"example = {name!r} is unknown; valid: {', '.join(EXAMPLES)}")

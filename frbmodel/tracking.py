@@ -39,6 +39,11 @@ class Peak:
         Orbit amplitude at the peak bin [m].
     direction : int
         ``FORWARD`` (+1) or ``BACKWARD`` (−1) whirl.
+
+    Examples
+    --------
+    >>> Peak(400.0, 2e-6, BACKWARD).direction == BACKWARD
+    True
     """
 
     freq_hz: float
@@ -81,7 +86,17 @@ class Track:
     misses: int = 0
 
     def add(self, k, peak, threshold_m):
-        """Append ``peak`` (a :class:`Peak`) found in segment ``k`` with detection threshold ``threshold_m`` [m]."""
+        """Append a peak found in a segment; resets :attr:`misses`.
+
+        Parameters
+        ----------
+        k : int
+            Segment index.
+        peak : Peak
+            The peak.
+        threshold_m : float
+            Detection threshold of segment ``k`` [m].
+        """
         self.segments.append(k)
         self.freqs_hz.append(peak.freq_hz)
         self.amplitudes_m.append(peak.amplitude_m)
@@ -89,7 +104,20 @@ class Track:
         self.misses = 0
 
     def extend(self, other):
-        """Append all peaks of a later fragment ``other`` of the same component."""
+        """Append all peaks of a later fragment of the same component.
+
+        Parameters
+        ----------
+        other : Track
+            The later fragment.
+
+        Examples
+        --------
+        >>> a, b = Track(FORWARD, [0, 1], [100.0, 101.0]), Track(FORWARD, [3], [103.0])
+        >>> a.extend(b)
+        >>> a.segments, len(a)
+        ([0, 1, 3], 3)
+        """
         self.segments += other.segments
         self.freqs_hz += other.freqs_hz
         self.amplitudes_m += other.amplitudes_m
@@ -271,6 +299,14 @@ def segment_peaks(freqs_hz, forward, backward, threshold_m):
     -------
     list of Peak
         Forward peaks by increasing frequency, then backward ones.
+
+    Examples
+    --------
+    >>> f = np.arange(8.0) * 10.0
+    >>> fwd = np.array([0, 1, 5, 1, 0, 2, 0, 0]) * 1e-6
+    >>> bwd = np.array([0, 0, 0, 0, 0, 0, 3, 0]) * 1e-6
+    >>> [(p.direction, round(p.freq_hz, 6)) for p in segment_peaks(f, fwd, bwd, 1.5e-6)]
+    [(1, 20.0), (1, 50.0), (-1, 60.0)]
     """
     from scipy.signal import find_peaks
 
@@ -288,12 +324,14 @@ def secondary_peaks(peaks, df_hz):
     Parameters
     ----------
     peaks : list of Peak
+        The peaks of one segment (:func:`segment_peaks`).
     df_hz : float
         Bin spacing [Hz]; peaks closer than max(1.5 df, 2 % of f) to a harmonic or mirror count as one.
 
     Returns
     -------
     set of int
+        Indices into ``peaks``.
 
     Examples
     --------
@@ -324,7 +362,9 @@ def assign(tracks, peaks, df_hz):
     Parameters
     ----------
     tracks : list of Track
+        The active tracks.
     peaks : list of Peak
+        The sub-synchronous peaks of the current segment.
     df_hz : float
         Bin spacing [Hz].
 
@@ -382,6 +422,17 @@ def split_segment(peaks, speed_rpm, df_hz, f_min_hz):
     sync, subs : list of Peak
         Forward peaks within ``SYNC_TOL`` (plus half a bin) of the rotor frequency; peaks below
         (1 − ``SYNC_TOL``) f_rot and above ``f_min_hz``.
+
+    Examples
+    --------
+    At 60 krpm (f_rot = 1000 Hz): a forward peak at 1000 Hz is 1X, one at 400 Hz is sub-synchronous, a backward
+    peak at 1000 Hz is neither, and a peak at 1500 Hz is super-synchronous:
+
+    >>> peaks = [Peak(400.0, 1.0, FORWARD), Peak(1000.0, 1.0, FORWARD), Peak(1000.0, 1.0, BACKWARD),
+    ...          Peak(1500.0, 1.0, FORWARD)]
+    >>> sync, subs = split_segment(peaks, 60e3, 10.0, 0.0)
+    >>> [p.freq_hz for p in sync], [p.freq_hz for p in subs]
+    ([1000.0], [400.0])
     """
     frot = speed_rpm / 60.0
     is_sync = [p.direction > 0 and abs(p.freq_hz / frot - 1.0) < SYNC_TOL + 0.5 * df_hz / frot for p in peaks]
@@ -417,6 +468,21 @@ def track_peaks(freqs_hz, speeds_rpm, forward, backward, db_range=25.0, min_ampl
         The synchronous (1X) peaks.
     tracks : list of Track
         Sub-synchronous tracks, unmerged, by the segment of their end.
+
+    Examples
+    --------
+    A run-up from 30 to 39.5 krpm, one segment per 500 rpm: a 1X line, and a forward whirl at 0.4 f_rot whose
+    amplitude is smallest in segment 5 and rises above the detection threshold in segment 12:
+
+    >>> f_hz = np.arange(0.0, 1000.0, 10.0)
+    >>> speeds = 30e3 + 500.0 * np.arange(20)
+    >>> def line(f0_hz):
+    ...     return np.exp(-((f_hz[:, None] - f0_hz) / 15.0) ** 2)
+    >>> fwd = 1e-9 + 1e-5 * line(speeds / 60) + 1e-9 * 2.0 ** np.abs(np.arange(20) - 5) * line(0.4 * speeds / 60)
+    >>> bwd = np.full_like(fwd, 1e-9)
+    >>> sync, tracks = track_peaks(f_hz, speeds, fwd, bwd, db_range=40.0)
+    >>> len(sync), [(t.segments[0], len(t)) for t in tracks]
+    (20, [(12, 8)])
     """
     df = freqs_hz[1] - freqs_hz[0]
     sync, done, active = Track(FORWARD), [], []
@@ -451,15 +517,28 @@ def merge_fragments(tracks, speeds_rpm, max_gap=4, ratio_tol=0.2):
     Parameters
     ----------
     tracks : list of Track
+        Sub-synchronous tracks (:func:`track_peaks`).
     speeds_rpm : (k,) ndarray
         Rotor speed of every segment [rpm].
     max_gap : int
+        Largest gap [segments] between the end of one fragment and the start of the next.
     ratio_tol : float
+        Relative tolerance [-] on f/f_rot between the end of one fragment and the start of the next.
 
     Returns
     -------
     list of Track
         The joined tracks, by their first segment (the inputs are modified in place).
+
+    Examples
+    --------
+    At a constant 60 krpm, a 400 Hz fragment resumes after a gap of 2 segments; a 700 Hz track stays apart:
+
+    >>> speeds = np.full(10, 60e3)
+    >>> parts = [Track(FORWARD, [0, 1, 2], [400.0] * 3), Track(FORWARD, [5, 6], [405.0] * 2),
+    ...          Track(FORWARD, [4, 5], [700.0] * 2)]
+    >>> [t.segments for t in merge_fragments(parts, speeds)]
+    [[0, 1, 2, 5, 6], [4, 5]]
     """
     out = []
     for t in sorted(tracks, key=lambda t: t.segments[0]):
@@ -581,10 +660,13 @@ def threshold_crossing_rpm(spec, freqs_hz, speeds_rpm, k0, f0_hz, threshold_m):
     spec : (f, k) ndarray
         Orbit amplitude [m] in the component's whirl direction.
     freqs_hz : (f,) ndarray
+        Frequencies [Hz].
     speeds_rpm : (k,) ndarray
         Rotor speed of every segment [rpm], in time order (rising, falling or constant).
     k0 : int
+        Segment of the first detection.
     f0_hz : float
+        Frequency of the first detection [Hz].
     threshold_m : float
         Detection threshold of segment ``k0`` [m].
 
@@ -648,7 +730,29 @@ def vanishing_rpm(spec, freqs_hz, speeds_rpm, k1, f1_hz, threshold_m):
 def to_component(label, track, freqs_hz, speeds_rpm, forward, backward):
     """The :class:`Component` ``label`` of ``track``, with its onset (turning point for sub-synchronous
     components, threshold crossing for 1X; none if it is there from the start of the run), the threshold
-    crossings where it appears (``onset_threshold_rpm``) and vanishes (``end_rpm``)."""
+    crossings where it appears (``onset_threshold_rpm``) and vanishes (``end_rpm``).
+
+    Parameters
+    ----------
+    label : str
+        "1X" or "sub1", "sub2", ...; "1X" takes the threshold crossing as its onset.
+    track : Track
+        The component's peaks.
+    freqs_hz : (f,) ndarray
+        Frequencies [Hz].
+    speeds_rpm : (k,) ndarray
+        Rotor speed of every segment [rpm], in time order.
+    forward, backward : (f, k) ndarray
+        Orbit amplitude [m] of forward and backward whirl (the track's direction selects one).
+
+    Returns
+    -------
+    Component
+
+    Examples
+    --------
+    See :func:`find_components`, which calls it for every track.
+    """
     k = np.array(track.segments)
     spec = forward if track.direction > 0 else backward
     comp = Component(label, speeds_rpm[k], np.array(track.freqs_hz), np.array(track.amplitudes_m),
@@ -681,6 +785,23 @@ def find_components(freqs_hz, speeds_rpm, forward, backward, db_range=25.0, min_
     Returns
     -------
     list of Component
+
+    Examples
+    --------
+    The spectrogram of :func:`track_peaks`: the sub-synchronous whirl is first detected at 36 krpm, and crosses
+    the detection threshold at about 35.8 krpm, but its onset (where its decay turned into growth) is at 32.5 krpm:
+
+    >>> f_hz = np.arange(0.0, 1000.0, 10.0)
+    >>> speeds = 30e3 + 500.0 * np.arange(20)
+    >>> def line(f0_hz):
+    ...     return np.exp(-((f_hz[:, None] - f0_hz) / 15.0) ** 2)
+    >>> fwd = 1e-9 + 1e-5 * line(speeds / 60) + 1e-9 * 2.0 ** np.abs(np.arange(20) - 5) * line(0.4 * speeds / 60)
+    >>> comps = find_components(f_hz, speeds, fwd, np.full_like(fwd, 1e-9), db_range=40.0)
+    >>> [(c.label, c.onset_estimate, round(c.onset_rpm, -2)) for c in comps]
+    [('1X', 'none: present from the start', nan), ('sub1', 'turning point', 32500.0)]
+    >>> c = comps[1]
+    >>> c.detected_from_rpm, round(c.onset_threshold_rpm, -2), round(float(c.ratio[0]), 6)
+    (36000.0, 35800.0, 0.4)
     """
     sync, tracks = track_peaks(freqs_hz, speeds_rpm, forward, backward, db_range, min_amplitude_m, f_min_hz)
     tracks = [t for t in merge_fragments(tracks, speeds_rpm) if len(t) >= min_segments]
@@ -707,6 +828,7 @@ def internal_resonances(components):
     Parameters
     ----------
     components : list of Component
+        Components of one run; only the sub-synchronous ones are compared.
 
     Returns
     -------
@@ -767,10 +889,19 @@ def components_table(components):
     Parameters
     ----------
     components : list of Component
+        Components of one run (:func:`find_components`).
 
     Returns
     -------
     pandas.DataFrame
+
+    Examples
+    --------
+    >>> c = Component("sub1", np.array([60e3, 90e3]), np.array([400.0, 600.0]), np.array([1e-6, 3e-6]), "forward",
+    ...               onset_interp_rpm=55e3, onset_estimate=ONSET_TURNING_POINT)
+    >>> row = components_table([c]).iloc[0]
+    >>> [round(float(row[k]), 6) for k in ("onset [rpm]", "f at onset [Hz]", "max amplitude [m]")]
+    [55000.0, 366.666667, 3e-06]
     """
     import pandas as pd
 

@@ -16,7 +16,25 @@ STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
 
 class FmiCallFailed(CosimStopped):
     """An FMI function returned Discard, Error or Fatal. ``.fmu`` (instance name), ``.function``, ``.status``
-    (fmi2Status value; 2 = Discard, the only one a master may retry after a rollback)."""
+    (fmi2Status value; 2 = Discard, the only one a master may retry after a rollback).
+
+    Parameters
+    ----------
+    fmu : str
+        Instance name of the FMU.
+    function : str
+        Name of the FMI function (fmpy ``FMU2Slave`` method, e.g. ``"doStep"``).
+    status : int
+        The returned fmi2Status value.
+
+    Examples
+    --------
+    >>> exc = FmiCallFailed("bearing_t", "doStep", 2)
+    >>> print(exc)
+    bearing_t: doStep returned status Discard (see the FMU log above)
+    >>> exc.discarded
+    True
+    """
 
     def __init__(self, fmu, function, status):
         super().__init__(f"{fmu}: {function} returned status {STATUS[status] if 0 <= status < 6 else status} "
@@ -25,6 +43,7 @@ class FmiCallFailed(CosimStopped):
 
     @property
     def discarded(self):
+        """True if the status is Discard (2): the step may be retried after a rollback."""
         return self.status == 2
 
 
@@ -59,7 +78,25 @@ class FmuInstance:
         self.call("instantiate", True)
 
     def call(self, function, *args):
-        """``slave.<function>(*args)`` with status check (and trace). Raises :class:`FmiCallFailed`."""
+        """``slave.<function>(*args)`` with status check (and trace).
+
+        Parameters
+        ----------
+        function : str
+            fmpy ``FMU2Slave`` method name (``"doStep"``, ``"getReal"``, ...).
+        *args
+            Its arguments.
+
+        Returns
+        -------
+        object
+            What the fmpy method returns (None for most setters).
+
+        Raises
+        ------
+        FmiCallFailed
+            If the function returned Discard, Error or Fatal.
+        """
         from fmpy.fmi1 import FMICallException
 
         try:
@@ -73,7 +110,22 @@ class FmuInstance:
         return out
 
     def vr(self, names):
-        """Value references of the variables ``names``; a ParameterError names a missing one."""
+        """Value references of the variables ``names``.
+
+        Parameters
+        ----------
+        names : list of str
+            Variable names as in the modelDescription.xml.
+
+        Returns
+        -------
+        list of int
+
+        Raises
+        ------
+        ParameterError
+            Naming the first variable the FMU does not have.
+        """
         try:
             return [self.vars[n].valueReference for n in names]
         except KeyError as exc:
@@ -81,10 +133,35 @@ class FmuInstance:
                                  f"{exc.args[0]!r}") from None
 
     def has(self, name):
+        """True if the FMU has a variable ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Variable name as in the modelDescription.xml.
+
+        Returns
+        -------
+        bool
+        """
         return name in self.vars
 
     def set_parameters(self, params):
-        """Set ``{name: (type, value)}`` (types Real, Integer, Boolean, String as in an .ssv file)."""
+        """Set parameters of the instance.
+
+        Parameters
+        ----------
+        params : dict
+            ``{name: (type, value)}`` with type ``"Real"``, ``"Integer"``, ``"Boolean"`` or ``"String"`` (as in an
+            .ssv file).
+
+        Raises
+        ------
+        ParameterError
+            For an unknown type or variable name.
+        FmiCallFailed
+            If the FMU refuses a value.
+        """
         setter = {"Real": "setReal", "Integer": "setInteger", "Boolean": "setBoolean", "String": "setString"}
         for name, (typ, val) in params.items():
             if typ not in setter:

@@ -27,9 +27,31 @@ def _dims(fmu):
 def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
     """Global state matrix of the SSP system at the ``method`` equilibrium at ``speed_rpm``, from the FMUs.
 
-    Returns ``(A, system)``: A in the state order [rotor q, ring_t (x, y), ring_c (x, y), rotor q̇,
-    ring_t (vx, vy), ring_c (vx, vy)] — the DoF order of :func:`frbmodel.linear_system` — and the frbmodel
-    system of the parameter set.
+    Parameters
+    ----------
+    ssp : str or Path
+        The SSP archive (``frb build-fmus``).
+    speed_rpm : float
+        Rotor speed of the operating point [rpm].
+    method : {"F", "G", "I", "J"}
+        Operating-point method (one with ring degrees of freedom).
+    parameter_set : str
+        SSP parameter set, e.g. ``"co36"``.
+
+    Returns
+    -------
+    A : ndarray, shape (N, N)
+        Global state matrix (SI units) in the state order [rotor q, ring_t (x, y), ring_c (x, y), rotor q̇,
+        ring_t (vx, vy), ring_c (vx, vy)] — the DoF order of :func:`frbmodel.linear_system`.
+    system : Turbocharger
+        The frbmodel system of the parameter set.
+
+    Raises
+    ------
+    ParameterError
+        For a method without ring degrees of freedom.
+    CosimStopped
+        If an FMU fails (an :class:`~frbmodel.cosim.fmu.FmiCallFailed`).
     """
     from ..methods import get_method
 
