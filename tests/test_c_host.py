@@ -26,6 +26,23 @@ EMPTY_ENV = {"PATH": "/usr/bin:/bin"}
 STEPS, H = 1000, 1e-5
 
 
+def _user_copies():
+    import pwd
+
+    root = Path(pwd.getpwuid(os.getuid()).pw_dir) / ".cache" / "frbmodel" / "fmu-pkg"
+    return set(root.glob("*")) if root.is_dir() else set()
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _remove_new_user_copies():
+    """The FMUs copy their bundled frbmodel into the user's cache (by design: numba's kernels survive fresh
+    extractions). The copies these tests make are removed afterwards; copies that existed before stay."""
+    before = _user_copies()
+    yield
+    for d in _user_copies() - before:
+        shutil.rmtree(d, ignore_errors=True)
+
+
 @pytest.fixture(scope="module")
 def c_host(tmp_path_factory):
     """The C host, compiled with the system C compiler."""
