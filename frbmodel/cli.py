@@ -431,6 +431,29 @@ def cmd_losses(args):
     print(f"results in {out.resolve()}")
 
 
+def cmd_warmup(args):
+    """Compile (or load) the numba kernels once, with a progress bar (CI and images call it on purpose)."""
+    from .warmup import _marker, warmup
+
+    wall = warmup(progress=True)
+    print(f"numba kernels ready in {wall:.1f} s (cached next to the package: {_marker().parent})")
+
+
+#: commands that run compiled kernels (a first run compiles them: the CLI says so first)
+KERNEL_COMMANDS = ("campbell", "equilibrium", "losses", "runup", "compare", "cosim", "linearize", "sweep",
+                   "paper-figures", "unbalance")
+
+
+def _first_run_notice(command):
+    """On the first run after an install or an update, compile the kernels with a visible message and a bar."""
+    from .warmup import kernels_ready, warmup
+
+    if command in KERNEL_COMMANDS and not kernels_ready():
+        print("frb: compiling the numba kernels (first run only, ~40 s on 2 cores; `frb warmup` does it on purpose)",
+              file=sys.stderr, flush=True)
+        warmup(progress=True)
+
+
 def cmd_build_fmus(args):
     """``frb build-fmus``: build the bearing and rotor FMUs and the SSP into a folder."""
     from .cosim.build import build_fmus
@@ -710,6 +733,12 @@ def _add_losses(sub):
     lo.set_defaults(func=cmd_losses)
 
 
+def _add_warmup(sub):
+    w = sub.add_parser("warmup", formatter_class=_Formatter,
+                       help="compile the numba kernels once (first run only; for CI and container images)")
+    w.set_defaults(func=cmd_warmup)
+
+
 def _add_plot(sub):
     pl = sub.add_parser("plot", formatter_class=_Formatter,
                         help="re-render the figures of a run-up / co-simulation results folder")
@@ -748,6 +777,7 @@ def build_parser():
     _add_sweep(sub)
     _add_paper_figures(sub)
     _add_plot(sub)
+    _add_warmup(sub)
     _add_losses(sub)
     return p
 
@@ -782,6 +812,7 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     signal.signal(signal.SIGTERM, _on_sigterm)
     try:
+        _first_run_notice(args.command)
         return args.func(args) or 0
     except FRBError as exc:
         print(f"frb {args.command}: error: {exc}", file=sys.stderr)

@@ -149,3 +149,16 @@ def test_convergence_check_labels_onsets_that_move_as_seeded_by_round_off():
     assert tab.loc["sub3", "onset moved [%]"] == pytest.approx(8.0)
     tab = convergence_table(ref, tight[:1]).set_index("component")
     assert not tab.loc["sub2", "converged"] and "not found" in tab.loc["sub2", "note"]
+
+
+def test_warmup_marks_the_kernels_ready_for_these_sources(tmp_path, monkeypatch):
+    """frb warmup compiles/loads every kernel group and stamps a marker with the hash of the kernel sources: a
+    changed kernel source means a new stamp (the next command compiles first and says so)."""
+    import frbmodel.warmup as w
+
+    monkeypatch.setattr(w, "_marker", lambda: tmp_path / f"kernels-{w._stamp()}.ok")
+    assert not w.kernels_ready()
+    assert w.warmup(progress=False) > 0
+    assert w.kernels_ready()
+    monkeypatch.setattr(w, "_stamp", lambda: "changed-sources")
+    assert not w.kernels_ready()
