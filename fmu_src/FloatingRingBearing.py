@@ -14,18 +14,23 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     Parameters (all ``fixed``): films, ring mass and inertia, initial ring state, gravity, substep,
     ``contact_eps``, ``film_model``, ``ring_speed_model``, ``linearization``. Inputs: journal state, rotor speed.
-    Outputs: force on the journal and its interface Jacobian, staggered-coupling values, ring state,
-    eccentricities, optional linearization. FMI behaviour and statuses: :class:`_fmu_common.FrbSlaveMixin`.
+    Outputs: force on the journal and its interface Jacobian, staggered-coupling values, the film torque on the
+    journal ``journal_torque`` [N m] and the friction power of both films ``power_loss`` [W] (direct feedthrough,
+    evaluated with the force at the same journal and ring state), ring state, eccentricities, optional
+    linearization. FMI behaviour and statuses: :class:`_fmu_common.FrbSlaveMixin` (a ring integrator that does not
+    converge or blows up in a step is an fmi2Discard with the state restored, like a film reaching its wall).
     """
 
     author = "frbmodel"
     description = ("Floating-ring bearing: inner film, free-spinning ring, outer film (short-bearing pi-film, "
-                   "half-Sommerfeld). Outputs the force on the journal and its interface Jacobian.")
+                   "half-Sommerfeld). Outputs the force on the journal and its interface Jacobian, the film torque "
+                   "on the journal and the power loss.")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._init_state()
         self._cache = None
+        self._loss = None
         self._lin = None
         self._parameters()
         for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
@@ -90,6 +95,10 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                      "last step, x [m/s2] (staggered coupling)", lambda: self._comp.path_accel[0], unit="m/s2")
         self._output("journal_accel.y", "journal acceleration of that path, y [m/s2]", lambda: self._comp.path_accel[1],
                      unit="m/s2")
+        self._output("journal_torque", "inner-film torque on the journal about +z [N m] (negative: it brakes the "
+                     "rotor; input <bearing>_bearing.torque of the rotor)", lambda: self._losses()[0], unit="N.m")
+        self._output("power_loss", "friction power of the inner and outer film [W]", lambda: self._losses()[1],
+                     unit="W")
         self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0], unit="m")
         self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1], unit="m")
         self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed(), unit="rad/s")
@@ -111,9 +120,17 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         if self._dirty or self._cache is None:
             self._ref_state = self._journal()
             self._cache = self._comp.outputs(self._ref_state, self._values["rotor_speed"])
+            self._loss = None
             self._lin = None
             self._dirty = False
         return self._cache
+
+    def _losses(self):
+        """(journal torque [N m], power loss [W]) at the journal and ring state of the force (:meth:`_out`)."""
+        self._out()
+        if self._loss is None:
+            self._loss = self._comp.losses(self._ref_state, self._values["rotor_speed"])
+        return self._loss
 
     def _ref(self):
         self._out()

@@ -6,7 +6,13 @@ communication point (force, stiffness, damping per bearing) and are applied line
 The rotor system is fixed when the FMU is built (:mod:`frbmodel.cosim.fmu_system`; ``frb build-fmus
 --rotor-file FILE``, default: the paper's Table 2 system): its discs name the outputs ``<disc>.x/y`` and the
 unbalance parameters, its bearings the inputs and outputs ``<bearing>_bearing.*``, and its node count sizes the
-state and the linearization matrices. The ``rotor_file`` parameter may select another system of the same
+state and the linearization matrices.
+
+The rotor speed follows ``speed_source`` (:data:`frbmodel.components.SPEED_SOURCES`): ``"ramp"`` the linear ramp
+of the parameters ``speed_start``, ``speed_end``, ``ramp_time``; ``"input"`` the input ``speed_in`` [rad/s] (its
+rate from the last two inputs); ``"torque"`` the spin equation J_p dΩ/dt = ``drive_torque`` + Σ
+``<bearing>_bearing.torque`` [N m] from ``speed_start`` (:func:`frbmodel.dynamics.spin_acceleration`, the same
+equation as the monolithic torque-driven run-up). The ``rotor_file`` parameter may select another system of the same
 structure at run time; a system of another structure is refused at initialization with the differences named.
 """
 import math
@@ -22,16 +28,17 @@ JOURNAL = (("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))
 class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     """FMI 2.0 co-simulation slave of the FE rotor built into the FMU (see the module description).
 
-    Parameters (all ``fixed``): ``rotor_file``, speed ramp, unbalance per disc, initial journal positions per
-    bearing, gravity, substep, ``linearization``, ``force_interpolation``. Inputs per bearing: force, end-of-step
-    force and path acceleration, reference journal state, interface Jacobian. Outputs: rotor speed, journal
-    states per bearing, disc centres per disc, optional linearization. FMI behaviour and statuses:
-    :class:`_fmu_common.FrbSlaveMixin`.
+    Parameters (all ``fixed``): ``rotor_file``, ``speed_source``, speed ramp, unbalance per disc, initial journal
+    positions per bearing, gravity, substep, ``linearization``, ``force_interpolation``. Inputs: ``speed_in``
+    [rad/s], ``drive_torque`` [N m]; per bearing force, end-of-step force and path acceleration, reference journal
+    state, interface Jacobian, film torque on the journal ``torque`` [N m]. Outputs: ``rotor_speed`` [rad/s],
+    ``rotor_angle`` [rad], journal states per bearing, disc centres per disc, optional linearization. FMI
+    behaviour and statuses: :class:`_fmu_common.FrbSlaveMixin`.
     """
 
     author = "frbmodel"
     description = ("Turbocharger rotor, FE model of the system built into the FMU (paper Table 2 by default), "
-                   "prescribed speed ramp.")
+                   "speed from a ramp, an input or a drive torque (speed_source).")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -49,15 +56,18 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def _parameters(self):
         """Parameters (all ``fixed``) with units and valid ranges; defaults: the built-in system and the default
         run-up of frbmodel.presets."""
-        from frbmodel.components import ROTOR_SUBSTEP
+        from frbmodel.components import ROTOR_SUBSTEP, SPEED_SOURCES
         from frbmodel.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
         from frbmodel.units import rpm_to_rad_s
 
         self._param("rotor_file", "", "frbmodel system description (.toml/.json, see frb system) whose rotor, bearing "
                     "nodes and gravity are used; it must have the structure this FMU was built for (node count, disc "
                     "names, bearing names); empty = the system built into the FMU", "str")
-        self._param("speed_start", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), "rotor speed at t = 0 [rad/s]", unit="rad/s",
-                    low=0.0)
+        self._param("speed_source", "ramp", "where the rotor speed comes from: ramp (speed_start -> speed_end in "
+                    "ramp_time) | input (the input speed_in) | torque (the spin is a state driven by the inputs "
+                    "drive_torque and <bearing>_bearing.torque, from speed_start)", "str", choices=SPEED_SOURCES)
+        self._param("speed_start", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), "rotor speed at t = 0 [rad/s] (ramp and torque "
+                    "modes)", unit="rad/s", low=0.0)
         self._param("speed_end", rpm_to_rad_s(RUNUP_SPEED_RPM[1]), "rotor speed after the ramp [rad/s]",
                     unit="rad/s", low=0.0)
         self._param("ramp_time", RUNUP_DURATION, "duration of the linear speed ramp [s]", unit="s", low=0.0)
@@ -75,7 +85,15 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                     "step (staggered masters that step the bearings first); false for Jacobi masters", "bool")
 
     def _inputs(self):
-        """Per bearing: force, end-of-step force and path acceleration, reference journal state, Jacobian."""
+        """Speed and drive torque; per bearing: force, end-of-step force and path acceleration, reference journal
+        state, Jacobian, film torque."""
+        from frbmodel.presets import RUNUP_SPEED_RPM
+        from frbmodel.units import rpm_to_rad_s
+
+        self._input("speed_in", "rotor speed [rad/s] (speed_source = input; its value at the end of initialization "
+                    "is the speed before the first step)", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), unit="rad/s")
+        self._input("drive_torque", "net external torque on the rotor about +z [N m], e.g. turbine minus compressor "
+                    "(speed_source = torque)", unit="N.m")
         self._keys = {}
         for b in self._bearings:
             self._input(f"{b}.force.x", "bearing force on the journal, x [N]", unit="N")
@@ -95,6 +113,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                 for k in range(2):
                     self._input(f"{b}.stiffness[{i + 1},{k + 1}]", "bearing interface stiffness [N/m]", unit="N/m")
                     self._input(f"{b}.damping[{i + 1},{k + 1}]", "bearing interface damping [N s/m]", unit="N.s/m")
+            self._input(f"{b}.torque", "film torque on the journal about +z [N m] (the bearing's journal_torque; "
+                        "brakes the rotor when speed_source = torque)", unit="N.m")
             self._keys[b] = ([f"{b}.force.x", f"{b}.force.y"],
                              [f"{b}.stiffness[{i},{k}]" for i in (1, 2) for k in (1, 2)],
                              [f"{b}.damping[{i},{k}]" for i in (1, 2) for k in (1, 2)],
@@ -105,6 +125,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def _outputs(self):
         """Speed, journal states per bearing, disc centres per disc, linearization sized by the node count."""
         self._output("rotor_speed", "rotor spin speed [rad/s]", lambda: self._comp.rotor_speed, unit="rad/s")
+        self._output("rotor_angle", "rotor rotation angle about +z since t = 0 [rad]", lambda: self._comp.phi,
+                     unit="rad")
         for bi, b in enumerate(self._bearings):
             for qi, (q, u) in enumerate(JOURNAL):
                 self._output(f"{b}.journal.{q}", f"journal {q} [{u}]", lambda bi=bi, qi=qi: self._comp.journal(bi)[qi],
@@ -163,7 +185,12 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                if v[f"{w}.unbalance"] > 0]
         speed = ramp_speed(rad_s_to_rpm(float(v["speed_start"])), rad_s_to_rpm(float(v["speed_end"])),
                            float(v["ramp_time"]))
-        comp = RotorComponent(tc, speed, unb, float(v["substep"]))
+        source = v["speed_source"]
+        w0 = float(v["speed_in"] if source == "input" else v["speed_start"])
+        if not math.isfinite(w0):
+            raise ValueError(f"speed_in = {w0!r} rad/s is invalid at the end of initialization with speed_source = "
+                             "'input' (it is the rotor speed before the first step): it must be finite")
+        comp = RotorComponent(tc, speed, unb, float(v["substep"]), speed_source=source, initial_speed=w0)
         journals = [(float(v[f"{b}.journal_x0"]), float(v[f"{b}.journal_y0"])) for b in self._bearings]
         comp.y[:comp.n] = tc.rotor.static_deflection([b.node for b in tc.bearings], journals, tc.gravity)
         self._node = {d.name: d.node for d in tc.rotor.discs}
@@ -180,7 +207,9 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             if not np.isfinite(np.concatenate(self._fend + self._acc)).all():
                 raise ValueError(f"bearing force_end / journal_accel inputs are not finite: {self._fend!r}, "
                                  f"{self._acc!r}")
-        self._comp.step(step_size, F, K, C, self._refs, path=path)
+        v = self._values
+        self._comp.step(step_size, F, K, C, self._refs, path=path, speed_in=v["speed_in"],
+                        drive_torque=v["drive_torque"], journal_torques=[v[f"{b}.torque"] for b in self._bearings])
 
     def _step_context(self):
         from frbmodel.units import rad_s_to_rpm
@@ -189,8 +218,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         return f"rotor speed {rad_s_to_rpm(w):.0f} rpm: " if math.isfinite(w) else ""
 
     def _component_state(self):
-        return {"y": [float(x) for x in self._comp.y], "phi": self._comp.phi, "t": self._comp.t}
+        """Rotor DoFs, angle, time and spin state (speed, rate, last speed input): RotorComponent.state()."""
+        return self._comp.state()
 
     def _set_component_state(self, st):
-        self._comp.y = np.array(st["y"], dtype=float)
-        self._comp.phi, self._comp.t = st["phi"], st["t"]
+        self._comp.set_state(st)

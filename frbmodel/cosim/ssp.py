@@ -1,5 +1,8 @@
 """SSP 1.0 system of the turbocharger: one rotor FMU, two bearing FMUs, their connections and parameter sets.
 
+The system is the rotor FMU's (default: the paper's Table 2 turbocharger): the bearing components are named after
+its bearings, and connect to the rotor's ``<bearing>_bearing.*`` variables.
+
 :func:`write_ssp` generates ``ssp/``; :func:`read_ssp` parses a folder or ``.ssp`` archive for the master.
 The SSD is flat (no system-level connectors) and carries the OSP fixed-step annotation, so libcosim runs it
 unchanged.
@@ -34,7 +37,6 @@ NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
       "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
-BEARINGS = (("turbine", "turbine_bearing"), ("compressor", "compressor_bearing"))
 #: the default variant of an SSP (SSP 1.0); further variants are the other .ssd files at the archive's root
 DEFAULT_SSD = "SystemStructure.ssd"
 PARAMETER_SET_TYPE = "application/x-ssp-parameter-set"
@@ -45,6 +47,7 @@ def _bearing_connections(inst, prefix):
     con.append(("rotor", "rotor_speed", inst, "rotor_speed"))
     con += [(inst, f"force.{q}", "rotor", f"{prefix}.force.{q}") for q in "xy"]
     con += [(inst, f"journal_ref.{q}", "rotor", f"{prefix}.journal_ref.{q}") for q in ("x", "y", "vx", "vy")]
+    con.append((inst, "journal_torque", "rotor", f"{prefix}.torque"))
     con += [(inst, f"force_end.{q}", "rotor", f"{prefix}.force_end.{q}") for q in "xy"]
     con += [(inst, f"journal_accel.{q}", "rotor", f"{prefix}.journal_accel.{q}") for q in "xy"]
     for m in ("stiffness", "damping"):
@@ -52,9 +55,39 @@ def _bearing_connections(inst, prefix):
     return con
 
 
-def connections():
+def _table2(system):
+    """``system``, or the paper's Table 2 turbocharger when it is None."""
+    if system is not None:
+        return system
+    from ..presets import turbocharger
+
+    return turbocharger()
+
+
+def bearing_components(system=None):
+    """``(component name, rotor variable prefix)`` per bearing of ``system``: ``(name, "<name>_bearing")``.
+
+    Parameters
+    ----------
+    system : Turbocharger, optional
+        The system the rotor FMU is built for (default: the paper's Table 2 turbocharger).
+
+    Returns
+    -------
+    list of tuple
+    """
+    return [(b.name, f"{b.name}_bearing") for b in _table2(system).bearings]
+
+
+def connections(system=None):
     """Connections of the system (per bearing: rotor -> bearing journal state and speed, bearing -> rotor force,
-    interface Jacobian and end-of-step values).
+    reference journal state, film torque on the journal, end-of-step values and interface Jacobian).
+
+    Parameters
+    ----------
+    system : Turbocharger, optional
+        The system the rotor FMU is built for (default: the paper's Table 2 turbocharger); its bearing names
+        name the bearing components.
 
     Returns
     -------
@@ -62,13 +95,15 @@ def connections():
         ``(start element, start connector, end element, end connector)``.
     """
     out = []
-    for inst, prefix in BEARINGS:
+    for inst, prefix in bearing_components(system):
         out += _bearing_connections(inst, prefix)
     return out
 
 
 def _unit(conn):
     """Unit of a connector, from its name."""
+    if conn.endswith("torque"):
+        return "N.m"
     if "journal_accel." in conn:
         return "m/s2"
     if "journal.v" in conn or "journal_ref.v" in conn:
@@ -87,11 +122,12 @@ def _unit(conn):
 
 
 UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "m/s2": dict(m=1, s=-2), "rad/s": dict(rad=1, s=-1),
-         "N": dict(kg=1, m=1, s=-2), "N/m": dict(kg=1, s=-2), "N.s/m": dict(kg=1, s=-1)}
+         "N": dict(kg=1, m=1, s=-2), "N/m": dict(kg=1, s=-2), "N.s/m": dict(kg=1, s=-1),
+         "N.m": dict(kg=1, m=2, s=-2)}
 
 
 def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_rpm=250e3, ramp_time=1.0,
-                   perturbation=0.05):
+                   perturbation=0.05, system=None):
     """Parameter sets of the turbocharger FMUs, one per outer clearance.
 
     Initial states come from the method-J equilibrium at the start speed (journals and rings offset in +x by
@@ -100,13 +136,17 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
     Parameters
     ----------
     clearances : sequence of float
-        Outer-film radial clearances [m]; set ``co<c in µm>`` each (``co36`` for 36e-6).
+        Outer-film radial clearances [m] of both bearings; set ``co<c in µm>`` each (``co36`` for 36e-6).
     start_rpm, end_rpm : float
         Speed ramp of the rotor FMU [rpm] (written in rad/s).
     ramp_time : float
         Ramp duration [s].
     perturbation : float
         Initial offset of journals and rings in +x as a fraction of the clearance [-].
+    system : Turbocharger, optional
+        The system the rotor FMU is built for (default: the paper's Table 2 turbocharger): its bearings name the
+        bearing components and give the films and rings, each set with its outer clearances set to one of
+        ``clearances``.
 
     Returns
     -------
@@ -116,9 +156,10 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
     """
     import frbmodel as frb
 
+    base = _table2(system)
     sets = {}
     for c in clearances:
-        tc = frb.turbocharger(outer_clearance=c)
+        tc = base.with_outer_clearance(c)
         eq = frb.equilibrium(tc, "J", start_rpm)
         name = f"co{c * 1e6:.0f}"
         comp = {"rotor": {"speed_start": ("Real", rpm_to_rad_s(start_rpm), "rad/s"),
@@ -127,7 +168,7 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
         from ..components import BearingComponent
 
         w0 = rpm_to_rad_s(start_rpm)
-        for (inst, prefix), b, e in zip(BEARINGS, tc.bearings, eq.bearings):
+        for (inst, prefix), b, e in zip(bearing_components(tc), tc.bearings, eq.bearings):
             jx = float(e.journal[0] + perturbation * (b.inner.clearance + b.outer.clearance))
             rx = float(e.ring[0] + perturbation * b.outer.clearance)
             comp["rotor"][f"{prefix}.journal_x0"] = ("Real", jx, "m")
@@ -137,6 +178,7 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
             bc = BearingComponent(b, tc.film_model)
             bc.ring[:] = [rx, e.ring[1], 0.0, 0.0, e.ring_speed]
             F, K, C, _ = bc.outputs([jx, e.journal[1], 0.0, 0.0], w0)
+            torque, _ = bc.losses([jx, e.journal[1], 0.0, 0.0], w0)
             for q, val in zip(("x", "y", "vx", "vy"), (jx, float(e.journal[1]), 0.0, 0.0)):
                 comp["rotor"][f"{prefix}.journal_ref.{q}"] = ("Real", val, "m" if len(q) == 1 else "m/s")
             comp["rotor"][f"{prefix}.force_end.x"] = ("Real", float(F[0]), "N")
@@ -147,6 +189,7 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
                 for k in range(2):
                     comp["rotor"][f"{prefix}.stiffness[{i + 1},{k + 1}]"] = ("Real", float(K[i, k]), "N/m")
                     comp["rotor"][f"{prefix}.damping[{i + 1},{k + 1}]"] = ("Real", float(C[i, k]), "N.s/m")
+            comp["rotor"][f"{prefix}.torque"] = ("Real", float(torque), "N.m")
             p = {"journal.x": ("Real", jx, "m"), "journal.y": ("Real", float(e.journal[1]), "m"),
                  "rotor_speed": ("Real", w0, "rad/s")}
             for fname, film in (("inner", b.inner), ("outer", b.outer)):
@@ -172,14 +215,14 @@ def _q(ns, tag):
     return f"{{{NS[ns]}}}{tag}"
 
 
-def _ssd_tree(bound_set, step_size, stop_time):
-    """SSD of the system whose components bind ``resources/<bound_set>_<component>.ssv``."""
+def _ssd_tree(bound_set, step_size, stop_time, tc=None):
+    """SSD of the system ``tc`` (default Table 2) whose components bind ``resources/<bound_set>_<component>.ssv``."""
     root = ET.Element(_q("ssd", "SystemStructureDescription"), {"version": "1.0", "name": "turbocharger"})
     system = ET.SubElement(root, _q("ssd", "System"), {"name": "turbocharger", "description":
                            "Turbocharger rotor on two floating-ring bearings (frbmodel), interface-Jacobian coupling"})
     elements = ET.SubElement(system, _q("ssd", "Elements"))
-    cons = connections()
-    comps = [("rotor", "TurbochargerRotor")] + [(inst, "FloatingRingBearing") for inst, _ in BEARINGS]
+    cons = connections(tc)
+    comps = [("rotor", "TurbochargerRotor")] + [(inst, "FloatingRingBearing") for inst, _ in bearing_components(tc)]
     for name, fmu in comps:
         el = ET.SubElement(elements, _q("ssd", "Component"), {"name": name, "source": f"resources/{fmu}.fmu",
                                                                "type": "application/x-fmu-sharedlibrary"})
@@ -219,7 +262,7 @@ def _ssv_tree(set_name, params):
     return ET.ElementTree(ps)
 
 
-def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, **kw):
+def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, system=None, **kw):
     """Write the SSP folder: the SSDs (one variant per parameter set) and the parameter sets.
 
     ``SystemStructure.ssd`` (the default variant) binds the first parameter set, ``<set>.ssd`` each further
@@ -234,6 +277,9 @@ def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, **kw):
         Macro step of the OSP fixed-step annotation [s].
     stop_time : float
         Stop time of the default experiment [s].
+    system : Turbocharger, optional
+        The system the rotor FMU is built for (default: the paper's Table 2 turbocharger): its bearings name the
+        bearing components and the rotor's ``<bearing>_bearing.*`` connectors (see :func:`parameter_sets`).
     **kw
         Passed to :func:`parameter_sets` (``clearances``, ``start_rpm``, ...).
 
@@ -246,11 +292,11 @@ def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, **kw):
     (out / "resources").mkdir(parents=True, exist_ok=True)
     for k, v in NS.items():
         ET.register_namespace(k, v)
-    sets = parameter_sets(**kw)
+    sets = parameter_sets(system=system, **kw)
     paths = []
     for i, set_name in enumerate(sets):
         paths.append(out / (DEFAULT_SSD if i == 0 else f"{set_name}.ssd"))
-        _ssd_tree(set_name, step_size, stop_time).write(paths[-1], xml_declaration=True, encoding="UTF-8")
+        _ssd_tree(set_name, step_size, stop_time, system).write(paths[-1], xml_declaration=True, encoding="UTF-8")
     for set_name, comps_p in sets.items():
         for comp, params in comps_p.items():
             paths.append(out / "resources" / f"{set_name}_{comp}.ssv")
@@ -559,4 +605,4 @@ def _read_folder(folder, source, require_fmus):
     return SSPSystem(folder, comps, cons, files, step, stop, sets, next(iter(sets)), source)
 
 
-__all__ = ["write_ssp", "read_ssp", "read_ssv", "connections", "parameter_sets", "SSPSystem"]
+__all__ = ["write_ssp", "read_ssp", "read_ssv", "connections", "bearing_components", "parameter_sets", "SSPSystem"]
