@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import FRBError, ParameterError, check_positive
+from .errors import FRBError, ParameterError, check_finite, check_positive
 from .interrupt import Terminated
 
 
@@ -469,9 +469,14 @@ def cmd_cosim(args):
 
     out = writable_dir(args.out)
     trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
+    overrides = {"rotor": {"speed_source": ("String", args.speed_source)}}
+    if args.speed_source == "torque":
+        overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque, "N m"))
+    elif args.drive_torque:
+        raise ParameterError("--drive-torque applies only with --speed-source torque")
     run, code = _stoppable("cosim", lambda: cosimulate(
         args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True, rollback=args.rollback,
-        trace=trace, unvalidated_step=args.unvalidated_step), out)
+        trace=trace, unvalidated_step=args.unvalidated_step, overrides=overrides), out)
     if "wall_time_s" in run.meta:
         wall = run.meta["wall_time_s"]
         print(f"wall time {wall:.1f} s ({run.meta['fmi_time_s'] / max(wall, 1e-9):.0%} in FMI calls), macro step "
@@ -483,7 +488,7 @@ def cmd_cosim(args):
         print(f"convergence check: the same co-simulation with half the macro step ({h:g} s)")
         check_convergence(run, lambda folder: cosimulate(
             args.ssp, args.parameter_set, args.stop_time, h, folder, progress=True, rollback=args.rollback,
-            unvalidated_step=args.unvalidated_step), out, "macro step / 2")
+            unvalidated_step=args.unvalidated_step, overrides=overrides), out, "macro step / 2")
     return code
 
 
@@ -668,6 +673,11 @@ def _add_cosim(sub):
     cs.add_argument("--stop-time", type=float, default=None, help="simulated time [s] (default: from the SSP)")
     cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 1e-5)")
     cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
+    cs.add_argument("--speed-source", choices=["ramp", "torque"], default="ramp",
+                    help="rotor speed: the parameter set's ramp, or a state driven by --drive-torque and braked by "
+                         "the bearings' film torques (starts at the set's speed_start)")
+    cs.add_argument("--drive-torque", type=float, default=0.0,
+                    help="net drive torque about +z [N m] for --speed-source torque")
     cs.add_argument("--check-convergence", action="store_true",
                     help="rerun with half the macro step and label the onsets that move by > 1 %% as not converged")
     cs.add_argument("--unvalidated-step", action="store_true",

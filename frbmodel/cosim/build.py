@@ -115,8 +115,9 @@ def build_fmus(out_dir="build", src=None, progress=print, rotor_file=None):
     src = find_source(src)  # before importing pythonfmu: a missing source is named even without the fmi extra
     from pythonfmu import FmuBuilder
 
-    from .fmu_system import write_rotor_system
+    from .fmu_system import as_system, write_rotor_system
     from .loader import install_loader
+    from .ssp import write_ssp
 
     out = Path(out_dir)
     (out / "fmus").mkdir(parents=True, exist_ok=True)
@@ -135,7 +136,12 @@ def build_fmus(out_dir="build", src=None, progress=print, rotor_file=None):
             paths.append(Path(fmu))
             progress(f"built {fmu} (bundles frbmodel {frbmodel.__version__})")
     ssp = out / "turbocharger.ssp"
-    _pack_ssp(ssp, src / "ssp", paths)
+    if rotor_file is None:
+        _pack_ssp(ssp, src / "ssp", paths)
+    else:  # the SSP of that system: its bearing components, connections and parameter sets
+        with tempfile.TemporaryDirectory(prefix="frb_ssp_src_") as tmp:
+            write_ssp(Path(tmp) / "ssp", system=as_system(rotor_file))
+            _pack_ssp(ssp, Path(tmp) / "ssp", paths)
     paths.append(ssp)
     progress(f"packed {ssp} (SSD variants, parameter sets, both FMUs)")
     return paths

@@ -24,7 +24,7 @@ RESOURCE = "rotor_system.json"
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
-def _as_system(system):
+def as_system(system):
     """A Turbocharger from a Turbocharger or a system file path."""
     from ..parameters import Turbocharger, load_system
 
@@ -74,7 +74,7 @@ def write_rotor_system(system, folder) -> Path:
     ParameterError
         The file cannot be read or holds an invalid system, or a name unusable in FMI variable names.
     """
-    tc = _as_system(system)
+    tc = as_system(system)
     check_names(tc)
     return tc.save(Path(folder) / RESOURCE)
 
