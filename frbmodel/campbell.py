@@ -31,6 +31,7 @@ from .modal import (
 )
 from .presets import PAPER_SPEED_RANGE_RPM
 from .progress import counter_bar
+from .results import Result, decode_attr, netcdf_attrs, variable
 from .units import rpm_to_rad_s
 from .whirl import FILM_NAMES, ONSET_SEARCH_RPM, bearing_whirl, film_names, film_onset_speeds
 
@@ -49,7 +50,7 @@ _PER_FILM = ("eccentricity", "whirl_hz", "whirl_margin")
 
 
 @dataclass
-class CampbellResult:
+class CampbellResult(Result):
     """Result of :func:`campbell` (and :func:`frbmodel.cosim.linearize.campbell_from_fmu`).
 
     Arrays are per speed (rows, ascending speed whatever the order of the grid given) and tracked mode (columns);
@@ -390,8 +391,123 @@ class CampbellResult:
             "units": {"speed": "rpm", "frequency": "Hz", "damping": "-", "eccentricity": "-", "clearance": "m"}})
         return meta
 
-    def save(self, out_dir, stem=None, fmax_hz=None, png=True, html=True):
-        """Write the tables, the metadata and the figures into ``out_dir``.
+    def to_xarray(self):
+        """The diagram as an :class:`xarray.Dataset` with dimensions speed × mode (and bearing, film).
+
+        Returns
+        -------
+        xarray.Dataset
+            Coordinates ``speed`` [rpm], ``mode`` (tracked mode index), ``bearing`` and ``film`` (names); per
+            speed and mode ``frequency`` [Hz], ``damping`` [-], ``damping_tol`` [-] (its round-off bound),
+            ``growth_rate`` Re λ [1/s] (λ = growth_rate + 2πi frequency), ``stability``, ``precession``, ``kind``
+            (strings, "" where the mode is absent) and ``ring_energy_fraction`` [-]; per speed and bearing
+            ``ring_speed_ratio`` [-]; per speed and film ``eccentricity`` [-], ``whirl_frequency`` [Hz] and
+            ``whirl_margin`` [-]; per film ``whirl_onset`` [rpm]. Every variable has ``units`` and
+            ``long_name``; the attributes are :meth:`metadata` (dicts and lists as JSON text).
+
+        Examples
+        --------
+        >>> import frbmodel as frb
+        >>> ds = frb.campbell(frb.turbocharger(), "A", [50e3, 100e3], whirl=False).to_xarray()
+        >>> dict(ds["frequency"].sizes), ds["frequency"].attrs["units"], ds.attrs["method"]
+        ({'speed': 2, 'mode': 16}, 'Hz', 'A')
+        """
+        import xarray as xr
+
+        sm, sb, sf = ("speed", "mode"), ("speed", "bearing"), ("speed", "film")
+        labels = {"stability": self.stability, "precession": self.precession, "kind": self.mode_kind}
+        data = {
+            "frequency": variable(sm, self.frequencies_hz, "Hz", "damped natural frequency Im(lambda)/(2 pi)"),
+            "damping": variable(sm, self.damping, "-", "modal damping D = -Re(lambda)/|lambda|"),
+            "damping_tol": variable(sm, self.damping_tol, "-", "round-off bound of the modal damping"),
+            "growth_rate": variable(sm, self.eigenvalues.real, "1/s", "growth rate Re(lambda)"),
+            **{k: variable(sm, v.astype(str), "", k) for k, v in labels.items()},
+            "ring_energy_fraction": variable(sm, self.ring_fraction, "-", "ring share of the modal kinetic energy"),
+            "ring_speed_ratio": variable(sb, self.ring_speed_ratio, "-", "ring speed / rotor speed"),
+            "eccentricity": variable(sf, self.eccentricity, "-", "film eccentricity ratio (method-J equilibrium)"),
+            "whirl_frequency": variable(sf, self.whirl_hz, "Hz", "film whirl frequency"),
+            "whirl_margin": variable(sf, self.whirl_margin, "-", "film whirl margin (> 0: past the whirl onset)"),
+            "whirl_onset": variable(("film",), self.whirl_onset_rpm, "rpm", "film whirl onset speed"),
+        }
+        coords = {"speed": variable(("speed",), self.speeds_rpm, "rpm", "rotor speed"),
+                  "mode": variable(("mode",), np.arange(self.n_modes), "", "tracked mode index"),
+                  "bearing": variable(("bearing",), list(self.bearing_names), "", "bearing"),
+                  "film": variable(("film",), list(self.film_labels), "", "film (bearing and inner/outer)")}
+        title = f"Campbell diagram, method {self.method}" + (f", {self.system_name}" if self.system_name else "")
+        return xr.Dataset(data, coords, attrs={"title": title, **netcdf_attrs(self.metadata())})
+
+    #: keys of :meth:`metadata` derived from the arrays (not kept in ``meta`` when a result is read back)
+    _DERIVED_META = ("method", "speeds_rpm", "whirl_onset_rpm", "max_unstable_modes", "max_neutral_modes",
+                     "stability_rule", "units", "frbmodel_version", "title")
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The result from a dataset of :meth:`to_xarray` (e.g. read from a ``.nc`` file written by :meth:`save`).
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        CampbellResult
+            Equal to the saved one (λ rebuilt as growth_rate + 2πi frequency, to round-off in its imaginary part).
+        """
+        meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
+        method = meta["method"]
+        arr = {k: ds[k].values for k in ds.data_vars}
+        lam = arr["growth_rate"] + 2j * np.pi * arr["frequency"]
+        meta = {k: v for k, v in meta.items() if k not in cls._DERIVED_META}
+        return cls(method, ds["speed"].values, arr["frequency"], arr["damping"], arr["precession"].astype(object),
+                   arr["kind"].astype(object), arr["ring_energy_fraction"], lam, arr["ring_speed_ratio"],
+                   arr["eccentricity"], arr["whirl_frequency"], arr["whirl_margin"], meta, arr["damping_tol"],
+                   arr["whirl_onset"])
+
+    @classmethod
+    def load(cls, path):
+        """Read a Campbell diagram saved by :meth:`save` (its ``.nc`` file).
+
+        Parameters
+        ----------
+        path : str or Path
+            The ``.nc`` file, or a folder holding exactly one ``campbell*.nc``.
+
+        Returns
+        -------
+        CampbellResult
+
+        Raises
+        ------
+        ParameterError
+            If there is no such file or the folder holds several.
+
+        Examples
+        --------
+        >>> import tempfile, frbmodel as frb
+        >>> cd = frb.campbell(frb.turbocharger(), "A", [50e3, 100e3], whirl=False)
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     _ = cd.save(tmp, png=False, html=False)
+        ...     back = CampbellResult.load(tmp)
+        >>> back.method, bool(np.array_equal(back.damping, cd.damping)), back.meta["system_name"] == cd.system_name
+        ('A', True, True)
+        """
+        import xarray as xr
+
+        from .results import NETCDF_ENGINE
+
+        path = Path(path)
+        if path.is_dir():
+            found = sorted(path.glob("campbell*.nc"))
+            if len(found) != 1:
+                raise ParameterError(f"{path}: {len(found)} Campbell result files (campbell*.nc) found "
+                                     f"{[p.name for p in found]}; name the .nc file")
+            path = found[0]
+        if not path.is_file():
+            raise ParameterError(f"{path}: no Campbell result there (file not found)")
+        return cls.from_xarray(xr.load_dataset(path, engine=NETCDF_ENGINE))
+
+    def save(self, out_dir, stem=None, fmax_hz=None, png=True, html=True, nc=True):
+        """Write the tables, the metadata, the dataset and the figures into ``out_dir``.
 
         Parameters
         ----------
@@ -403,12 +519,15 @@ class CampbellResult:
             Upper frequency limit of the figures [Hz].
         png, html : bool
             Write the matplotlib PNG / plotly HTML figure.
+        nc : bool
+            Write ``<stem>.nc``: :meth:`to_xarray` as netCDF-4 (read it with ``xarray.open_dataset`` or
+            :meth:`load`).
 
         Returns
         -------
         list of Path
             ``<stem>_modes.csv`` (:meth:`to_dataframe`), ``<stem>_films.csv``, ``<stem>_unstable.csv``,
-            ``<stem>.json`` (:meth:`metadata`) and the figures.
+            ``<stem>.json`` (:meth:`metadata`), ``<stem>.nc`` and the figures.
         """
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -422,6 +541,8 @@ class CampbellResult:
         p = out / f"{stem}.json"
         p.write_text(json.dumps(self.metadata(), indent=2, default=str))
         paths.append(p)
+        if nc:
+            paths.append(self.to_netcdf(out / f"{stem}.nc"))
         if png:
             import matplotlib.pyplot as plt
 

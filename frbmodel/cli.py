@@ -181,17 +181,39 @@ def _parse_unbalance(items):
     return out
 
 
+#: the named speed profiles of ``frb runup --profile`` (or a FILE.csv)
+PROFILES = ("ramp", "exponential", "constant", "up-down", "torque")
+#: figure titles of the runs by :attr:`frbmodel.runup.SpeedProfile.direction` (else "run-up")
+RUN_TITLES = {"down": "run-down", "up-down": "run-up and run-down", "mixed": "run with rising and falling speed"}
+
+
+def _profile_arg(text):
+    """``--profile``: a named profile or a path ending in .csv."""
+    if text in PROFILES or text.lower().endswith(".csv"):
+        return text
+    raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(PROFILES)}, or a FILE.csv)")
+
+
 def _profile(args):
     from .runup import SpeedProfile
 
+    if args.profile.lower().endswith(".csv"):
+        prof = SpeedProfile.from_csv(args.profile)
+        if args.duration is not None and args.duration > prof.t[-1]:
+            raise ParameterError(f"--duration = {args.duration!r} s is invalid with --profile {args.profile}: valid "
+                                 f"range up to the profile's last time, {prof.t[-1]:g} s")
+        return prof
+    duration = 1.0 if args.duration is None else args.duration
     a, b = _speed_pair(args.speeds)
     if args.profile == "ramp":
-        return SpeedProfile.ramp(a, b, args.duration)
+        return SpeedProfile.ramp(a, b, duration)
     if args.profile == "exponential":
-        return SpeedProfile.exponential(a, b, args.duration)
+        return SpeedProfile.exponential(a, b, duration)
+    if args.profile == "up-down":
+        return SpeedProfile.up_down(a, b, check_positive("--duration", duration, "s") / 2)
     if args.profile == "torque":
-        return SpeedProfile.torque(args.drive_torque, a, args.duration)
-    return SpeedProfile.constant(a, args.duration)
+        return SpeedProfile.torque(args.drive_torque, a, duration)
+    return SpeedProfile.constant(a, duration)
 
 
 def _speed_pair(text):
@@ -247,13 +269,14 @@ def cmd_runup(args):
     tc = load_from_args(args)
     prof = _profile(args)
     out = writable_dir(args.out)
-    print(f"{'run-down' if prof.direction == 'down' else 'run-up'}: {prof.description}, film model {tc.film_model}, "
-          f"results stream to {out.resolve()}")
+    kind = RUN_TITLES.get(prof.direction, "run-up")
+    duration = float(prof.t[-1]) if args.duration is None else args.duration
+    print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
     rtol = check_positive("--rtol", args.rtol)
     atol = check_positive("--atol", args.atol, "m")
 
     def run_at(tighten, folder):
-        return runup(tc, profile=prof, duration=args.duration, unbalance=_parse_unbalance(args.unbalance),
+        return runup(tc, profile=prof, duration=duration, unbalance=_parse_unbalance(args.unbalance),
                      output_rate_hz=args.rate, rtol=rtol * tighten, atol=atol * tighten, out_dir=folder,
                      progress=True)
 
@@ -261,12 +284,38 @@ def cmd_runup(args):
     if "wall_time_s" in run.meta:
         print(f"wall time {run.meta['wall_time_s']:.1f} s, {run.meta['rhs_evaluations']} RHS and "
               f"{run.meta['jacobian_evaluations']} Jacobian evaluations, {run.time.size} samples")
-    _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear",
-                title="run-down" if prof.direction == "down" else "run-up")
+    if prof.direction == "up-down" and not args.no_figure:
+        write_up_down_halves(run, tc, out)
+    _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear", title=kind)
     if args.check_convergence and code == 0:
         print("convergence check: the same run with rtol and atol tightened tenfold")
         check_convergence(run, lambda folder: run_at(0.1, folder), out, "tolerances x0.1")
     return code
+
+
+def write_up_down_halves(run, system, out):
+    """Composite figures of each half of a run-up and run-down, in ``out/run-up`` and ``out/run-down``: the
+    spectrogram of the whole run puts the segments of both halves side by side along the speed axis, the halves
+    show each direction on its own (the hysteresis between them). The run-up ends where the top speed is first
+    reached, the run-down starts where it is last held.
+
+    Parameters
+    ----------
+    run : RunupResult
+        A run whose speed rises to its top and then falls.
+    system : Turbocharger
+        The run's system.
+    out : Path
+        Output folder of the run.
+    """
+    from .recorder import RunupResult
+
+    df, top = run.to_dataframe(), np.flatnonzero(run.speed_rpm == run.speed_rpm.max())
+    for name, rows in (("run-up", slice(0, top[0] + 1)), ("run-down", slice(top[-1], None))):
+        half = RunupResult.from_dataframe(df.iloc[rows], run.meta)
+        if half.time.size >= 64:
+            print(f"{name} half:")
+            write_composites(half, system, writable_dir(out / name), title=f"{name} (of a run-up and run-down)")
 
 
 def check_convergence(run, rerun, out, what):
@@ -328,8 +377,9 @@ def _stoppable(command, fn, out):
 
 
 def _finish_run(args, run, system, out, **figure_kw):
-    """Composite figures (unless --no-figure or too few samples; ``system()`` gives the Turbocharger) and the
-    closing line naming the output folder."""
+    """``runup.nc`` (the run as netCDF, :meth:`RunupResult.to_xarray`), composite figures (unless --no-figure or
+    too few samples; ``system()`` gives the Turbocharger) and the closing line naming the output folder."""
+    print(f"wrote {run.to_netcdf(out / 'runup.nc').resolve()} (netCDF: xarray.open_dataset)")
     if not args.no_figure and run.time.size >= 64:
         write_composites(run, system(), out, **figure_kw)
     print(f"results in {out.resolve()}")
@@ -400,8 +450,10 @@ def cmd_plot(args):
     system = Turbocharger.from_dict(run.meta["system"]) if "system" in run.meta else None
     if system is None:
         raise ParameterError(f"{out / 'runup.json'}: no system recorded, cannot draw the Campbell overlay")
-    down = run.speed_rpm[-1] < run.speed_rpm[0]
-    title = f"{'run-down' if down else 'run-up'} ({run.status})"
+    from .runup import SpeedProfile
+
+    recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
+    title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
     write_composites(run, system, out, xscale=args.xscale, title=title)
     print(f"results in {out.resolve()}")
 
@@ -616,11 +668,14 @@ def _add_runup(sub):
 
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
-    r.add_argument("--speeds", default="20000:250000", help="START:END [rpm]")
-    r.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
-    r.add_argument("--profile", choices=["ramp", "exponential", "constant", "torque"], default="ramp",
-                   help="speed profile; 'torque': the spin is a state driven by --drive-torque and braked by the films "
-                        "(starts at START of --speeds)")
+    r.add_argument("--speeds", default="20000:250000", help="START:END [rpm] (up-down: START:TOP)")
+    r.add_argument("--duration", type=float, default=None,
+                   help="simulated time [s] (default: 1; with a CSV profile its last time)")
+    r.add_argument("--profile", type=_profile_arg, default="ramp", metavar="{" + ",".join(PROFILES) + "}|FILE.csv",
+                   help="speed profile; 'up-down': START -> TOP -> START, half the duration each way; 'torque': the "
+                        "spin is a state driven by --drive-torque and braked by the films (starts at START of "
+                        "--speeds); FILE.csv: header 'time [s], speed [rpm]', one row per point from t = 0, the speed "
+                        "linear in between (--speeds unused)")
     r.add_argument("--drive-torque", type=float, default=0.0, help="net drive torque about +z [N m] (--profile torque)")
     r.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
                    help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable)")

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ParameterError
+from .results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
 from .units import RPM
 
 FILMS = ("inner", "outer")
@@ -347,7 +348,7 @@ class Recorder:
 
 
 @dataclass
-class RunupResult:
+class RunupResult(Result):
     """Sampled result of a run-up or co-simulation (SI units; speeds also in rpm).
 
     Usually made by :func:`frbmodel.runup`, the co-simulation or :meth:`load`; see :meth:`from_rows` to build one
@@ -451,6 +452,122 @@ class RunupResult:
             cols += [self.journal_torque.get(b, nan), self.power_loss.get(b, nan)]
         return np.column_stack(cols)
 
+    def to_xarray(self):
+        """The result as an :class:`xarray.Dataset` along ``time``, bearings, discs, films and axes as dimensions.
+
+        Returns
+        -------
+        xarray.Dataset
+            Coordinates ``time`` [s], ``bearing``, ``disc``, ``axis`` ("x", "y") and ``film`` ("inner",
+            "outer"); variables ``speed`` (time) [rpm], ``ring_speed`` (time, bearing) [rad/s],
+            ``ring_speed_ratio`` (time, bearing) [-], ``journal`` and ``ring`` (time, bearing, axis) [m],
+            ``eccentricity`` (time, bearing, film) [-], ``displacement`` (time, disc, axis) [m], ``journal_torque``
+            (time, bearing) [N m] and ``power_loss`` (time, bearing) [W], each with ``units`` and ``long_name``;
+            the attributes are :attr:`meta` (status, message, system, ...; dicts and lists as JSON text).
+
+        Examples
+        --------
+        >>> schema = RunupSchema(("front", "rear"), ("wheel",))
+        >>> rows = [schema.row(t, 6e4, [500.0, 400.0], [[0, 0], [1e-6, 0]], [[0, 0], [0, 0]], [[0.1, 0.2], [0.3, 0.4]],
+        ...                    [[2e-6, 0]]) for t in (0.0, 0.5)]
+        >>> ds = RunupResult.from_rows(schema, rows, {"status": "finished"}).to_xarray()
+        >>> dict(ds["eccentricity"].sizes), ds["eccentricity"].attrs["units"], ds.attrs["status"]
+        ({'time': 2, 'bearing': 2, 'film': 2}, '-', 'finished')
+        >>> float(ds["eccentricity"].sel(bearing="rear", film="outer")[0]), float(ds["journal"].sel(bearing="rear",
+        ...       axis="x")[1])
+        (0.4, 1e-06)
+        """
+        import xarray as xr
+
+        n, names = self.time.size, self.bearing_names
+        nan = np.full(n, np.nan)
+
+        def stack(d, keys, shape):
+            return np.stack([d[k] for k in keys], axis=1) if keys else np.empty((n, 0) + shape)
+
+        tb, tba = ("time", "bearing"), ("time", "bearing", "axis")
+        data = {
+            "speed": variable(("time",), self.speed_rpm, "rpm", "rotor speed"),
+            "ring_speed": variable(tb, self.ring_speed, "rad/s", "ring spin speed"),
+            "ring_speed_ratio": variable(tb, self.ring_speed_ratio, "-", "ring speed / rotor speed"),
+            "journal": variable(tba, stack(self.journal, names, (2,)), "m", "journal centre relative to the housing"),
+            "ring": variable(tba, stack(self.ring, names, (2,)), "m", "ring centre relative to the housing"),
+            "eccentricity": variable(("time", "bearing", "film"), self.eccentricity.reshape(n, len(names), 2), "-",
+                                     "film eccentricity ratio"),
+            "displacement": variable(("time", "disc", "axis"), stack(self.displacement, tuple(self.displacement),
+                                                                     (2,)), "m", "disc displacement"),
+            "journal_torque": variable(tb, np.column_stack([self.journal_torque.get(b, nan) for b in names]), "N m",
+                                       "film torque on the journal about +z"),
+            "power_loss": variable(tb, np.column_stack([self.power_loss.get(b, nan) for b in names]), "W",
+                                   "friction power of both films of the bearing"),
+        }
+        coords = {"time": variable(("time",), self.time, "s", "time"),
+                  "bearing": variable(("bearing",), list(names), "", "bearing"),
+                  "disc": variable(("disc",), list(self.displacement), "", "rotor disc"),
+                  "axis": variable(("axis",), ["x", "y"], "", "housing-fixed axis (y up)"),
+                  "film": variable(("film",), list(FILMS), "", "film of the bearing")}
+        meta = {"title": "run-up result (frbmodel)", **self.meta, "status": self.status, "message": self.message}
+        return xr.Dataset(data, coords, attrs=netcdf_attrs(meta))
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The result from a dataset of :meth:`to_xarray` (e.g. a ``runup.nc`` file).
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        RunupResult
+        """
+        meta = {k: decode_attr(v) for k, v in ds.attrs.items() if k != "title"}
+        names = [str(b) for b in ds["bearing"].values]
+
+        def per(name, key):
+            return {str(k): ds[name].values[:, i] for i, k in enumerate(ds[key].values)}
+
+        return cls(ds["time"].values, ds["speed"].values, ds["ring_speed"].values, per("journal", "bearing"),
+                   per("ring", "bearing"), ds["eccentricity"].values.reshape(ds.sizes["time"], 2 * len(names)),
+                   per("displacement", "disc"), meta.get("status", "finished"), meta.get("message", ""), meta,
+                   per("journal_torque", "bearing"), per("power_loss", "bearing"))
+
+    def save(self, out_dir, nc=True):
+        """Write ``runup.csv`` (:meth:`to_dataframe`), ``runup.json`` (:attr:`meta` with status and message) and
+        ``runup.nc`` (:meth:`to_xarray`) into ``out_dir`` — the files a streamed run writes, for a run kept in
+        memory.
+
+        Parameters
+        ----------
+        out_dir : str or Path
+            Folder (created if missing).
+        nc : bool
+            Also write ``runup.nc``.
+
+        Returns
+        -------
+        list of Path
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> res = RunupResult.from_rows(RunupSchema(("b",), ()), [[0.0, 1e3, 50.0, 0.5, 0, 0, 0, 0, 0.1, 0.2, 0, 0]])
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     names = [p.name for p in res.save(tmp)]
+        ...     back = RunupResult.load(Path(tmp) / "runup.nc")
+        >>> names, back.eccentricity.tolist()
+        (['runup.csv', 'runup.json', 'runup.nc'], [[0.1, 0.2]])
+        """
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        csv, meta_p = out / "runup.csv", out / "runup.json"
+        with open(csv, "w") as fh:
+            fh.write(",".join(self.schema.columns) + "\n")
+            np.savetxt(fh, self._rows(), delimiter=",", fmt="%.10g")
+        meta_p.write_text(json.dumps({**self.meta, "status": self.status, "message": self.message}, indent=2,
+                                     default=str))
+        return [csv, meta_p] + ([self.to_netcdf(out / "runup.nc")] if nc else [])
+
     @classmethod
     def load(cls, path):
         """Read a result written by :func:`frbmodel.runup` or :func:`frbmodel.cosim.cosimulate`.
@@ -458,7 +575,8 @@ class RunupResult:
         Parameters
         ----------
         path : str or Path
-            A folder with ``runup.csv`` (and ``runup.json``), or the CSV itself.
+            A folder with ``runup.csv`` (and ``runup.json``), the CSV itself, or a ``runup.nc``
+            (:meth:`to_xarray`).
 
         Returns
         -------
@@ -483,6 +601,10 @@ class RunupResult:
         import pandas as pd
 
         path = Path(path)
+        if path.suffix == ".nc" and path.is_file():
+            import xarray as xr
+
+            return cls.from_xarray(xr.load_dataset(path, engine=NETCDF_ENGINE))
         csv = path / "runup.csv" if path.is_dir() else path
         if not csv.is_file():
             raise ParameterError(f"{csv}: no run-up result there (runup.csv not found)")

@@ -15,6 +15,7 @@ import math
 import sys
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -33,8 +34,9 @@ from .units import RPM
 #: numerical guard: film forces of trial states beyond this ε are evaluated at this ε (physics.md §2.7)
 EPS_CAP = 0.999
 
-__all__ = ["DEFAULT_ATOL_M", "DEFAULT_RTOL", "MAX_SPEED_RPM", "Problem", "RunupResult", "RunupStopped", "SpeedProfile",
-           "Unbalance", "atol_vector", "build_problem", "check_speed", "initial_state", "runup", "static_rotor_state"]
+__all__ = ["DEFAULT_ATOL_M", "DEFAULT_RTOL", "MAX_PROFILE_POINTS", "MAX_SPEED_RPM", "PROFILE_HEADER", "Problem",
+           "RunupResult", "RunupStopped", "SEGMENT_STEPS", "SpeedProfile", "Unbalance", "atol_vector", "build_problem",
+           "check_speed", "initial_state", "runup", "static_rotor_state"]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -81,12 +83,139 @@ def check_speed(name, speed_rpm):
     return v
 
 
+#: grid steps on the shortest segment of a piecewise-linear speed profile with kinks: Ω̇ (piecewise constant) is
+#: tabulated at the grid points and interpolated linearly, so at a kink it passes from one slope to the next over
+#: one step either side, <= 2 % of any segment
+SEGMENT_STEPS = 100
+#: most grid points of a tabulated speed profile (three float arrays of 16 MB each)
+MAX_PROFILE_POINTS = 2_000_001
+#: a knot lies on a uniform grid when it is within this fraction of a grid step of a grid point
+_ON_GRID_TOL = 1e-6
+#: slopes of neighbouring segments that differ by less than this (relative to the largest) are no kink (round-off)
+_KINK_TOL = 1e-9
+
+
+def _knot_cells(t):
+    """Number of cells N of the coarsest uniform grid on [0, t[-1]] with every knot ``t`` on a grid point (within
+    _ON_GRID_TOL of a step), or None (none with fewer than MAX_PROFILE_POINTS points)."""
+    from fractions import Fraction
+
+    x = t / t[-1]
+
+    def fits(n):
+        return bool(np.all(np.abs(x * n - np.round(x * n)) <= _ON_GRID_TOL))
+
+    n = max(1, int(round(t[-1] / float(np.min(np.diff(t))))))
+    if n < MAX_PROFILE_POINTS and fits(n):
+        return n
+    n = 1
+    for v in x[1:-1]:  # least common multiple of the knots' denominators as fractions of the duration
+        n = math.lcm(n, Fraction(float(v)).limit_denominator(MAX_PROFILE_POINTS).denominator)
+        if n >= MAX_PROFILE_POINTS:
+            return None
+    return n if fits(n) else None
+
+
+def _tabulate(t, rpm):
+    """Uniform grid (t_grid [s], Ω [rad/s], Ω̇ [rad/s²]) of the piecewise-linear speed through the knots (t [s],
+    rpm), and a note on the grid. Knots on the grid are exact; Ω̇ is the slope of Ω in each cell, the mean of the
+    two slopes at a kink."""
+    w = rpm * RPM
+    slopes = np.diff(w) / np.diff(t)
+    kinks = bool(np.any(np.abs(np.diff(slopes)) > _KINK_TOL * max(float(np.max(np.abs(slopes))), 1e-300)))
+    exact = _knot_cells(t)
+    base = exact or int(math.ceil(t[-1] / float(np.min(np.diff(t))) - 1e-9))
+    if base >= MAX_PROFILE_POINTS:
+        raise ParameterError(f"speed profile: time steps down to {float(np.min(np.diff(t))):g} s over {t[-1]:g} s "
+                             f"need {base + 1} grid points; valid: at most {MAX_PROFILE_POINTS} (resample it coarser)")
+    refine = 1
+    if kinks:  # at least SEGMENT_STEPS steps on the shortest segment (within the size limit)
+        cells_shortest = float(np.min(np.diff(t))) * base / t[-1]
+        refine = max(1, min(int(math.ceil(SEGMENT_STEPS / cells_shortest - 1e-9)),
+                            (MAX_PROFILE_POINTS - 1) // base))
+    n = base * refine
+    tg = np.linspace(0.0, t[-1], n + 1)
+    if exact:
+        idx = np.round(t / t[-1] * exact).astype(np.int64) * refine
+        wg = np.interp(np.arange(n + 1), idx, w)
+        cell = slopes[np.searchsorted(idx, np.arange(n), side="right") - 1]
+        note = "every point of the table on the grid"
+    else:
+        wg = np.interp(tg, t, w)
+        cell = np.diff(wg) / np.diff(tg)
+        dev = float(np.max(np.abs(np.interp(t, tg, wg) - w))) / RPM
+        note = f"points off the grid: speed within {dev:.3g} rpm of the table"
+    wd = np.empty(n + 1)
+    wd[0], wd[-1] = cell[0], cell[-1]
+    wd[1:-1] = np.where(cell[:-1] == cell[1:], cell[1:], 0.5 * (cell[:-1] + cell[1:]))
+    return tg, wg, wd, f"uniform grid of {n + 1} points, step {t[-1] / n:.6g} s, {note}"
+
+
+def _check_knots(t, rpm, where):
+    """Check a speed table: at least 2 points, t[0] = 0, times increasing, speeds in range; ``where(i)`` names
+    point i in the messages."""
+    if t.size < 2:
+        raise ParameterError(f"{where(None)}: {t.size} point(s); a speed profile needs at least 2 (time [s], "
+                             "speed [rpm])")
+    t, rpm = [float(x) for x in t], [float(x) for x in rpm]
+    for i in range(len(t)):
+        if not math.isfinite(t[i]):
+            raise ParameterError(f"{where(i)}: time = {t[i]!r} s is invalid: it must be finite")
+        if i == 0 and t[0] != 0.0:
+            raise ParameterError(f"{where(0)}: time = {t[0]!r} s is invalid: the profile must start at t = 0 s")
+        if i > 0 and not t[i] > t[i - 1]:
+            raise ParameterError(f"{where(i)}: time = {t[i]!r} s is invalid: valid range > {t[i - 1]!r} s (the "
+                                 "previous time: times must increase)")
+        check_speed(f"{where(i)}: speed", rpm[i])
+
+
+#: the header a speed-profile CSV must have (case and spaces aside)
+PROFILE_HEADER = ("time [s]", "speed [rpm]")
+
+
+def _read_profile_csv(path):
+    """Times [s], speeds [rpm] and the line number of each row of a speed-profile CSV (header checked)."""
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = getattr(exc, "strerror", None) or exc
+        raise ParameterError(f"{path}: cannot read the speed profile: {reason}") from None
+    want = ", ".join(PROFILE_HEADER)
+    t, rpm, lines, header = [], [], [], None
+    for num, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        fields = [f.strip() for f in line.split(",")]
+        if header is None:
+            header = tuple(" ".join(f.lower().split()) for f in fields)
+            if header != PROFILE_HEADER:
+                raise ParameterError(f"{path}, line {num}: header {line!r} is invalid: expected {want!r} (the units "
+                                     "in brackets: seconds and rpm)")
+            continue
+        if len(fields) != 2:
+            raise ParameterError(f"{path}, line {num}: {line!r} has {len(fields)} values; expected 2 ({want}), "
+                                 "separated by a comma")
+        for name, f in zip(PROFILE_HEADER, fields):
+            try:
+                float(f)
+            except ValueError:
+                raise ParameterError(f"{path}, line {num}: {name} = {f!r} is not a number") from None
+        t.append(float(fields[0]))
+        rpm.append(float(fields[1]))
+        lines.append(num)
+    if header is None:
+        raise ParameterError(f"{path}: empty; expected the header {want!r} and at least 2 rows")
+    return np.array(t), np.array(rpm), lines
+
+
 @dataclass
 class SpeedProfile:
     """Rotor speed vs time, tabulated (linear interpolation inside the RHS), or a torque-driven rotor.
 
-    Build with :meth:`ramp`, :meth:`constant`, :meth:`exponential` or :meth:`from_function`. A profile whose end
-    speed is below its start speed is a run-down (:attr:`direction` ``"down"``). :meth:`torque` makes the rotor
+    Build with :meth:`ramp`, :meth:`constant`, :meth:`exponential`, :meth:`from_function`, :meth:`from_csv`,
+    :meth:`piecewise_linear` or :meth:`up_down`. A profile whose speed falls is a run-down (:attr:`direction`
+    ``"down"``); one that rises and then falls is ``"up-down"``. :meth:`torque` makes the rotor
     speed a state instead: J_p Ω̇ = T_drive(t) + Σ T_J (physics.md §7.3); then ``omega`` holds only the start speed
     and ``drive_torque`` the drive torque [N m] on the grid ``t``.
 
@@ -125,12 +254,25 @@ class SpeedProfile:
 
     @property
     def direction(self):
-        """``"up"``, ``"down"`` or ``"constant"``: the sign of the end speed minus the start speed (torque-driven:
-        ``"up"`` if the mean drive torque is positive, else ``"down"``: the films only brake)."""
+        """``"up"`` or ``"down"`` (the speed never falls / never rises, and changes), ``"constant"``, ``"up-down"``
+        (it rises to its top speed and then falls: a run-up followed by a run-down, :meth:`up_down`) or
+        ``"mixed"`` (any other course). Torque-driven: ``"up"`` if the mean drive torque is positive, else
+        ``"down"`` (the films only brake).
+
+        Examples
+        --------
+        >>> [SpeedProfile.piecewise_linear([0, 1, 2], s).direction for s in ([1e3, 2e3, 2e3], [2e3, 1e3, 2e3])]
+        ['up', 'mixed']
+        """
         if self.torque_driven:
             return "up" if float(np.mean(self.drive_torque)) > 0 else "down"
-        d = float(self.omega[-1] - self.omega[0])
-        return "up" if d > 0 else "down" if d < 0 else "constant"
+        d = np.diff(self.omega)
+        if not np.any(d):
+            return "constant"
+        if np.all(d >= 0) or np.all(d <= 0):
+            return "up" if d.sum() > 0 else "down"
+        top = int(np.argmax(self.omega))
+        return "up-down" if np.all(d[:top] >= 0) and np.all(d[top:] <= 0) else "mixed"
 
     @staticmethod
     def _checked(start_rpm, end_rpm, duration):
@@ -305,6 +447,154 @@ class SpeedProfile:
                                  "finite")
         return cls(t, np.full(t.size, start_rpm * RPM), np.zeros(t.size),
                    f"torque-driven from {start_rpm:.0f} rpm, drive torque {text}, {duration:g} s", tq)
+
+    @classmethod
+    def piecewise_linear(cls, t_s, speed_rpm, description=None):
+        """Speed linear between the points of a table (t [s], speed [rpm]), tabulated on the uniform grid the
+        right-hand side needs (:func:`frbmodel.dynamics.interp_uniform`).
+
+        The grid is the coarsest uniform one that holds every point of the table (e.g. the table's own step if it
+        is uniform), so the speed is exact there and in between; a table whose points fit no uniform grid of at
+        most :data:`MAX_PROFILE_POINTS` points is sampled with a step at most its smallest, and the description
+        says how far the speed then departs from the table. Ω̇ is piecewise constant (the slope of each segment);
+        where the slope changes (a kink) the grid is refined to at least :data:`SEGMENT_STEPS` steps on the
+        shortest segment, because the tabulated Ω̇ is interpolated linearly: it takes the mean of both slopes at
+        the kink and passes from one to the other within one step either side (its integral over the run is
+        still the speed change). A table of two points is the same profile as :meth:`ramp`, bit for bit.
+
+        Parameters
+        ----------
+        t_s : array_like (n,)
+            Times [s], starting at 0 and increasing, n >= 2.
+        speed_rpm : array_like (n,)
+            Rotor speed at those times [rpm], each in 0 < speed <= :data:`MAX_SPEED_RPM`.
+        description : str, optional
+            Description for the result's metadata (default: the table's extent and the grid).
+
+        Returns
+        -------
+        SpeedProfile
+
+        Raises
+        ------
+        ParameterError
+            Fewer than 2 points, a first time other than 0, times not increasing, a speed out of range (naming
+            the point), or a table that needs more than :data:`MAX_PROFILE_POINTS` grid points.
+
+        Examples
+        --------
+        >>> p = SpeedProfile.piecewise_linear([0.0, 0.2, 0.5], [20e3, 60e3, 60e3])
+        >>> p.t.size, round(float(p.t[1] - p.t[0]), 9), p.direction  # 0.1 s holds both points: 100 steps on 0.2 s
+        (251, 0.002, 'up')
+        >>> round(float(p(0.1)) / RPM), [round(float(p.omega_dot[k]) / RPM) for k in (50, 100, 150)]  # [rpm/s]
+        (40000, [200000, 100000, 0])
+        """
+        t = np.asarray(t_s, dtype=float).ravel()
+        rpm = np.asarray(speed_rpm, dtype=float).ravel()
+        if t.size != rpm.size:
+            raise ParameterError(f"speed profile: {t.size} times and {rpm.size} speeds; they must pair up")
+        _check_knots(t, rpm, lambda i: "speed profile" + ("" if i is None else f", point {i}"))
+        tg, wg, wd, grid = _tabulate(t, rpm)
+        text = description or (f"piecewise-linear profile of {t.size} points, {rpm.min():.0f} ... {rpm.max():.0f} "
+                               f"rpm in {t[-1]:g} s")
+        return cls(tg, wg, wd, f"{text}; {grid}")
+
+    @classmethod
+    def from_csv(cls, path):
+        """Speed profile from a CSV table with the header ``time [s], speed [rpm]`` (the speed linear in between,
+        see :meth:`piecewise_linear` for the grid and Ω̇).
+
+        Blank lines and lines starting with ``#`` are skipped; the separator is a comma.
+
+        Parameters
+        ----------
+        path : str or Path
+            The CSV file: a header line ``time [s], speed [rpm]`` (units in brackets), then one ``time, speed``
+            row per point, the first at time 0, times increasing, speeds in 0 < speed <= :data:`MAX_SPEED_RPM`.
+
+        Returns
+        -------
+        SpeedProfile
+
+        Raises
+        ------
+        ParameterError
+            Naming the file, the line, the value and the valid range: a missing or different header, a row that
+            is not two numbers, a first time other than 0, a time not above the previous one, a speed out of
+            range, fewer than 2 rows; or an unreadable file.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     path = Path(tmp) / "ramp.csv"
+        ...     _ = path.write_text("time [s], speed [rpm]\\n0, 20000\\n1.0, 60000\\n")
+        ...     p = SpeedProfile.from_csv(path)
+        >>> q = SpeedProfile.ramp(20e3, 60e3, 1.0)
+        >>> all(np.array_equal(a, b) for a, b in ((p.t, q.t), (p.omega, q.omega), (p.omega_dot, q.omega_dot)))
+        True
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     path = Path(tmp) / "bad.csv"
+        ...     _ = path.write_text("time [s], speed [rpm]\\n0, 20000\\n0.5, -3\\n")
+        ...     try:
+        ...         SpeedProfile.from_csv(path)
+        ...     except ParameterError as exc:
+        ...         print(str(exc).replace(str(path), "bad.csv"))
+        bad.csv, line 3: speed = -3.0 rpm is invalid: valid range is finite and > 0 rpm
+        """
+        path = Path(path)
+        t, rpm, lines = _read_profile_csv(path)
+        _check_knots(t, rpm, lambda i: f"{path}" + ("" if i is None else f", line {lines[i]}"))
+        tg, wg, wd, grid = _tabulate(t, rpm)
+        return cls(tg, wg, wd, f"speed profile {path.name} ({t.size} rows, {rpm.min():.0f} ... {rpm.max():.0f} rpm "
+                               f"in {t[-1]:g} s); {grid}")
+
+    @classmethod
+    def up_down(cls, start_rpm, top_rpm, ramp_s, hold_s=0.0, end_rpm=None):
+        """A run-up followed by a run-down in one run (to see hysteresis): linear from ``start_rpm`` to
+        ``top_rpm`` in ``ramp_s``, held for ``hold_s``, then linear down to ``end_rpm`` in ``ramp_s``
+        (:attr:`direction` ``"up-down"``; tabulated by :meth:`piecewise_linear`).
+
+        Parameters
+        ----------
+        start_rpm, top_rpm : float
+            Start and top rotor speed [rpm], top > start.
+        ramp_s : float
+            Duration of each ramp [s], > 0.
+        hold_s : float
+            Time at the top speed [s], >= 0.
+        end_rpm : float, optional
+            End speed [rpm], below the top (default: ``start_rpm``).
+
+        Returns
+        -------
+        SpeedProfile
+            Duration 2 ``ramp_s`` + ``hold_s``.
+
+        Raises
+        ------
+        ParameterError
+            A speed or time out of range, or a top speed not above the start and end speeds.
+
+        Examples
+        --------
+        >>> p = SpeedProfile.up_down(20e3, 60e3, 0.5)
+        >>> p.direction, float(p.t[-1]), [round(float(p(t)) / RPM) for t in (0.0, 0.25, 0.5, 0.75, 1.0)]
+        ('up-down', 1.0, [20000, 40000, 60000, 40000, 20000])
+        """
+        start = check_speed("start speed", start_rpm)
+        top = check_speed("top speed", top_rpm)
+        end = start if end_rpm is None else check_speed("end speed", end_rpm)
+        ramp_s = check_positive("ramp time", ramp_s, "s")
+        hold_s = check_positive("hold time", hold_s, "s", allow_zero=True)
+        if not top > max(start, end):
+            raise ParameterError(f"top speed = {top_rpm!r} rpm is invalid: valid range > {max(start, end):g} rpm "
+                                 "(above the start and end speeds)")
+        t = [0.0, ramp_s] + ([ramp_s + hold_s] if hold_s > 0 else []) + [2 * ramp_s + hold_s]
+        rpm = [start, top] + ([top] if hold_s > 0 else []) + [end]
+        hold = f", {hold_s:g} s at the top" if hold_s > 0 else ""
+        return cls.piecewise_linear(t, rpm, f"run-up and run-down {start:.0f} -> {top:.0f} -> {end:.0f} rpm, "
+                                            f"{ramp_s:g} s each way{hold}")
 
     def __call__(self, t):
         """Prescribed rotor speed [rad/s] at ``t`` [s] (for a torque-driven profile: the start speed).

@@ -15,11 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import ParameterError
+from .results import Result, netcdf_attrs, variable
 from .tracking import RESONANCE_TOL, SYNC_TOL, Component, components_table, find_components, internal_resonances
 
 
 @dataclass
-class SpectrogramResult:
+class SpectrogramResult(Result):
     """Spectrogram of a node's orbit during a run-up or run-down.
 
     Parameters
@@ -69,6 +70,37 @@ class SpectrogramResult:
         """:attr:`amplitude` in dB relative to its maximum, (f, k)."""
         a = self.amplitude
         return 20 * np.log10(np.maximum(a, 1e-300) / a.max())
+
+    def to_xarray(self):
+        """The spectrogram as an :class:`xarray.Dataset` with dimensions frequency × time.
+
+        Returns
+        -------
+        xarray.Dataset
+            Coordinates ``frequency`` [Hz], ``time`` [s] (segment centres) and ``speed`` [rpm] along ``time``;
+            variables ``forward`` and ``backward`` (frequency, time): orbit amplitude [m] of forward / backward
+            whirl, each with ``units`` and ``long_name``; attributes ``node``, ``direction``, ``db_range_dB`` and
+            :attr:`meta` (segment length [s], overlap, FFT length, sampling rate [Hz], ...).
+
+        Examples
+        --------
+        >>> sp = SpectrogramResult(np.array([0.1, 0.2]), np.array([3e4, 3.1e4]), np.array([0.0, 100.0, 200.0]),
+        ...                        np.zeros((3, 2)), np.zeros((3, 2)), "turbine_wheel", meta={"segment_s": 0.05})
+        >>> ds = sp.to_xarray()
+        >>> dict(ds["forward"].sizes), ds["forward"].attrs["units"], ds["speed"].dims, ds.attrs["direction"]
+        ({'frequency': 3, 'time': 2}, 'm', ('time',), 'up')
+        """
+        import xarray as xr
+
+        ft = ("frequency", "time")
+        data = {"forward": variable(ft, self.forward, "m", "orbit amplitude of forward whirl (+f)"),
+                "backward": variable(ft, self.backward, "m", "orbit amplitude of backward whirl (-f)")}
+        coords = {"frequency": variable(("frequency",), self.freqs_hz, "Hz", "whirl frequency"),
+                  "time": variable(("time",), self.times, "s", "segment centre time"),
+                  "speed": variable(("time",), self.speeds_rpm, "rpm", "rotor speed at the segment centre")}
+        attrs = {"title": f"spectrogram of the {self.node} orbit x + iy", "node": self.node,
+                 "direction": self.direction, "db_range_dB": float(self.db_range), **self.meta}
+        return xr.Dataset(data, coords, attrs=netcdf_attrs(attrs))
 
     # ---------------------------------------------------------------- components
     def components(self, min_segments=6, min_amplitude=None):

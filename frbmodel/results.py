@@ -1,0 +1,170 @@
+"""The shared contract of analysis results: labelled arrays (xarray) and netCDF files.
+
+Every result class (Campbell diagram, run-up, spectrogram, ...) offers ``.plot()`` (matplotlib), ``.plot_html()``
+(plotly), ``.to_dataframe()`` (pandas, units in the column names) and ``.to_xarray()`` (an
+:class:`xarray.Dataset`, units in the ``units`` attribute of every variable and coordinate). :class:`Result` is the
+small base that turns ``to_xarray()`` into a netCDF-4 file (:meth:`Result.to_netcdf`, engine h5netcdf), so that
+every ``.nc`` the package writes opens with ``xarray.open_dataset`` and carries its units and metadata.
+
+netCDF attributes can only be strings, numbers or 1-D arrays of numbers: :func:`netcdf_attrs` JSON-encodes
+everything else (dicts, lists of strings, None, booleans), and :func:`decode_attr` reads such an attribute back.
+
+>>> attrs = netcdf_attrs({"method": "J", "speeds_rpm": [1.0, 2.0], "system": {"name": "tc"}, "ok": True})
+>>> attrs["method"], attrs["speeds_rpm"], attrs["system"], attrs["ok"]
+('J', '[1.0, 2.0]', '{"name": "tc"}', 'true')
+>>> decode_attr(attrs["system"])["name"], decode_attr(attrs["method"])
+('tc', 'J')
+"""
+from __future__ import annotations
+
+import json
+from numbers import Integral, Real
+from pathlib import Path
+
+#: xarray backend used for every netCDF file the package writes (netCDF-4/HDF5 through h5py; no C netCDF library)
+NETCDF_ENGINE = "h5netcdf"
+
+
+def _json_default(obj):
+    """JSON for numpy scalars and arrays (and anything else as its str)."""
+    import numpy as np
+
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return str(obj)
+
+
+def netcdf_attrs(meta):
+    """Attributes that netCDF can store: strings and finite or non-finite numbers are kept, everything else
+    (dicts, lists, None, booleans, numpy arrays) is written as JSON text.
+
+    Parameters
+    ----------
+    meta : dict
+        Attribute name -> value (any JSON-serialisable value, numpy scalars and arrays included).
+
+    Returns
+    -------
+    dict
+        Attribute name -> str, int or float.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> netcdf_attrs({"n": np.int64(3), "x": 0.5, "none": None, "arr": np.array([1, 2])})
+    {'n': 3, 'x': 0.5, 'none': 'null', 'arr': '[1, 2]'}
+    """
+    out = {}
+    for key, value in meta.items():
+        if isinstance(value, str):
+            out[str(key)] = value
+        elif isinstance(value, (Integral, Real)) and not isinstance(value, bool):
+            out[str(key)] = int(value) if isinstance(value, Integral) else float(value)
+        else:
+            out[str(key)] = json.dumps(value, default=_json_default)
+    return out
+
+
+def decode_attr(value):
+    """An attribute written by :func:`netcdf_attrs` back as Python data: JSON text decoded, other values as read.
+
+    Parameters
+    ----------
+    value : object
+        An attribute value of a dataset read from a ``.nc`` file.
+
+    Returns
+    -------
+    object
+        The decoded value (a string that is not JSON is returned unchanged).
+
+    Examples
+    --------
+    >>> decode_attr('{"a": [1, null]}'), decode_attr("run-up"), decode_attr(2.5)
+    ({'a': [1, None]}, 'run-up', 2.5)
+    """
+    if not isinstance(value, str):
+        return value
+    try:
+        return json.loads(value)
+    except ValueError:
+        return value
+
+
+def variable(dims, data, units, description):
+    """One variable of a dataset: ``(dims, data, attrs)`` with its ``units`` and ``long_name``.
+
+    Parameters
+    ----------
+    dims : tuple of str
+        Dimension names.
+    data : array_like
+        Values, in ``units``.
+    units : str
+        Unit (``"-"`` for dimensionless; ``""`` for labels).
+    description : str
+        Human-readable meaning (netCDF ``long_name``).
+
+    Returns
+    -------
+    tuple
+        ``(dims, data, {"units": units, "long_name": description})``, as :class:`xarray.Dataset` takes it.
+
+    Examples
+    --------
+    >>> variable(("time",), [0.0, 1.0], "s", "time")[2]
+    {'units': 's', 'long_name': 'time'}
+    """
+    return tuple(dims), data, {"units": units, "long_name": description}
+
+
+class Result:
+    """Base of the analysis results: the labelled-array and netCDF part of their common contract.
+
+    Subclasses implement :meth:`to_xarray` (and, each in its own way, ``plot``, ``plot_html``, ``to_dataframe``,
+    ``save`` and ``load``); :meth:`to_netcdf` is shared.
+
+    Examples
+    --------
+    >>> import tempfile, xarray as xr
+    >>> class Tiny(Result):
+    ...     def to_xarray(self):
+    ...         return xr.Dataset({"x": variable(("time",), [1e-6, 2e-6], "m", "orbit x")},
+    ...                           attrs=netcdf_attrs({"meta": {"status": "finished"}}))
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     with xr.open_dataset(Tiny().to_netcdf(f"{tmp}/tiny.nc")) as ds:
+    ...         print(ds["x"].attrs["units"], decode_attr(ds.attrs["meta"])["status"])
+    m finished
+    """
+
+    def to_xarray(self):
+        """The result as an :class:`xarray.Dataset` (units in the attributes of every variable).
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        raise NotImplementedError(f"{type(self).__name__} has no to_xarray()")
+
+    def to_netcdf(self, path):
+        """Write :meth:`to_xarray` as a netCDF-4 file (engine :data:`NETCDF_ENGINE`).
+
+        Parameters
+        ----------
+        path : str or Path
+            The ``.nc`` file (its folder must exist; an existing file is replaced).
+
+        Returns
+        -------
+        Path
+            ``path``.
+        """
+        path = Path(path)
+        ds = self.to_xarray()
+        ds.to_netcdf(path, engine=NETCDF_ENGINE)
+        return path
+
+
+__all__ = ["NETCDF_ENGINE", "Result", "decode_attr", "netcdf_attrs", "variable"]
