@@ -1071,7 +1071,8 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     solver.set_initial_value(y0, 0.0)
     rec.append(_sample(problem, rec.schema, 0.0, y0, f_buf))
     status, message = "finished", ""
-    with deferred_signals() as signals, simulation_bar(t_out[-1], "run-up", progress) as bar:
+    label = {"down": "run-down", "up-down": "run-up/down"}.get(problem.profile.direction, "run-up")
+    with deferred_signals() as signals, simulation_bar(t_out[-1], label, progress) as bar:
         for k in range(1, t_out.size):
             y = solver.integrate(t_out[k])
             if not solver.successful() or not np.all(np.isfinite(y)):
@@ -1164,6 +1165,10 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
         profile = SpeedProfile.ramp(speed_rpm[0], speed_rpm[1], duration)
     elif not isinstance(profile, SpeedProfile):
         profile = SpeedProfile.from_function(profile, duration)
+    if duration > float(profile.t[-1]) * (1 + 1e-9) and not profile.torque_driven:
+        # beyond its table a profile would hold its last speed *and* its last acceleration: inconsistent
+        raise ParameterError(f"duration = {duration:g} s is longer than the speed profile "
+                             f"({float(profile.t[-1]):g} s): valid range 0 < duration <= the profile's length")
     if not 0.0 < contact_eps < 1.0:
         raise ParameterError(f"contact_eps = {contact_eps!r} is invalid: valid range 0 < contact_eps < 1")
     problem = build_problem(system, profile, model, unbalance, linear_springs)

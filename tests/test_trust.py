@@ -162,3 +162,10 @@ def test_warmup_marks_the_kernels_ready_for_these_sources(tmp_path, monkeypatch)
     assert w.kernels_ready()
     monkeypatch.setattr(w, "_stamp", lambda: "changed-sources")
     assert not w.kernels_ready()
+
+
+def test_a_run_longer_than_its_speed_profile_is_refused():
+    """Beyond its table a profile would keep its last acceleration at a constant speed (gyroscopic and unbalance
+    terms then disagree with the speed): refused, naming both lengths."""
+    with pytest.raises(ParameterError, match=r"duration = 0\.2 s is longer than the speed profile \(0\.1 s\)"):
+        frb.runup(frb.turbocharger(), profile=SpeedProfile.ramp(20e3, 30e3, 0.1), duration=0.2)
