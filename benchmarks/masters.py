@@ -3,7 +3,7 @@ run-up over the first 0.1 s of the co36 run-up (20 -> 250 krpm in 1 s, i.e. 20 -
 
 Usage::
 
-    python benchmarks/masters.py [--build build] [--step 1e-5] [--no-halving]
+    python benchmarks/masters.py [--build build] [--step 1e-5] [--halvings 1]
 
 Runs, each from the SSP's default parameter set (co36, bound by SystemStructure.ssd):
 
@@ -26,7 +26,8 @@ Runs, each from the SSP's default parameter set (co36, bound by SystemStructure.
 
 Prints per master the macro step, the journal x, y of both bearings at t = 0.02, 0.05, 0.1 s and the largest
 distance of each journal centre from the monolithic one over [0, 15 ms] and over [0, 0.1 s] [um and % of the
-outer clearance]; with halving, each co-simulation again at half the step (the coupling error of a Jacobi master
+outer clearance], when it first exceeds 1 and 10 um, and the mean orbit radius over 50-100 ms; with
+``--halvings``, each co-simulation again at half the step (the coupling error of a Jacobi master
 is O(H): its deviation over the first 15 ms halves). Also checks that libcosim and the container set every co36
 parameter to its SSV value, and which coupling inputs they start from, and how much each scheme amplifies a
 1e-12 m change of the start state (the staggered master as the physics, the Jacobi loop ~10^3 times more after
@@ -337,22 +338,64 @@ def _print_positions(ref, runs):
             print(f"  {name:<16}{step * 1e6:6.2f}{vals}" if step == step else f"  {name:<16}{'-':>6}{vals}")
 
 
+def first_exceeds(run, ref, threshold_m):
+    """First time [s] at which a journal centre of ``run`` is farther than ``threshold_m`` from ``ref`` (NaN:
+    never within the run)."""
+    d = np.zeros_like(ref["t"])
+    for b in BEARINGS:
+        x = np.column_stack([np.interp(ref["t"], run["t"], run[b][:, k]) for k in range(2)])
+        d = np.fmax(d, np.hypot(*(x - ref[b]).T))
+    hit = np.flatnonzero(d > threshold_m)
+    return float(ref["t"][hit[0]]) if hit.size else math.nan
+
+
+def orbit_radius(run, b, t0=0.05, t1=DURATION_S):
+    """Mean distance [m] of bearing ``b``'s journal centre from its mean position over [t0, t1] (whirl size)."""
+    w = (run["t"] >= t0) & (run["t"] <= t1 + 1e-12)
+    x = run[b][w]
+    return float(np.nanmean(np.hypot(*(x - np.nanmean(x, axis=0)).T)))
+
+
 def _print_deviations(ref, runs, clearance):
     print(f"\nLargest distance from the monolithic journal centre [um] (% of the outer clearance "
-          f"{clearance * 1e6:.0f} um), turbine / compressor")
-    print(f"  {'master':<16}{'H [us]':>7}{'[0, 15 ms]':>22}{'[0, 0.1 s]':>22}{'[0, 0.1 s] % c_o':>20}")
+          f"{clearance * 1e6:.0f} um), turbine / compressor; first time [ms] either journal is > 1 um, > 10 um "
+          f"away; mean orbit radius over 50-100 ms [um]")
+    print(f"  {'master':<16}{'H [us]':>7}{'[0, 15 ms]':>20}{'[0, 0.1 s]':>16}{'% c_o':>12}{'> 1 um':>9}"
+          f"{'> 10 um':>8}{'orbit radius':>16}")
+    print(f"  {'monolithic':<16}{'-':>7}{'':>48}{'':>17}{orbit_radius(ref, 'turbine') * 1e6:8.1f}"
+          f"{orbit_radius(ref, 'compressor') * 1e6:8.1f}")
     early = {}
     for name, step, run, _ in runs:
         e, f = deviation(run, ref, EARLY_S), deviation(run, ref, DURATION_S)
         early[(name, step)] = max(e.values())
-        print(f"  {name:<16}{step * 1e6:7.2f}{e['turbine'] * 1e6:11.4f}{e['compressor'] * 1e6:11.4f}"
-              f"{f['turbine'] * 1e6:11.2f}{f['compressor'] * 1e6:11.2f}"
-              f"{f['turbine'] / clearance * 100:10.1f}{f['compressor'] / clearance * 100:10.1f}")
+        t1, t10 = (first_exceeds(run, ref, d) * 1e3 for d in (1e-6, 1e-5))
+        print(f"  {name:<16}{step * 1e6:7.2f}{e['turbine'] * 1e6:10.4f}{e['compressor'] * 1e6:10.4f}"
+              f"{f['turbine'] * 1e6:8.2f}{f['compressor'] * 1e6:8.2f}"
+              f"{f['turbine'] / clearance * 100:6.0f}{f['compressor'] / clearance * 100:6.0f}{t1:9.1f}{t10:8.1f}"
+              f"{orbit_radius(run, 'turbine') * 1e6:8.1f}{orbit_radius(run, 'compressor') * 1e6:8.1f}")
     steps = sorted({s for _, s in early}, reverse=True)
     if len(steps) > 1:
         print("\n  halving the step: deviation over [0, 15 ms] at H / at H/2 (O(H): 2, O(H^2): 4)")
         for name in dict.fromkeys(n for n, _ in early):
-            print(f"  {name:<16}{early[(name, steps[0])] / early[(name, steps[1])]:7.2f}")
+            print(f"  {name:<16}" + "".join(f"{early[(name, a)] / early[(name, b)]:7.2f}"
+                                             for a, b in zip(steps, steps[1:])))
+
+
+def ring_time_constants(params, speeds_rpm=SPEED_RPM):
+    """{(bearing, rpm): shortest time constant [s] of the ring's lateral motion in its films}, from the bearing's
+    linearization (ring speed held) at the method-J equilibrium of the co36 system."""
+    from frbmodel.components import BearingComponent
+    from frbmodel.units import rpm_to_rad_s
+
+    tc = frb.turbocharger(params[BEARINGS[0]]["outer.clearance"][1])
+    out = {}
+    for rpm in speeds_rpm:
+        for b, e in zip(tc.bearings, frb.equilibrium(tc, "J", rpm).bearings):
+            bc = BearingComponent(b, tc.film_model)
+            bc.ring[:] = [e.ring[0], e.ring[1], 0.0, 0.0, e.ring_speed]
+            a = bc.linearization([e.journal[0], e.journal[1], 0.0, 0.0], rpm_to_rad_s(rpm))[0]
+            out[(b.name, rpm)] = 1.0 / float(np.max(-np.linalg.eigvals(a).real))
+    return out
 
 
 def _print_checks(params, checks, ref):
@@ -373,7 +416,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default="build", help="folder of frb build-fmus (built if missing)")
     ap.add_argument("--step", type=float, default=1e-5, help="macro step H [s] of every master (default: 10 us)")
-    ap.add_argument("--no-halving", action="store_true", help="skip the runs at H/2")
+    ap.add_argument("--halvings", type=int, default=1, help="also run each co-simulation at H/2, H/4, ... (default: 1;"
+                    " 0: only H)")
     args = ap.parse_args(argv)
     ssp_path = built_ssp(args.build)
     t0 = time.perf_counter()
@@ -381,7 +425,7 @@ def main(argv=None):
     loose = monolithic(1e-7, 1e-10)
     print(f"monolithic: {time.perf_counter() - t0:.1f} s wall; defaults (rtol 1e-7, atol 1e-10 m) vs reference: "
           f"{max(deviation(loose, ref, DURATION_S).values()) * 1e6:.1e} um")
-    steps = (args.step,) if args.no_halving else (args.step, args.step / 2)
+    steps = tuple(args.step / 2 ** k for k in range(args.halvings + 1))
     with read_ssp(ssp_path) as ssp, tempfile.TemporaryDirectory(prefix="frb_masters_") as tmp:
         params = ssp.parameters()
         runs, checks = _runs(ssp_path, ssp.root, steps, tmp)
@@ -393,6 +437,9 @@ def main(argv=None):
     _print_positions(ref, runs)
     _print_deviations(ref, runs, clearance)
     _print_checks(params, checks, ref)
+    print("\nShortest time constant of the ring's lateral motion in its films (bearing linearization, method-J "
+          "equilibrium): " + ", ".join(f"{b} {rpm / 1e3:g} krpm {tau * 1e6:.1f} us"
+                                       for (b, rpm), tau in ring_time_constants(params).items()))
     print(f"\nAmplification of a 1e-12 m change of the start state (largest journal change / 1e-12 m), "
           f"H = {args.step * 1e6:g} us")
     for name, a in amp.items():
