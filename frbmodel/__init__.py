@@ -45,6 +45,7 @@ from .rotor import Disc, Rotor, ShaftElement
 from .runup import SpeedProfile, Unbalance, runup
 from .spectral import SpectrogramResult, spectrogram
 from .tracking import Component
+from .unbalance import UnbalanceResponse, unbalance_response
 from .units import rad_s_to_rpm, rpm_to_rad_s
 from .whirl import film_onset_speeds
 
@@ -57,4 +58,5 @@ __all__ = [
     "equilibrium", "film_coefficients", "film_force", "film_onset_speeds", "film_torques", "get_method",
     "linear_system", "load_system", "modes", "rad_s_to_rpm", "ring_speed_ratio", "ring_torque", "rpm_to_rad_s",
     "runup", "spectrogram", "static_eccentricity", "static_position", "turbocharger",
+    "UnbalanceResponse", "unbalance_response",
 ]

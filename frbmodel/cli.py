@@ -109,6 +109,7 @@ def cmd_campbell(args):
 
         _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky"))
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
+        tc, kw = None, {}
     else:
         tc = load_from_args(args)
         kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
@@ -131,6 +132,75 @@ def cmd_campbell(args):
     print(f"max. simultaneously unstable modes: {int(cd.n_unstable.max())}")
     if cd.n_neutral.max():
         print(f"neutral modes (|D| <= round-off bound, undamped): up to {int(cd.n_neutral.max())} at one speed")
+    paths.append(_critical_table(cd, None if args.from_fmu else tc, out / f"campbell_{cd.method}_critical.csv", kw))
+    print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
+    print(f"results in {out.resolve()}")
+
+
+def _critical_table(cd, system, path, kw):
+    """Print the 1X crossings of a Campbell diagram (:func:`frbmodel.unbalance.critical_speeds`) and write them."""
+    from .unbalance import critical_speeds
+
+    cs = critical_speeds(cd, system, **kw)
+    _print_critical(cs)
+    cs.to_csv(path, index=False)
+    return path
+
+
+def _print_critical(cs):
+    """Print a critical-speed table (speeds in rpm, amplitudes in µm)."""
+    if not len(cs):
+        print("no critical speed in the speed range")
+        return
+    tab = cs[["source", "speed [rpm]", "mode", "kind", "precession", "damping [-]", "location"]].copy()
+    tab["amplitude [um]"] = cs["amplitude [m]"] * 1e6
+    print("critical speeds (1X crossings of the Campbell branches; response peaks):")
+    fmt = {"speed [rpm]": "{:,.0f}".format, "damping [-]": lambda x: f"{0.0 if abs(x) < 5e-5 else x:.4f}",
+           "amplitude [um]": "{:.4g}".format}
+    print(tab.to_string(index=False, na_rep="", formatters=fmt))
+
+
+def _unbalance_methods(text, kw):
+    """Method letters of ``--method`` (one or a comma list) and the spring options each takes."""
+    from .methods import get_method
+
+    methods = [get_method(x) for x in text.split(",") if x.strip()] or [get_method(text)]
+    unused = [k for k in kw if not any(k in m.parameters for m in methods)]
+    if unused:
+        raise ParameterError(f"--{unused[0]} = {kw[unused[0]]!r} is invalid for method {text}: it sets a spring of "
+                             "methods A, B, E")
+    return [(m.letter, {k: v for k, v in kw.items() if k in m.parameters}) for m in methods]
+
+
+def cmd_unbalance(args):
+    """``frb unbalance``: unbalance response (Bode, polar, film orbits) and critical speeds of one or more methods."""
+    from .unbalance import bode_figure, location_names, unbalance_response
+
+    speeds = parse_speeds(args.speeds)
+    kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
+    methods = _unbalance_methods(args.method, kw)
+    unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"])
+    tc = load_from_args(args)
+    names = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
+    bad = [n for n in names or [] if n not in location_names(tc)]
+    if bad:
+        raise ParameterError(f"--locations {bad[0]!r} is unknown; valid: {', '.join(location_names(tc))}")
+    out = writable_dir(args.out)
+    results, paths = [], []
+    for letter, kw_m in methods:
+        ur = unbalance_response(tc, letter, speeds, unbalance, peak_names=names, progress=True, **kw_m)
+        paths += ur.save(out, names=names)
+        print(f"method {letter}: {ur.meta['method_title']}; {speeds.size} speeds; unbalance "
+              + ", ".join(f"{u['disc']} {u['m e [kg m]']:g} kg m at {u['phase [rad]']:g} rad" for u in ur.unbalance))
+        _print_critical(ur.critical_speeds())
+        results.append(ur)
+    if len(results) > 1:
+        import matplotlib.pyplot as plt
+
+        fig = bode_figure(results, names)
+        paths.append(out / f"unbalance_bode_{''.join(r.method for r in results)}.png")
+        fig.savefig(paths[-1], dpi=130, bbox_inches="tight")
+        plt.close(fig)
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
 
@@ -643,6 +713,26 @@ def _add_campbell(sub):
     c.set_defaults(func=cmd_campbell)
 
 
+def _add_unbalance(sub):
+    u = sub.add_parser("unbalance", formatter_class=_Formatter,
+                       help="unbalance response (Bode, polar, film orbits) and critical speeds (CSV + PNG + HTML)")
+    u.add_argument("--method", default="J", type=str.upper,
+                   help="bearing model (Table 1: A B C D E F G I J), or a comma list such as A,J for one Bode figure "
+                        "of all")
+    u.add_argument("--speeds", default="1000:250000:200", help="START:STOP:COUNT [rpm] or comma list")
+    u.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
+                   help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable; default turbine_wheel:1e-6:0)")
+    u.add_argument("--locations", default=None, metavar="NAMES",
+                   help="comma list of the locations drawn and searched for peaks (default: the wheels), e.g. "
+                        "'turbine_wheel,turbine journal'")
+    u.add_argument("--k", type=float, default=None, help="spring stiffness of methods A, E [N/m] (1e6)")
+    u.add_argument("--kx", type=float, default=None, help="horizontal spring of method B [N/m] (1e6)")
+    u.add_argument("--ky", type=float, default=None, help="vertical spring of method B [N/m] (2e6)")
+    u.add_argument("--out", default="results/unbalance", help="output folder")
+    _system_args(u)
+    u.set_defaults(func=cmd_unbalance)
+
+
 def _add_equilibrium(sub):
     from .methods import METHODS
 
@@ -833,6 +923,7 @@ def build_parser():
     sub = p.add_subparsers(dest="command", required=True)
     _add_campbell(sub)
     _add_equilibrium(sub)
+    _add_unbalance(sub)
     _add_system(sub)
     _add_runup(sub)
     _add_compare(sub)
