@@ -1,7 +1,9 @@
-"""The rotor FMU built for any rotor (issue 11 item 3): the Table 2 rotor with every shaft element split in four
-(13 nodes instead of 4) is built into the FMU with ``build_fmus(..., rotor_file=...)``; the FMU's variables
+"""The rotor FMU built for any rotor (issue 11 item 3): the Table 2 rotor with every shaft element split in two
+(7 nodes instead of 4; FRB_FINE_PARTS=4 repeats it with 13 nodes, ~1 min more, as measured for the README) is built
+into the FMU with ``build_fmus(..., rotor_file=...)``; the FMU's variables
 follow that system, it passes validation, co-simulates like the monolithic run-up of the same system and its
 linearization equals ``frb.campbell`` on it."""
+import os
 import shutil
 from dataclasses import replace
 from pathlib import Path
@@ -23,7 +25,7 @@ from frbmodel.cosim.master import cosimulate, operating_point_overrides  # noqa:
 from frbmodel.cosim.ssp import write_ssp  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-PARTS = 4
+PARTS = int(os.environ.get("FRB_FINE_PARTS", "2"))  # 2 keeps the suite within its 3 min budget
 
 
 def refined(system, parts):
@@ -43,7 +45,7 @@ def fine(tmp_path_factory):
 
     tmp = tmp_path_factory.mktemp("fine")
     system = refined(frb.turbocharger(36e-6), PARTS)
-    path = system.save(tmp / "table2_x4.toml")
+    path = system.save(tmp / f"table2_x{PARTS}.toml")
     out = tmp / "build"
     build_fmus(out, ROOT, progress=lambda m: None, rotor_file=path)
     ssp = tmp / "ssp1500"  # the SSP folder as build_fmus packs it: SSDs, parameter sets, resources/*.fmu
@@ -73,14 +75,14 @@ def test_structure_differences_name_what_differs():
     tc = frb.turbocharger()
     fine = refined(tc, PARTS)
     assert structure_differences(tc, tc.with_(gravity=0.0)) == []  # values are not structure
-    assert structure_differences(tc, fine) == ["node count 13 (the FMU was built for 4)"]
+    assert structure_differences(tc, fine) == [f"node count {3 * PARTS + 1} (the FMU was built for 4)"]
     swapped = tc.with_(bearings=tuple(reversed(tc.bearings)))
     assert structure_differences(tc, swapped) == [
         "bearing names (in order) ['compressor', 'turbine'] (the FMU was built for ['turbine', 'compressor'])"]
 
 
 def test_fine_rotor_fmu_has_the_variables_of_its_system(fine):
-    """13 nodes: 104 states (A 104 x 104), 4 force inputs, 8 journal outputs; outputs per disc and inputs per
+    """3 PARTS + 1 nodes (7: 56 states, A 56 x 56; 13: 104 states), 4 force inputs, 8 journal outputs; outputs per disc and inputs per
     bearing by name, every Real with a unit; the FMU passes fmpy's validation and carries the system."""
     system, _, out, _ = fine
     fmu = out / "fmus" / "TurbochargerRotor.fmu"
@@ -132,7 +134,7 @@ def test_fine_rotor_cosimulates_like_its_monolithic_run_up(fine):
 
 
 def test_fine_rotor_linearization_equals_campbell(fine):
-    """FMU linearization (rotor FMU with 104 states + both bearing FMUs, interconnected along the SSP) at three
+    """FMU linearization (rotor FMU with 56 (7 nodes) or 104 (13 nodes) states + both bearing FMUs, interconnected along the SSP) at three
     speeds: eigenvalues = those of frb.linear_system of the fine system (what frb.campbell analyses), relative
     1e-6, and the Campbell frequencies of both routes agree."""
     from scipy.optimize import linear_sum_assignment
@@ -155,7 +157,8 @@ def test_fine_rotor_linearization_equals_campbell(fine):
     a = campbell_from_fmu(ssp, np.array(speeds), "J")
     b = frb.campbell(system, "J", np.array(speeds))
     tracked = np.isfinite(b.eigenvalues)
-    assert tracked.sum() > 3 * 40 and (np.isfinite(a.eigenvalues) == tracked).all()  # the same modes tracked
+    # the same modes tracked; most of the n_dof + 4 mode pairs oscillate (the others are overdamped): > 70 %
+    assert tracked.sum() > 3 * 0.7 * (system.rotor.n_dof + 4) and (np.isfinite(a.eigenvalues) == tracked).all()
     # the same 1e-6 acceptance per tracked mode (measured 2e-8); its frequency Im(λ)/2π can differ by more than
     # 1e-6 relative for a well-damped mode (measured 1.04e-6 at 466 Hz, 120 krpm)
     err = np.abs(a.eigenvalues[tracked] - b.eigenvalues[tracked]) / np.abs(b.eigenvalues[tracked])
