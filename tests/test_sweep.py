@@ -67,7 +67,7 @@ def test_killed_study_resumes_without_recomputing(tmp_path):
 def test_failing_case_is_recorded_and_others_finish(tmp_path):
     # a viscosity this low cannot carry the turbine's load: the equilibrium (eps -> 1) fails for that case only
     cases = grid({"viscosity_turbine": [1e-7, 4.9e-3]}, "runup", speed_rpm=(20e3, 30e3), duration=0.04)
-    idx = run_study(cases, tmp_path, n_workers=2)
+    idx = run_study(cases, tmp_path, scheduler="serial")  # the Dask path is test_local_cluster_equals_serial's
     st = dict(zip(idx["viscosity_turbine [Pa s]"], idx["status"]))
     assert st == {1e-7: "failed", 4.9e-3: "finished"}
     err = idx.loc[idx["status"] == "failed", "error"].iloc[0]
