@@ -83,7 +83,8 @@ def test_structure_differences_name_what_differs():
 
 def test_fine_rotor_fmu_has_the_variables_of_its_system(fine):
     """3 PARTS + 1 nodes (7: 56 states, A 56 x 56; 13: 104 states), 4 force inputs, 8 journal outputs; outputs
-    per disc and inputs per bearing by name, every Real with a unit; the FMU passes fmpy's validation and carries the system."""
+    per disc and inputs per bearing by name, every Real with a unit; the FMU passes fmpy's validation and carries
+    the system."""
     system, _, out, _ = fine
     fmu = out / "fmus" / "TurbochargerRotor.fmu"
     assert validate_fmu(str(fmu)) == []
@@ -135,8 +136,8 @@ def test_fine_rotor_cosimulates_like_its_monolithic_run_up(fine):
 
 def test_fine_rotor_linearization_equals_campbell(fine):
     """FMU linearization (rotor FMU with 56 (7 nodes) or 104 (13 nodes) states + both bearing FMUs, interconnected
-    along the SSP) at three speeds: eigenvalues = those of frb.linear_system of the fine system (what frb.campbell analyses), relative
-    1e-6, and the Campbell frequencies of both routes agree."""
+    along the SSP) at three speeds: eigenvalues = those of frb.linear_system of the fine system (what
+    frb.campbell analyses), relative 1e-6, and the Campbell frequencies of both routes agree."""
     from scipy.optimize import linear_sum_assignment
 
     from frbmodel.cosim.linearize import campbell_from_fmu, linearize
