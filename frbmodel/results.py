@@ -161,9 +161,17 @@ class Result:
         Path
             ``path``.
         """
+        import contextlib
+        import sys
+
         path = Path(path)
         ds = self.to_xarray()
-        ds.to_netcdf(path, engine=NETCDF_ENGINE)
+        # the arrays are in memory: write them here, whatever dask scheduler or client the session has (a default
+        # distributed client would make xarray take a cluster-wide lock for the file)
+        quiet = (sys.modules["dask"].config.set(scheduler="synchronous") if "dask" in sys.modules
+                 else contextlib.nullcontext())
+        with quiet:
+            ds.to_netcdf(path, engine=NETCDF_ENGINE)
         return path
 
 

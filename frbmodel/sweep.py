@@ -456,9 +456,9 @@ def _client(scheduler, n_workers):
     if scheduler is None:
         cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
                                     processes=True, dashboard_address=":0")
-        return dist.Client(cluster), cluster
+        return dist.Client(cluster, set_as_default=False), cluster  # never the user's default client
     try:
-        return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S), None
+        return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S, set_as_default=False), None
     except (OSError, TimeoutError, ValueError) as exc:
         raise ParameterError(f"scheduler = {scheduler!r} is unreachable: {exc} (expected the address of a running "
                              f"Dask scheduler, tcp://host:port; waited {SCHEDULER_TIMEOUT_S:g} s)") from None
@@ -551,11 +551,12 @@ def _run_on_dask(todo, out, scheduler, n_workers, report, say):
     try:
         say(f"dask: {len(client.scheduler_info().get('workers', {}))} workers, dashboard {client.dashboard_link}")
         futures = [client.submit(run_case, c, str(out), key=f"frb-{c.case_id}", pure=False) for c in todo]
-        for fut in _distributed().as_completed(futures):
-            try:
-                report(fut.result())
-            except Exception as exc:  # noqa: BLE001  (a lost worker: the case stays pending, rerun picks it up)
-                say(f"  a task failed outside the case handler: {exc}")
+        with client.as_current():  # this study's client, not the session's default
+            for fut in _distributed().as_completed(futures):
+                try:
+                    report(fut.result())
+                except Exception as exc:  # noqa: BLE001  (a lost worker: the case stays pending; a rerun does it)
+                    say(f"  a task failed outside the case handler: {exc}")
     finally:
         client.close()
         if cluster is not None:
