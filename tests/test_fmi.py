@@ -345,6 +345,8 @@ def _assert_same_components(mono, cosim, segment_s):
     return cm, cc
 
 
+@pytest.mark.slow  # 26 s; the same property (first onset, co-sim = monolithic) is checked in torque mode by
+# tests/test_fmu_drive.py::test_torque_mode_cosimulation_equals_monolithic_runup (9 s): python -m pytest -m slow
 def test_cosim_runup_onset_equals_monolithic(built):
     """Run-up through the first loss of stability (forward conical whirl at ~2 krpm): the co-simulated and the
     monolithic run-up must show the same sub-synchronous onset. Macro step 20 µs (twice the SSP's) on purpose:
