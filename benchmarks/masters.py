@@ -29,9 +29,11 @@ distance of each journal centre from the monolithic one over [0, 15 ms] and over
 outer clearance], when it first exceeds 1 and 10 um, and the mean orbit radius over 50-100 ms; with
 ``--halvings``, each co-simulation again at half the step (the coupling error of a Jacobi master
 is O(H): its deviation over the first 15 ms halves). Also checks that libcosim and the container set every co36
-parameter to its SSV value, and which coupling inputs they start from, and how much each scheme amplifies a
-1e-12 m change of the start state (the staggered master as the physics, the Jacobi loop ~10^3 times more after
-the compressor film's fast force transition at ~17 ms). ~2 min on 2 cores.
+parameter to its SSV value and which coupling inputs they start from; for the Jacobi masters the period-2
+oscillation of the exchanged bearing forces (a force alternating from one macro step to the next, from ~17 ms on);
+how much each scheme amplifies a 1e-12 m change of the start state (monolithic and staggered alike, the Jacobi
+loop by orders of magnitude more once its force oscillation sets in); the time constants of the ring in its films.
+~1.5 min on 2 cores (``--halvings 3``: ~7 min).
 """
 from __future__ import annotations
 
@@ -53,7 +55,7 @@ from frbmodel.cosim.ssp import read_ssp
 DURATION_S = 0.1
 SPEED_RPM = (20e3, 20e3 + (250e3 - 20e3) * DURATION_S)  # the first 0.1 s of the 1 s run-up
 SAMPLE_S = 5e-5  # every master is sampled on this grid (the monolithic run-up's 20 kHz)
-EARLY_S = 0.015  # before the compressor film's first fast force transition (~17 ms), see the README
+EARLY_S = 0.015  # the Jacobi masters' force oscillation starts at 17-20 ms (10-2.5 us): compare before it
 TIMES_S = (0.02, 0.05, 0.1)
 BEARINGS = ("turbine", "compressor")
 
@@ -93,7 +95,8 @@ def _libcosim_execution(folder, step):
 
 
 def libcosim(folder, step):
-    """Journal trajectories of libcosim (fixed-step Jacobi master) running the SSP folder unchanged."""
+    """Journal trajectories of libcosim (fixed-step Jacobi master) running the SSP folder unchanged, with the
+    bearing forces after every step (``"force"``, see :func:`alternating_force`)."""
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimObserver import CosimObserver
 
@@ -101,19 +104,32 @@ def libcosim(folder, step):
     obs = CosimObserver.create_time_series(buffer_size=int(round(DURATION_S / step)) + 10)
     ex.add_observer(obs)
     i, vr = names["rotor"]
-    refs = [vr[f"{b}_bearing.journal.{q}"] for b in BEARINGS for q in "xy"]
-    for r in refs:
-        obs.start_time_series(i, r, CosimVariableType.REAL)
+    series = [(i, vr[f"{b}_bearing.journal.{q}"]) for b in BEARINGS for q in "xy"]
+    series += [(names[b][0], names[b][1][f"force.{q}"]) for b in BEARINGS for q in "xy"]
+    for slave, ref in series:
+        obs.start_time_series(slave, ref, CosimVariableType.REAL)
     n = int(round(DURATION_S / step))
     ex.step(n)
     # samples from step 1 on: libcosimpy drops samples whose step number is 0 from the count it returns
-    cols = [obs.time_series_real_samples(i, r, 1, n) for r in refs]
+    cols = [obs.time_series_real_samples(slave, ref, 1, n) for slave, ref in series]
     t = np.array(cols[0][0]) * 1e-9
+    values = np.column_stack([c[2] for c in cols])
     every = int(round(SAMPLE_S / step))
     keep = slice(every - 1, None, every)
-    first = _trajectory([0.0], [[np.nan] * 4])
-    traj = _trajectory(t[keep], np.column_stack([c[2] for c in cols])[keep])
-    return {k: np.concatenate([first[k], traj[k]]) for k in traj}
+    traj = _trajectory(np.concatenate([[0.0], t[keep]]), np.vstack([np.full(4, np.nan), values[keep, :4]]))
+    traj["force"] = (t, values[:, 4:])
+    return traj
+
+
+def alternating_force(run):
+    """(largest amplitude [N] of the period-2 component of the exchanged bearing forces after the first ms, first
+    time [s] it exceeds 0.1 N there) from ``run["force"] = (t, (n, 2 nb) forces after each step)``:
+    |F[k+1] - 2 F[k] + F[k-1]| / 4 is the amplitude of a force alternating from step to step and ~1e-3 N for the
+    smooth whirl (30 N at 140 Hz, 10 us steps)."""
+    t, f = run["force"]
+    a = np.abs(f[2:] - 2 * f[1:-1] + f[:-2]).max(axis=1) / 4
+    hit = np.flatnonzero((a > 0.1) & (t[1:-1] > 1e-3))  # after the first ms: libcosim's start-up jump is there
+    return float(a[t[1:-1] > 1e-3].max()), (float(t[1:-1][hit[0]]) if hit.size else math.nan)
 
 
 def libcosim_start(folder, params, connected):
@@ -246,6 +262,9 @@ def fmpy_jacobi(folder, step, duration=DURATION_S, overrides=None):
             for src, svr, dst, dvr in links:  # rotor -> bearings first: the bearings' outputs belong to them
                 dst.call("setReal", dvr, src.call("getReal", svr))
             out_vr = fmus["rotor"].vr([f"{b}_bearing.journal.{q}" for b in BEARINGS for q in "xy"])
+            force_at = [[k for k, c in enumerate(ssp.connections) if c[0] == b and c[1] == f"force.{q}"][0]
+                        for b in BEARINGS for q in "xy"]
+            forces = []
             rows, n, every = [fmus["rotor"].call("getReal", out_vr)], int(round(duration / step)), \
                 int(round(SAMPLE_S / step))
             for k in range(n):
@@ -254,12 +273,15 @@ def fmpy_jacobi(folder, step, duration=DURATION_S, overrides=None):
                 vals = [src.call("getReal", svr) for src, svr, _, _ in links]  # all outputs, then all inputs
                 for (_, _, dst, dvr), v in zip(links, vals):
                     dst.call("setReal", dvr, v)
+                forces.append([vals[k][0] for k in force_at])
                 if (k + 1) % every == 0:
                     rows.append(fmus["rotor"].call("getReal", out_vr))
         finally:
             for f in fmus.values():
                 f.free()
-    return _trajectory(np.arange(len(rows)) * SAMPLE_S, rows)
+    traj = _trajectory(np.arange(len(rows)) * SAMPLE_S, rows)
+    traj["force"] = (np.arange(1, len(forces) + 1) * step, np.array(forces))
+    return traj
 
 
 def sensitivity(ssp_path, folder, step, params, delta_m=1e-12, times_s=(0.015, 0.03)):
@@ -373,6 +395,12 @@ def _print_deviations(ref, runs, clearance):
               f"{f['turbine'] * 1e6:8.2f}{f['compressor'] * 1e6:8.2f}"
               f"{f['turbine'] / clearance * 100:6.0f}{f['compressor'] / clearance * 100:6.0f}{t1:9.1f}{t10:8.1f}"
               f"{orbit_radius(run, 'turbine') * 1e6:8.1f}{orbit_radius(run, 'compressor') * 1e6:8.1f}")
+    print("\n  period-2 oscillation of the exchanged bearing forces (force alternating from step to step) after the "
+          "first ms: largest amplitude [N], first time > 0.1 N [ms]")
+    for name, step, run, _ in runs:
+        if "force" in run:
+            amp, t_on = alternating_force(run)
+            print(f"  {name:<16}{step * 1e6:7.2f}{amp:10.3f}{t_on * 1e3:9.2f}")
     steps = sorted({s for _, s in early}, reverse=True)
     if len(steps) > 1:
         print("\n  halving the step: deviation over [0, 15 ms] at H / at H/2 (O(H): 2, O(H^2): 4)")
