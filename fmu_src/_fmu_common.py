@@ -15,6 +15,22 @@ INSTANTIATED, INITIALIZATION, STEP, TERMINATED, ERROR = ("the instantiated state
 STATUS_FROM_LOG = "frb_status_from_log"
 
 
+def _with_initial_unknowns(root):
+    """``root`` (the modelDescription element) with ModelStructure/InitialUnknowns listing every output declared
+    ``initial="calculated"`` (FMI 2.0 section 2.2.8), by its 1-based index, after Outputs."""
+    from xml.etree.ElementTree import Element
+
+    calculated = [str(i) for i, sv in enumerate(root.iter("ScalarVariable"), start=1)
+                  if sv.get("causality") == "output" and sv.get("initial") == "calculated"]
+    structure = root.find("ModelStructure")
+    if calculated and structure is not None and structure.find("InitialUnknowns") is None:
+        node = Element("InitialUnknowns")
+        for i in calculated:
+            node.append(Element("Unknown", {"index": i}))
+        structure.append(node)
+    return root
+
+
 class FrbSlaveMixin:
     """FMI 2.0 co-simulation behaviour shared by the frbmodel slaves.
 
@@ -89,7 +105,7 @@ class FrbSlaveMixin:
                           getter=lambda f=fn, n=name: self._evaluate(n, f, int, 0))
         else:
             var = Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                       initial=Fmi2Initial.exact, description=desc,
+                       initial=Fmi2Initial.calculated, description=desc,
                        getter=lambda f=fn, n=name: self._evaluate(n, f, float, math.nan))
         vr = self._register(var, "output", unit)
         if kind != "int":
@@ -116,7 +132,8 @@ class FrbSlaveMixin:
         """pythonfmu's model description plus the declared units (``unit`` of each Real, UnitDefinitions)."""
         from frbmodel.cosim.units import declare_units
 
-        return declare_units(super().to_xml(model_options or {}), self._units)
+        root = declare_units(super().to_xml(model_options or {}), self._units)
+        return _with_initial_unknowns(root)
 
     # ------------------------------------------------------------------ status protocol
     def _refuse(self, msg):
@@ -135,6 +152,8 @@ class FrbSlaveMixin:
             return
         self._values[name] = v
         self._dirty = True
+        if self._mode == INITIALIZATION:
+            self._comp = None  # outputs evaluated in initialization mode are rebuilt from the new parameters
 
     def _set_input(self, name, v):
         if self._mode in (TERMINATED, ERROR):
@@ -218,7 +237,15 @@ class FrbSlaveMixin:
             self._refuse(f"output {name} is not available: the instance failed (see the messages above)")
             return failed
         if self._comp is None:
-            return cast(0)
+            if self._mode != INITIALIZATION:
+                return cast(0)
+            try:  # initialization mode: the outputs of the parameters and inputs set so far (initial="calculated")
+                self._check_parameters()
+                self._initialize()
+            except Exception as exc:  # noqa: BLE001
+                self._comp = None
+                self._discard(f"output {name} cannot be evaluated in initialization mode: {exc}")
+                return failed
         try:
             value = cast(fn())
         except Exception as exc:  # noqa: BLE001

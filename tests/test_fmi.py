@@ -392,3 +392,34 @@ def test_cosim_runup_through_four_onsets_equals_monolithic(built):
     c = cosimulate(built / "turbocharger.ssp", "co36", stop_time=T, progress=False, overrides=ov)
     cm, _ = _assert_same_components(m, c, 0.025)  # the main job's segment length
     assert len(cm) >= 4 and np.nanmax([x.onset_rpm for x in cm]) > 75e3
+
+
+def test_outputs_in_initialization_mode_follow_parameters_and_inputs(built, tmp_path):
+    """Outputs are initial="calculated": masters that exchange during initialization (libcosim, fmpy's container
+    FMU) read the outputs of the parameters and inputs set so far — they used to read 0 (a centred journal at
+    standstill; benchmarks/masters.py). Expected values independent of the FMU: at the method-J equilibrium the
+    journal force carries the static load from hand statics, and the rotor reports the journal start position."""
+    from _reference import table2_bearing_loads
+
+    tc = frb.turbocharger(36e-6)
+    e = frb.equilibrium(tc, "J", 50e3).bearings[0]
+    s, vr, _ = _slave(built / "fmus" / "FloatingRingBearing.fmu", "init_b", tmp_path)
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.setReal([vr["ring.x0"], vr["ring.y0"], vr["ring.speed0"]], [e.ring[0], e.ring[1], e.ring_speed])
+    s.setReal([vr["journal.x"], vr["journal.y"], vr["rotor_speed"]], [e.journal[0], e.journal[1], 50e3 * math.pi / 30])
+    fx, fy = s.getReal([vr["force.x"], vr["force.y"]])
+    load = table2_bearing_loads()[0]
+    assert fy == pytest.approx(load, rel=1e-6) and abs(fx) < 1e-6 * load  # equilibrium solved to ~1e-10 N
+    s.exitInitializationMode()
+    s.terminate()
+    s.freeInstance()
+    r, vr, _ = _slave(built / "fmus" / "TurbochargerRotor.fmu", "init_r", tmp_path)
+    r.setupExperiment(startTime=0.0)
+    r.enterInitializationMode()
+    r.setReal([vr["turbine_bearing.journal_x0"], vr["turbine_bearing.journal_y0"]], [3e-6, -7e-6])
+    assert r.getReal([vr["turbine_bearing.journal.x"], vr["turbine_bearing.journal.y"]]) == pytest.approx(
+        [3e-6, -7e-6], abs=1e-15)
+    r.exitInitializationMode()
+    r.terminate()
+    r.freeInstance()
