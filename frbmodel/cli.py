@@ -665,8 +665,17 @@ def cmd_sweep(args):
         cases = grid(params, args.analysis, **opts)
     scheduler = "serial" if args.serial else args.scheduler
     writable_dir(args.out)
-    idx = run_study(cases, args.out, scheduler=scheduler, n_workers=args.workers, retry_failed=args.retry_failed,
-                    progress=True)
+    interrupted = None
+    try:
+        idx = run_study(cases, args.out, scheduler=scheduler, n_workers=args.workers,
+                        retry_failed=args.retry_failed, progress=True)
+    except KeyboardInterrupt as exc:  # finished cases are on disk: index them and draw the map from them
+        from .sweep import write_index
+
+        interrupted = exc
+        idx = write_index(cases, Path(args.out))
+        print(f"\nfrb sweep: interrupted ({'SIGTERM' if isinstance(exc, Terminated) else 'Ctrl-C'}); the finished "
+              "cases are kept, the same command resumes the study", file=sys.stderr)
     paths = plot_stability_map(args.out)
     sm = stability_map(args.out)
     n_fail = int((idx["status"] == "failed").sum())
@@ -680,6 +689,8 @@ def cmd_sweep(args):
               .to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     print("wrote:\n  " + "\n  ".join(str(p) for p in [Path(args.out) / "index.csv", *paths]))
     print(f"results in {Path(args.out).resolve()}")
+    if interrupted is not None:
+        return 143 if isinstance(interrupted, Terminated) else 130
     return 4 if n_fail else 0
 
 
