@@ -375,6 +375,7 @@ def test_cosim_developed_whirl_limit_cycle_equals_monolithic(built):
     np.testing.assert_allclose(ec, em, rtol=0.01)
 
 
+@pytest.mark.slow  # 21 s: python -m pytest -m slow (README "Co-simulation accuracy" has the full-run numbers)
 def test_cosim_runup_through_four_onsets_equals_monolithic(built):
     """20 -> 135 krpm at the main job's ramp rate (230 krpm/s) with a 0.1 g mm turbine-wheel unbalance: four
     sub-synchronous components, the last one (~82 krpm) born inside the developed whirl. The unbalance is a

@@ -48,9 +48,12 @@ def test_workers_below_one_are_refused(tmp_path, capsys, workers):
     assert f"workers = {workers} is invalid" in capsys.readouterr().err
 
 
-def test_unreachable_scheduler_fails_fast_naming_the_address(tmp_path):
+def test_unreachable_scheduler_fails_fast_naming_the_address(tmp_path, monkeypatch):
     pytest.importorskip("distributed")
-    from frbmodel.sweep import SCHEDULER_TIMEOUT_S
+    import frbmodel.sweep
+
+    monkeypatch.setattr(frbmodel.sweep, "SCHEDULER_TIMEOUT_S", 1.0)  # the default 5 s, shortened for the suite
+    SCHEDULER_TIMEOUT_S = frbmodel.sweep.SCHEDULER_TIMEOUT_S
 
     address = f"tcp://127.0.0.1:{_free_port()}"  # a port nobody listens on
     cases = grid({"outer_clearance": [36e-6]}, "campbell", speeds_rpm=(1e3, 250e3, 5))

@@ -75,7 +75,8 @@ def test_cli_names_the_extra_of_a_missing_optional_package(capsys, tmp_path, mon
     assert code == 2 and "optional package 'fmpy'" in err and "frbmodel[fmi]" in err
 
 
-@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize("sig, code", [pytest.param(signal.SIGINT, 130, marks=pytest.mark.slow),  # same path
+                                       (signal.SIGTERM, 143)])
 def test_interrupted_runup_keeps_its_data_marks_it_and_draws_its_figures(tmp_path, sig, code):
     out = tmp_path / "run"
     env = dict(os.environ, MPLBACKEND="Agg")
