@@ -18,3 +18,18 @@ def built(tmp_path_factory):
     out = tmp_path_factory.mktemp("build")
     build_fmus(out, Path(__file__).resolve().parents[1], progress=lambda m: None)
     return out
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _dask_scratch_in_tmp(tmp_path_factory):
+    """Dask's LocalCluster writes its scratch space under the temporary directory (/tmp/dask-scratch-space by
+    default): point it at this session's tmp path, so the suite leaves nothing outside pytest's tmp paths."""
+    path = str(tmp_path_factory.mktemp("dask"))
+    os.environ["DASK_TEMPORARY_DIRECTORY"] = path  # for worker processes
+    try:  # and for this process, whose dask config may already be loaded
+        import dask
+
+        dask.config.set({"temporary-directory": path})
+    except ImportError:
+        pass
+    yield
