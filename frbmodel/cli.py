@@ -525,7 +525,78 @@ def cmd_plot(args):
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
     write_composites(run, system, out, xscale=args.xscale, title=title)
+    if args.orbits:
+        write_orbits(run, out, parse_speeds(args.orbits))
+    if args.waterfall:
+        write_waterfalls(run, out)
     print(f"results in {out.resolve()}")
+
+
+def write_orbits(run, out, speeds_rpm, revolutions=20.0):
+    """Orbit figures of a run at given speeds: ``orbits_<rpm>.png`` and ``.html`` in ``out``.
+
+    Parameters
+    ----------
+    run : RunupResult
+        With the system in its metadata (clearances).
+    out : Path
+        Output folder (must exist).
+    speeds_rpm : sequence of float
+        Window centres [rpm] (each within the run's speeds).
+    revolutions : float
+        Half-width of each window in rotor revolutions.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    import matplotlib.pyplot as plt
+
+    from .orbits import orbits
+
+    paths = []
+    for s in speeds_rpm:
+        o = orbits(run, speed_rpm=float(s), revolutions=revolutions)
+        stem = out / f"orbits_{float(s):.0f}"
+        fig = o.plot()
+        fig.savefig(stem.with_suffix(".png"), dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        o.plot_html(stem.with_suffix(".html"))
+        paths += [stem.with_suffix(".png"), stem.with_suffix(".html")]
+        print(f"wrote {stem}.png/.html")
+    return paths
+
+
+def write_waterfalls(run, out):
+    """3-D waterfall of every disc of a run: ``waterfall_<disc>.png`` and ``.html`` in ``out``.
+
+    Parameters
+    ----------
+    run : RunupResult
+        At least 64 samples.
+    out : Path
+        Output folder (must exist).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    import matplotlib.pyplot as plt
+
+    from .spectral import spectrogram
+
+    paths = []
+    for node in run.displacement:
+        sp = spectrogram(run, node)
+        fig = sp.waterfall()
+        fig.savefig(out / f"waterfall_{node}.png", dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        sp.waterfall_html(out / f"waterfall_{node}.html")
+        paths += [out / f"waterfall_{node}.png", out / f"waterfall_{node}.html"]
+        print(f"wrote {out / f'waterfall_{node}'}.png/.html")
+    return paths
 
 
 def cmd_losses(args):
@@ -910,6 +981,11 @@ def _add_plot(sub):
                         help="re-render the figures of a run-up / co-simulation results folder")
     pl.add_argument("dir", help="folder with runup.csv and runup.json")
     pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
+    pl.add_argument("--orbits", metavar="SPEEDS", default=None,
+                    help="also write orbits_<rpm>.png/.html at these speeds [rpm] (comma list or start:stop:count; "
+                         "±20 revolutions about each): journal in ring, ring in housing (µm and ε), wheels")
+    pl.add_argument("--waterfall", action="store_true",
+                    help="also write the 3-D waterfall waterfall_<disc>.png/.html (amplitude in µm, 1X line)")
     pl.set_defaults(func=cmd_plot)
 
 

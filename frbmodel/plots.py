@@ -359,12 +359,82 @@ def _speed_order(sp):
     return np.argsort(sp.speeds_rpm, kind="stable")
 
 
+def content_fmax(sp, db_range=None, margin=1.2):
+    """Default upper frequency of the spectrogram figures [Hz]: ``margin`` × the highest frequency whose amplitude
+    (forward or backward, any segment) lies within ``db_range`` of the largest, at most the Nyquist frequency.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    db_range : float, optional
+        Colour range [dB] (default ``sp.db_range``).
+    margin : float
+        Factor on the highest visible frequency.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> f = np.arange(0.0, 5000.0, 10.0)
+    >>> a = np.where(f <= 800.0, 1e-6, 1e-9)[:, None] * np.ones((1, 3))
+    >>> sp = SimpleNamespace(freqs_hz=f, amplitude=a, db_range=25.0)
+    >>> content_fmax(sp)
+    960.0
+    """
+    rng = sp.db_range if db_range is None else db_range
+    a = sp.amplitude.max(axis=1)
+    vis = np.flatnonzero(a >= a.max() * 10 ** (-rng / 20.0))
+    top = sp.freqs_hz[vis[-1]] if vis.size else sp.freqs_hz[-1]
+    return float(min(sp.freqs_hz[-1], margin * max(top, sp.freqs_hz[1])))
+
+
+def order_label(k):
+    """Label of the order line k × f_rot: ``"1X"``, ``"0.5X"``, ``"2X"``."""
+    return f"{k:g}X"
+
+
+def spectrogram_colour(sp, amplitude="db_max"):
+    """Colour data, limits and colour-bar label of a spectrogram figure.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    amplitude : {"db_max", "um", "db_um"}
+        dB relative to the largest amplitude (the paper's figures), orbit amplitude in µm (linear), or dB re 1 µm;
+        each over ``sp.db_range`` below the largest amplitude (µm: from 0).
+
+    Returns
+    -------
+    z : (f, k) ndarray
+    vmin, vmax : float
+    label : str
+    """
+    a = sp.amplitude
+    top = float(a.max())
+    if amplitude == "db_max":
+        return sp.db(), -sp.db_range, 0.0, f"orbit amplitude [dB re max], {sp.db_range:g} dB range"
+    if amplitude == "um":
+        return a * 1e6, 0.0, top * 1e6, "orbit amplitude [µm]"
+    if amplitude == "db_um":
+        hi = 20 * np.log10(top / 1e-6)
+        return (20 * np.log10(np.maximum(a, 1e-300) / 1e-6), hi - sp.db_range, hi,
+                f"orbit amplitude [dB re 1 µm], {sp.db_range:g} dB range")
+    raise ValueError(f"amplitude = {amplitude!r} is invalid: valid 'db_max', 'um', 'db_um'")
+
+
 def _label_components(ax, sp):
     """Component labels at their onset, or at their first detection marked "(from start)" if they have none;
-    a cross where a component vanishes before the end of the run."""
+    a cross where a component vanishes before the end of the run. Only components whose largest amplitude lies
+    within the colour range (``sp.db_range`` below the largest amplitude of the spectrogram) are labelled."""
     first = True
     down = _kind(sp) == "run-down"
+    floor = sp.amplitude.max() * 10 ** (-sp.db_range / 20.0)
     for c in sp.components():
+        if np.max(c.amplitude_m) < floor:
+            continue
         if np.isfinite(c.onset_rpm):
             xy, text = (c.onset_rpm / 1e3, c.onset_hz), c.label
         else:
@@ -379,7 +449,7 @@ def _label_components(ax, sp):
 
 
 def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None,
-                     xscale="linear"):
+                     xscale="linear", amplitude="db_max", orders=(1.0,)):
     """The paper's Figs. 12–14: spectrogram (25 dB, log) with unstable Campbell modes (solid), film whirl
     curves (dashed), 1X (dotted), component labels; RSR of the run vs the linear methods beside it.
 
@@ -397,11 +467,15 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     rsr : bool
         Add the RSR panel (needs ``sp.run``; the linear methods' RSR needs the system in ``sp.run.meta``).
     fmax_hz : float, optional
-        Upper frequency limit [Hz] (default: 1.1 × the highest rotor frequency, at most the Nyquist frequency).
+        Upper frequency limit [Hz] (default: :func:`content_fmax`, the content within the colour range).
     components : bool
-        Label the tracked components.
+        Label the tracked components (those within the colour range).
     title : str, optional
     xscale : {"linear", "log"}
+    amplitude : {"db_max", "um", "db_um"}
+        Colour scale (:func:`spectrogram_colour`).
+    orders : sequence of float
+        Order lines k × f_rot drawn dotted (1X by default; e.g. ``(0.5, 1, 2)``).
 
     Returns
     -------
@@ -411,7 +485,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
 
     run = sp.run
     kind = _kind(sp)
-    fmax = fmax_hz or float(min(sp.freqs_hz[-1], 1.1 * sp.speeds_rpm.max() / 60.0))
+    fmax = fmax_hz or content_fmax(sp)
     if rsr and run is not None:
         fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6), gridspec_kw={"width_ratios": [2.3, 1]})
     else:
@@ -420,11 +494,13 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     sel = sp.freqs_hz <= fmax
     order = _speed_order(sp)
     s_all = sp.speeds_rpm[order]
-    mesh = ax.pcolormesh(s_all / 1e3, sp.freqs_hz[sel], sp.db()[sel][:, order], shading="nearest", cmap="magma",
-                         vmin=-sp.db_range, vmax=0.0, rasterized=True)
+    z, vmin, vmax, clabel = spectrogram_colour(sp, amplitude)
+    mesh = ax.pcolormesh(s_all / 1e3, sp.freqs_hz[sel], z[sel][:, order], shading="nearest", cmap="magma",
+                         vmin=vmin, vmax=vmax, rasterized=True)
     cb = fig.colorbar(mesh, ax=ax, pad=0.01)
-    cb.set_label(f"orbit amplitude [dB re max], {sp.db_range:g} dB range")
-    ax.plot(s_all / 1e3, s_all / 60.0, ":", color="w", lw=1, label="1X")
+    cb.set_label(clabel)
+    for k in orders:
+        ax.plot(s_all / 1e3, k * s_all / 60.0, ":", color="w" if k == 1 else "#bbbbbb", lw=1, label=order_label(k))
     if campbell is not None:
         first = True
         for sk, f, _ in _unstable_lines(campbell, fmax):
@@ -448,13 +524,13 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     return fig
 
 
-def composite_plotly(sp, campbell=None, fmax_hz=None):
+def composite_plotly(sp, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,)):
     """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and 1X; the speed axis increases
     to the right for run-ups and run-downs alike (a run-down is titled as one).
 
     Parameters
     ----------
-    sp, campbell, fmax_hz
+    sp, campbell, fmax_hz, amplitude, orders
         As for :func:`composite_figure`.
 
     Returns
@@ -464,14 +540,19 @@ def composite_plotly(sp, campbell=None, fmax_hz=None):
     import plotly.graph_objects as go
 
     kind = _kind(sp)
-    fmax = fmax_hz or float(min(sp.freqs_hz[-1], 1.1 * sp.speeds_rpm.max() / 60.0))
+    fmax = fmax_hz or content_fmax(sp)
     sel = sp.freqs_hz <= fmax
     order = _speed_order(sp)
     s_all = sp.speeds_rpm[order]
-    fig = go.Figure(go.Heatmap(x=s_all, y=sp.freqs_hz[sel], z=sp.db()[sel][:, order], zmin=-sp.db_range, zmax=0,
-                               colorscale="Magma", colorbar=dict(title="dB"),
-                               hovertemplate="speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>%{z:.1f} dB<extra></extra>"))
-    fig.add_trace(go.Scatter(x=s_all, y=s_all / 60, mode="lines", name="1X", line=dict(dash="dot", color="white")))
+    z, vmin, vmax, _ = spectrogram_colour(sp, amplitude)
+    unit = "µm" if amplitude == "um" else "dB"
+    fig = go.Figure(go.Heatmap(x=s_all, y=sp.freqs_hz[sel], z=z[sel][:, order], zmin=vmin, zmax=vmax,
+                               colorscale="Magma", colorbar=dict(title=unit),
+                               hovertemplate="speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>%{z:.3g} " + unit
+                               + "<extra></extra>"))
+    for k in orders:
+        fig.add_trace(go.Scatter(x=s_all, y=k * s_all / 60, mode="lines", name=order_label(k),
+                                 line=dict(dash="dot", color="white")))
     if campbell is not None:
         for sk, f, j in _unstable_lines(campbell, fmax):
             fig.add_trace(go.Scatter(x=sk * 1e3, y=f, mode="lines", name=f"unstable mode {j}",
@@ -481,4 +562,105 @@ def composite_plotly(sp, campbell=None, fmax_hz=None):
                                      line=dict(dash="dash", color=_whirl_style(k)[0])))
     fig.update_layout(xaxis_title=_speed_label(kind, "rpm"), yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
                       title=f"{kind.capitalize()} spectrogram, {sp.node}")
+    return fig
+
+
+def waterfall_lines(sp, fmax_hz=None, amplitude="um", n_lines=40):
+    """The spectra drawn in a waterfall: up to ``n_lines`` segments, evenly spread in speed order.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    fmax_hz : float, optional
+        Upper frequency [Hz] (default :func:`content_fmax`).
+    amplitude : {"um", "db_um"}
+        Orbit amplitude (max of forward and backward) in µm, or in dB re 1 µm clipped at ``sp.db_range`` below
+        the largest.
+    n_lines : int
+        Largest number of spectra.
+
+    Returns
+    -------
+    freqs_hz : (f,) ndarray
+    speeds_rpm : (m,) ndarray
+        Increasing.
+    z : (f, m) ndarray
+        Amplitudes of the spectra in the unit of ``amplitude``.
+    """
+    fmax = fmax_hz or content_fmax(sp)
+    sel = sp.freqs_hz <= fmax
+    order = _speed_order(sp)
+    pick = order[np.unique(np.linspace(0, order.size - 1, min(n_lines, order.size)).round().astype(int))]
+    z, vmin, _, _ = spectrogram_colour(sp, amplitude)
+    z = np.maximum(z[sel][:, pick], vmin) if amplitude == "db_um" else z[sel][:, pick]
+    return sp.freqs_hz[sel], sp.speeds_rpm[pick], z
+
+
+def waterfall_figure(sp, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40, title=None):
+    """3-D waterfall (cascade): spectra of the orbit (frequency × amplitude) stacked along the rotor speed, with
+    order lines k × f_rot on the floor.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    fmax_hz, amplitude, n_lines
+        As for :func:`waterfall_lines`.
+    orders : sequence of float
+        Order lines (1X by default).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    f, s, z = waterfall_lines(sp, fmax_hz, amplitude, n_lines)
+    fig = plt.figure(figsize=(10, 7))
+    ax = fig.add_subplot(projection="3d")
+    cmap = plt.get_cmap("viridis")
+    base = float(z.min())
+    for j in range(s.size):
+        ax.plot(f, np.full(f.size, s[j] / 1e3), z[:, j], lw=0.8, color=cmap(j / max(1, s.size - 1)))
+    for k in orders:
+        fk = k * s / 60.0
+        ok = fk <= f[-1]
+        ax.plot(fk[ok], s[ok] / 1e3, np.full(ok.sum(), base), "--", color="C3" if k == 1 else "0.4", lw=1,
+                label=f"{order_label(k)} (k × f_rot)")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(_speed_label(_kind(sp)).replace(" (run-down: time runs right to left)", ""))
+    ax.set_zlabel("orbit amplitude [µm]" if amplitude == "um" else "orbit amplitude [dB re 1 µm]")
+    ax.view_init(elev=28, azim=-60)
+    ax.legend(fontsize=8, loc="upper left")
+    ax.set_title(title or f"Waterfall, {_kind(sp)}, {sp.node} (orbit x + iy, max of forward/backward)",
+                 fontsize=10)
+    return fig
+
+
+def waterfall_plotly(sp, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40, title=None):
+    """Interactive 3-D waterfall (plotly), as :func:`waterfall_figure`.
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+    """
+    import plotly.graph_objects as go
+
+    f, s, z = waterfall_lines(sp, fmax_hz, amplitude, n_lines)
+    unit = "µm" if amplitude == "um" else "dB re 1 µm"
+    fig = go.Figure()
+    for j in range(s.size):
+        fig.add_trace(go.Scatter3d(x=f, y=np.full(f.size, s[j]), z=z[:, j], mode="lines", showlegend=False,
+                                   line=dict(width=2, color=z[:, j], colorscale="Viridis", cmin=z.min(),
+                                             cmax=z.max()),
+                                   hovertemplate=f"{s[j]:.0f} rpm<br>%{{x:.1f}} Hz<br>%{{z:.3g}} {unit}"
+                                   "<extra></extra>"))
+    for k in orders:
+        fk = k * s / 60.0
+        ok = fk <= f[-1]
+        fig.add_trace(go.Scatter3d(x=fk[ok], y=s[ok], z=np.full(ok.sum(), float(z.min())), mode="lines",
+                                   name=order_label(k), line=dict(dash="dash", color="red", width=3)))
+    fig.update_layout(title=title or f"Waterfall, {_kind(sp)}, {sp.node}",
+                      scene=dict(xaxis_title="frequency [Hz]", yaxis_title="rotor speed [rpm]",
+                                 zaxis_title=f"orbit amplitude [{unit}]"))
     return fig

@@ -71,6 +71,14 @@ class SpectrogramResult(Result):
         a = self.amplitude
         return 20 * np.log10(np.maximum(a, 1e-300) / a.max())
 
+    def amplitude_um(self):
+        """Forward and backward orbit amplitudes in µm, ((f, k), (f, k))."""
+        return self.forward * 1e6, self.backward * 1e6
+
+    def db_re_um(self):
+        """:attr:`amplitude` in dB re 1 µm, (f, k)."""
+        return 20 * np.log10(np.maximum(self.amplitude, 1e-300) / 1e-6)
+
     def to_xarray(self):
         """The spectrogram as an :class:`xarray.Dataset` with dimensions frequency × time.
 
@@ -157,10 +165,16 @@ class SpectrogramResult(Result):
         return components_table(self.components())
 
     # ---------------------------------------------------------------- figures
-    def plot(self, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None, xscale="linear"):
+    def plot(self, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None, xscale="linear",
+             amplitude="db_max", orders=(1.0,)):
         """Spectrogram vs speed; with ``campbell`` (a method-J :class:`CampbellResult`) its unstable-mode
         frequencies as solid lines and the film whirl curves dashed, and — with ``rsr`` — the run-up RSR vs the
         linear methods beside it (the paper's Figs. 12–14).
+
+        ``amplitude`` is the colour scale: ``"db_max"`` (dB re the largest, default), ``"um"`` (µm) or
+        ``"db_um"`` (dB re 1 µm); ``orders`` the order lines k × f_rot (1X by default); the frequency axis ends
+        by default a little above the highest component within the colour range
+        (:func:`frbmodel.plots.content_fmax`). See :func:`frbmodel.plots.composite_figure`.
 
         Returns
         -------
@@ -169,10 +183,11 @@ class SpectrogramResult(Result):
         from .plots import composite_figure
 
         return composite_figure(self, campbell=campbell, whirl=whirl, rsr=rsr, fmax_hz=fmax_hz,
-                                components=components, title=title, xscale=xscale)
+                                components=components, title=title, xscale=xscale, amplitude=amplitude,
+                                orders=orders)
 
-    def plot_html(self, path=None, campbell=None, fmax_hz=None):
-        """Interactive spectrogram (plotly); written to ``path`` (HTML) if given.
+    def plot_html(self, path=None, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,)):
+        """Interactive spectrogram (plotly); written to ``path`` (HTML) if given (options as :meth:`plot`).
 
         Returns
         -------
@@ -180,9 +195,35 @@ class SpectrogramResult(Result):
         """
         from .plots import composite_plotly
 
-        fig = composite_plotly(self, campbell=campbell, fmax_hz=fmax_hz)
+        fig = composite_plotly(self, campbell=campbell, fmax_hz=fmax_hz, amplitude=amplitude, orders=orders)
         if path is not None:
             fig.write_html(str(path))
+        return fig
+
+    def waterfall(self, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40, title=None):
+        """3-D waterfall (speed × frequency × amplitude in µm, or ``amplitude="db_um"``) with order lines
+        (:func:`frbmodel.plots.waterfall_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from .plots import waterfall_figure
+
+        return waterfall_figure(self, fmax_hz, amplitude, orders, n_lines, title)
+
+    def waterfall_html(self, path=None, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40):
+        """Interactive 3-D waterfall (plotly); written to ``path`` (HTML, plotly.js from the CDN) if given.
+
+        Returns
+        -------
+        plotly.graph_objects.Figure
+        """
+        from .plots import waterfall_plotly
+
+        fig = waterfall_plotly(self, fmax_hz, amplitude, orders, n_lines)
+        if path is not None:
+            fig.write_html(str(path), include_plotlyjs="cdn")
         return fig
 
 
