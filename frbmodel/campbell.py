@@ -325,6 +325,25 @@ class CampbellResult(Result):
                                  "past onset at grid start": self.whirl_margin[0] > 0,
                                  "source": self.meta.get("whirl_onset_source", "")})
 
+    def mode_shape(self, speed_rpm, mode):
+        """Shape of tracked mode ``mode`` at ``speed_rpm``, solved at exactly that speed.
+
+        Delegates to :func:`frbmodel.modeshape.mode_shape`.
+
+        Parameters
+        ----------
+        speed_rpm : float
+            Rotor speed [rpm] within the range where the mode is present.
+        mode : int
+            Column of the Campbell arrays.
+
+        Returns
+        -------
+        frbmodel.modeshape.ModeShape
+        """
+        from .modeshape import mode_shape
+        return mode_shape(self, speed_rpm, mode)
+
     # ------------------------------------------------------------------ output
     def plot(self, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None):
         """Holistic Campbell diagram (matplotlib); see :func:`frbmodel.plots.campbell_figure`.

@@ -133,6 +133,12 @@ def cmd_campbell(args):
     if cd.n_neutral.max():
         print(f"neutral modes (|D| <= round-off bound, undamped): up to {int(cd.n_neutral.max())} at one speed")
     paths.append(_critical_table(cd, None if args.from_fmu else tc, out / f"campbell_{cd.method}_critical.csv", kw))
+    if args.mode_shapes is not None:
+        from .modeshape import save_mode_shapes
+
+        if args.from_fmu:
+            raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
+        paths += save_mode_shapes(cd, check_positive("--mode-shapes", args.mode_shapes, "rpm"), out, fmax)
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
 
@@ -785,6 +791,9 @@ def _add_campbell(sub):
     c.add_argument("--out", default="results/campbell", help="output folder")
     c.add_argument("--fmax", type=float, default=None, help="upper frequency limit of the plots [Hz]")
     c.add_argument("--no-whirl", action="store_true", help="skip the film whirl curves")
+    c.add_argument("--mode-shapes", metavar="SPEED", type=float, default=None,
+                   help="also write mode_shapes_<method>_<rpm>.png/.html/.csv: the shapes of the modes at SPEED "
+                        "[rpm] (below --fmax if given)")
     c.add_argument("--k", type=float, default=None, help="spring stiffness of methods A, E [N/m] (1e6)")
     c.add_argument("--kx", type=float, default=None, help="horizontal spring of method B [N/m] (1e6)")
     c.add_argument("--ky", type=float, default=None, help="vertical spring of method B [N/m] (2e6)")
