@@ -230,6 +230,51 @@ class Orbits:
         return fig
 
 
+def orbits_figure(windows, title=None):
+    """Orbits of several windows side by side, one row each: per bearing the journal in the ring and the ring in
+    the housing as ε (unit clearance circle dashed), and the wheels in µm.
+
+    Parameters
+    ----------
+    windows : sequence of Orbits
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    bearings = list(windows[0].clearances)
+    ncol = 2 * len(bearings) + 1
+    fig, axs = plt.subplots(len(windows), ncol, figsize=(2.6 * ncol, 2.7 * len(windows)), squeeze=False)
+    th = np.linspace(0, 2 * np.pi, 200)
+    for i, o in enumerate(windows):
+        cells = [(f"{b}: {w}", e) for b in bearings
+                 for w, e in (("journal in ring", o.eps_inner(b)), ("ring in housing", o.eps_outer(b)))]
+        for j, (name, e) in enumerate(cells):
+            ax = axs[i, j]
+            ax.plot(e[:, 0], e[:, 1], lw=0.7)
+            ax.plot(np.cos(th), np.sin(th), "k--", lw=0.8)
+            ax.set_xlim(-1.1, 1.1)
+            ax.set_ylim(-1.1, 1.1)
+            ax.set_aspect("equal")
+            ax.set_title(f"{name}, ε", fontsize=8)
+        ax = axs[i, -1]
+        for d, xy in o.wheels.items():
+            ax.plot(xy[:, 0] * 1e6, xy[:, 1] * 1e6, lw=0.7, label=d)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title("wheels [µm]", fontsize=8)
+        ax.legend(fontsize=6, loc="upper right")
+        axs[i, 0].set_ylabel(o.label, fontsize=8)
+        for ax in axs[i]:
+            ax.tick_params(labelsize=6)
+            ax.grid(alpha=0.3)
+    fig.suptitle(title or "Orbits (dashed: clearance circle)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
 def orbits(run, speed_rpm=None, time_s=None, revolutions=20.0, span_rpm=None):
     """Orbits of a run-up / co-simulation over a window (see :func:`window_indices`).
 
@@ -272,4 +317,4 @@ def orbits(run, speed_rpm=None, time_s=None, revolutions=20.0, span_rpm=None):
                   {b: clear[b] for b in run.journal}, label)
 
 
-__all__ = ["Orbits", "orbits", "window_indices"]
+__all__ = ["Orbits", "orbits", "orbits_figure", "window_indices"]

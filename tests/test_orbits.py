@@ -3,7 +3,7 @@ order lines and the waterfall (frbmodel.plots), on small synthetic runs (no inte
 import numpy as np
 import pytest
 
-from frbmodel.orbits import orbits, window_indices
+from frbmodel.orbits import orbits, orbits_figure, window_indices
 from frbmodel.plots import composite_figure, content_fmax, spectrogram_colour, waterfall_figure, waterfall_lines
 from frbmodel.recorder import RunupResult
 from frbmodel.spectral import spectrogram
@@ -62,6 +62,11 @@ def test_orbit_figure_plots_the_input_and_the_clearance_circles():
     np.testing.assert_allclose(np.hypot(*axs[e].lines[2].get_xydata().T), 1.0, rtol=1e-12)
     w = titles.index("wheel")
     np.testing.assert_allclose(np.hypot(*axs[w].lines[0].get_xydata().T), R_W * 1e6, rtol=1e-12)
+    plt.close(fig)
+    fig = orbits_figure([o, o])                                 # two windows: rows of ε panels + wheels in µm
+    ax = fig.axes[2 * 5 - 3]                                    # second row, "rear: journal in ring, ε"
+    assert ax.get_title() == "rear: journal in ring, ε"
+    np.testing.assert_allclose(np.hypot(*ax.lines[0].get_xydata().T), R_J["rear"] / C_IN["rear"], rtol=1e-12)
     plt.close(fig)
 
 
