@@ -248,7 +248,7 @@ class ModeShape:
     @property
     def title(self) -> str:
         """Short label: method, mode, speed, frequency, damping, kind."""
-        return (f"{self.method} mode {self.mode} @ {self.speed_rpm / 1e3:g} krpm: {self.frequency_hz:.1f} Hz, "
+        return (f"{self.method} mode {self.mode} @ {self.speed_rpm / 1e3:.1f} krpm: {self.frequency_hz:.1f} Hz, "
                 f"D = {self.damping:.3f}, {self.precession} {self.kind}")
 
     def plot(self, ax=None, n_phases=8, title=None):
@@ -397,7 +397,7 @@ def plot_mode_shape(ms, ax=None, n_phases=8, title=None):
                         fontsize=7, color="tab:orange")
     ax.set_ylim(-1.25, 1.25)
     ax.set_xlabel("z [mm]")
-    ax.set_ylabel("x / max orbit radius [-]")
+    ax.set_ylabel("x / largest orbit semi-axis [-]")
     ax.set_title(title or ms.title, fontsize=9)
     return fig
 
@@ -526,3 +526,35 @@ def save_mode_shapes(cd, speed_rpm, out_dir, fmax_hz=None):
         frames.append(df)
     pd.concat(frames, ignore_index=True).to_csv(stem.with_suffix(".csv"), index=False)
     return [stem.with_suffix(s) for s in (".png", ".html", ".csv")]
+
+
+def unstable_mode_shapes(cd, precession="forward"):
+    """Shape of each unstable range's mode at its least damped grid speed (:meth:`CampbellResult.unstable_ranges`).
+
+    Parameters
+    ----------
+    cd : CampbellResult
+    precession : str or None
+        Keep only the ranges of this precession ("forward", "backward", "mixed"); None: all.
+
+    Returns
+    -------
+    list of ModeShape
+        In the order of the unstable ranges (by their start speed).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> cd = frb.campbell(frb.turbocharger(), "J", np.linspace(10e3, 250e3, 25), whirl=False)
+    >>> [(ms.mode, ms.damping < 0) for ms in unstable_mode_shapes(cd)]
+    [(3, True), (5, True), (1, True), (2, True)]
+    """
+    out = []
+    for _, r in cd.unstable_ranges().iterrows():
+        if precession is not None and r["precession"] != precession:
+            continue
+        j = int(r["mode"])
+        inside = (cd.speeds_rpm >= r["from [rpm]"]) & (cd.speeds_rpm <= r["to [rpm]"])
+        i = np.flatnonzero(inside)[np.nanargmin(cd.damping[inside, j])]
+        out.append(mode_shape(cd, cd.speeds_rpm[i], j))
+    return out
