@@ -300,7 +300,9 @@ def mode_shape(cd, speed_rpm, mode) -> ModeShape:
     cd : CampbellResult
         From :func:`frbmodel.campbell` (its ``meta`` holds the system, method options).
     speed_rpm : float
-        Rotor speed [rpm] within the range where the mode is present.
+        Rotor speed [rpm] within the range where the mode is present. Between grid speeds the mode is the
+        eigenvalue nearest to the track's linearly interpolated one (near a crossing of two branches, choose a grid
+        speed to be sure of the identity).
     mode : int
         Column of the Campbell arrays.
 
