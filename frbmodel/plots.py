@@ -75,11 +75,24 @@ def _default_fmax(cd):
     return float(max(1.15 * f1x, 500.0))
 
 
+def _mark_critical_speeds(ax, cd, fmax):
+    """Critical speeds (1X crossings of the damped branches, interpolated on the grid) as stars on the 1X line."""
+    if cd.speeds_rpm.size < 2:
+        return
+    from .unbalance import critical_speeds
+
+    cs = critical_speeds(cd, refine=False)
+    cs = cs[cs["frequency [Hz]"] <= fmax]
+    if len(cs):
+        ax.scatter(cs["speed [rpm]"] / 1e3, cs["frequency [Hz]"], marker="*", s=110, color="gold",
+                   edgecolors="k", linewidths=0.7, zorder=4, label="critical speeds (1X crossings)")
+
+
 def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None):
     """Holistic Campbell diagram: frequency vs speed, colour = modal damping (diverging, centred at 0),
     marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge, neutral modes
     (|D| within its round-off bound, e.g. every mode of the undamped methods A, B, E) grey; dashed film whirl curves
-    above their onset; optional 1X line.
+    above their onset; optional 1X line with the critical speeds (its crossings with the damped branches) starred.
 
     Parameters
     ----------
@@ -87,7 +100,7 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
     fmax_hz : float, optional
         Upper frequency limit [Hz] (default: 1.15 × the highest rotor frequency, at least 500 Hz).
     whirl, one_x : bool
-        Draw the film whirl curves and the 1X line.
+        Draw the film whirl curves and the 1X line (with the critical speeds).
     ax : matplotlib.axes.Axes, optional
         Draw into these axes (default: a new figure).
     title : str, optional
@@ -126,6 +139,7 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
         _plot_whirl(ax, cd)
     if one_x:
         ax.plot(cd.speeds_rpm / 1e3, cd.speeds_rpm / 60.0, color="0.4", lw=1, ls=":", label="1X")
+        _mark_critical_speeds(ax, cd, fmax)
     for prec, (mk, _) in MARKERS.items():  # shape = precession (hollow: the fill is the damping colour)
         ax.scatter([], [], marker=mk, facecolors="none", edgecolors="0.2", s=25, label=prec)
     ax.scatter([], [], marker="o", color=cmap(norm(-0.5)), edgecolors="k", linewidths=0.8, s=46,

@@ -259,3 +259,23 @@ def test_cli_campbell_writes_critical_speeds(tmp_path, capsys):
     cs = pd.read_csv(tmp_path / "campbell_A_critical.csv")
     exact = synchronous_critical_speeds(frb.turbocharger(), "A", k=1e6)
     np.testing.assert_allclose(cs["speed [rpm]"], exact[exact <= 30e3], rtol=1e-6)
+
+
+def test_campbell_figure_marks_the_critical_speeds():
+    """The stars on the 1X line are the grid crossings of the damped branches with 1X, computed here
+    independently by sign changes of f_mode - n/60 and linear interpolation."""
+    import matplotlib.pyplot as plt
+
+    speeds = np.linspace(1e3, 60e3, 60)
+    cd = frb.campbell(frb.turbocharger(), "A", speeds, whirl=False)
+    fig = cd.plot(fmax_hz=2000)
+    stars = [c for c in fig.axes[0].collections if c.get_label() == "critical speeds (1X crossings)"]
+    assert len(stars) == 1
+    got = np.sort(stars[0].get_offsets()[:, 0] * 1e3)
+    expected = []
+    for j in range(cd.frequencies_hz.shape[1]):
+        g = cd.frequencies_hz[:, j] - speeds / 60.0
+        for k in np.flatnonzero(np.isfinite(g[:-1]) & np.isfinite(g[1:]) & (np.sign(g[:-1]) != np.sign(g[1:]))):
+            expected.append(speeds[k] - g[k] * (speeds[k + 1] - speeds[k]) / (g[k + 1] - g[k]))
+    plt.close(fig)
+    np.testing.assert_allclose(got, np.sort(expected), rtol=1e-9)  # same interpolation: round-off only
