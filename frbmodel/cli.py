@@ -89,6 +89,13 @@ def _refuse_with_fmu(args, names):
                              "write your own (frb system + frb build-fmus)")
 
 
+def _spring_args(p):
+    """The spring stiffnesses of methods A, B, E [N/m]."""
+    p.add_argument("--k", type=float, default=None, help="spring stiffness of methods A, E [N/m] (1e6)")
+    p.add_argument("--kx", type=float, default=None, help="horizontal spring of method B [N/m] (1e6)")
+    p.add_argument("--ky", type=float, default=None, help="vertical spring of method B [N/m] (2e6)")
+
+
 def _system_args(p):
     p.add_argument("--outer-clearance", type=float, default=None, metavar="M",
                    help="radial clearance of both outer films [m] (default 36e-6)")
@@ -794,9 +801,7 @@ def _add_campbell(sub):
     c.add_argument("--mode-shapes", metavar="SPEED", type=float, default=None,
                    help="also write mode_shapes_<method>_<rpm>.png/.html/.csv: the shapes of the modes at SPEED "
                         "[rpm] (below --fmax if given)")
-    c.add_argument("--k", type=float, default=None, help="spring stiffness of methods A, E [N/m] (1e6)")
-    c.add_argument("--kx", type=float, default=None, help="horizontal spring of method B [N/m] (1e6)")
-    c.add_argument("--ky", type=float, default=None, help="vertical spring of method B [N/m] (2e6)")
+    _spring_args(c)
     c.add_argument("--from-fmu", metavar="SSP", default=None,
                    help="assemble the linear system from the FMUs of this SSP (methods F, G, I, J)")
     c.add_argument("--parameter-set", default="co36", help="SSP parameter set for --from-fmu")
@@ -816,9 +821,7 @@ def _add_unbalance(sub):
     u.add_argument("--locations", default=None, metavar="NAMES",
                    help="comma list of the locations drawn and searched for peaks (default: the wheels), e.g. "
                         "'turbine_wheel,turbine journal'")
-    u.add_argument("--k", type=float, default=None, help="spring stiffness of methods A, E [N/m] (1e6)")
-    u.add_argument("--kx", type=float, default=None, help="horizontal spring of method B [N/m] (1e6)")
-    u.add_argument("--ky", type=float, default=None, help="vertical spring of method B [N/m] (2e6)")
+    _spring_args(u)
     u.add_argument("--out", default="results/unbalance", help="output folder")
     _system_args(u)
     u.set_defaults(func=cmd_unbalance)
