@@ -520,13 +520,37 @@ def cmd_compare(args):
     print(f"results in {Path(args.out).resolve()}")
 
 
+def parse_orders(text: str) -> tuple:
+    """Order lines of ``frb plot --orders``: comma list of positive multiples k of the rotor frequency.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"0.5,1,2"``; ``"none"`` (or empty) for no order lines.
+
+    Returns
+    -------
+    tuple of float
+        The orders k [-], as given.
+
+    Examples
+    --------
+    >>> parse_orders("0.5,1,2"), parse_orders("none")
+    ((0.5, 1.0, 2.0), ())
+    """
+    if text.strip().lower() in ("", "none"):
+        return ()
+    return tuple(check_positive("--orders", x.strip()) for x in text.split(",") if x.strip())
+
+
 def cmd_plot(args):
     """Re-render the figures of a results folder written by frb runup / frb cosim (finished, stopped or
-    interrupted)."""
+    interrupted) or by frb unbalance."""
     from .parameters import Turbocharger
     from .recorder import RunupResult
 
     out = Path(args.dir)
+    orders = parse_orders(args.orders)
     run = RunupResult.load(out)
     if run.time.size < 64:
         raise ParameterError(f"{out}: {run.time.size} samples recorded; the figures need at least 64")
@@ -537,12 +561,52 @@ def cmd_plot(args):
 
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
-    write_composites(run, system, out, xscale=args.xscale, title=title)
+    replot_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
     if args.orbits:
         write_orbits(run, out, parse_speeds(args.orbits))
     if args.waterfall:
-        write_waterfalls(run, out)
+        write_waterfalls(run, out, orders=orders)
     print(f"results in {out.resolve()}")
+
+
+def replot_composites(run, system, out, xscale="linear", title="run-up", orders=(1.0,)):
+    """The composite figures and component tables of every disc of a run, with order lines (``frb plot``).
+
+    As :func:`write_composites` (same files, the method-J Campbell overlay over the run's speed range), with the
+    order lines k × f_rot of ``orders``.
+
+    Parameters
+    ----------
+    run : RunupResult
+        At least 64 samples.
+    system : Turbocharger
+        The run's system.
+    out : Path
+        Output folder (must exist).
+    xscale : {"linear", "log"}
+    title : str
+        Figure title prefix.
+    orders : sequence of float
+        Order lines (multiples of the rotor frequency).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    from .campbell import campbell
+    from .spectral import spectrogram
+
+    lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
+    cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
+    paths = []
+    for node in run.displacement:  # the system's discs
+        sp = spectrogram(run, node)
+        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {node}", orders=orders)
+        tab = sp.components_table()
+        print(f"components at the {node}:")
+        print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
+    return paths
 
 
 def write_orbits(run, out, speeds_rpm, revolutions=20.0):
@@ -581,7 +645,7 @@ def write_orbits(run, out, speeds_rpm, revolutions=20.0):
     return paths
 
 
-def write_waterfalls(run, out):
+def write_waterfalls(run, out, orders=(1.0,)):
     """3-D waterfall of every disc of a run: ``waterfall_<disc>.png`` and ``.html`` in ``out``.
 
     Parameters
@@ -590,6 +654,8 @@ def write_waterfalls(run, out):
         At least 64 samples.
     out : Path
         Output folder (must exist).
+    orders : sequence of float
+        Order lines k × f_rot on the floor of the waterfall.
 
     Returns
     -------
@@ -603,10 +669,10 @@ def write_waterfalls(run, out):
     paths = []
     for node in run.displacement:
         sp = spectrogram(run, node)
-        fig = sp.waterfall()
+        fig = sp.waterfall(orders=orders)
         fig.savefig(out / f"waterfall_{node}.png", dpi=110, bbox_inches="tight")
         plt.close(fig)
-        sp.waterfall_html(out / f"waterfall_{node}.html")
+        sp.waterfall_html(out / f"waterfall_{node}.html", orders=orders)
         paths += [out / f"waterfall_{node}.png", out / f"waterfall_{node}.html"]
         print(f"wrote {out / f'waterfall_{node}'}.png/.html")
     return paths
@@ -997,7 +1063,10 @@ def _add_plot(sub):
                     help="also write orbits_<rpm>.png/.html at these speeds [rpm] (comma list or start:stop:count; "
                          "±20 revolutions about each): journal in ring, ring in housing (µm and ε), wheels")
     pl.add_argument("--waterfall", action="store_true",
-                    help="also write the 3-D waterfall waterfall_<disc>.png/.html (amplitude in µm, 1X line)")
+                    help="also write the 3-D waterfall waterfall_<disc>.png/.html (amplitude in µm, order lines)")
+    pl.add_argument("--orders", metavar="K", default="0.5,1",
+                    help="order lines k × rotor frequency drawn on the spectrograms and waterfalls (comma list, "
+                         "e.g. 0.5,1,2; 'none' for none)")
     pl.set_defaults(func=cmd_plot)
 
 

@@ -200,6 +200,49 @@ class SpectrogramResult(Result):
             fig.write_html(str(path))
         return fig
 
+    def save(self, out_dir, campbell=None, xscale="linear", title=None, orders=(1.0,), png=True, html=True):
+        """Write the composite figure and the component table of this spectrogram into ``out_dir``.
+
+        Parameters
+        ----------
+        out_dir : str or Path
+            Folder (created if missing).
+        campbell : CampbellResult, optional
+            Method-J Campbell diagram for the overlay (unstable modes, whirl curves).
+        xscale : {"linear", "log"}
+            Speed axis scale of the PNG.
+        title : str, optional
+            Figure title (default: the kind of run and the node).
+        orders : sequence of float
+            Order lines k × f_rot.
+        png, html : bool
+            Write ``composite_<node>.png`` / ``.html``.
+
+        Returns
+        -------
+        list of Path
+            The figures written and ``components_<node>.csv`` (:meth:`components_table`).
+        """
+        from pathlib import Path
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        stem = out / f"composite_{self.node}"
+        paths = []
+        if png:
+            import matplotlib.pyplot as plt
+
+            fig = self.plot(campbell=campbell, xscale=xscale, title=title, orders=orders)
+            paths.append(stem.with_suffix(".png"))
+            fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
+            plt.close(fig)
+        if html:
+            paths.append(stem.with_suffix(".html"))
+            self.plot_html(paths[-1], campbell=campbell, orders=orders)
+        paths.append(out / f"components_{self.node}.csv")
+        self.components_table().to_csv(paths[-1], index=False)
+        return paths
+
     def waterfall(self, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40, title=None):
         """3-D waterfall (speed × frequency × amplitude in µm, or ``amplitude="db_um"``) with order lines
         (:func:`frbmodel.plots.waterfall_figure`).

@@ -1,0 +1,83 @@
+"""``frb plot DIR``: order lines from the command line on a run-up folder (synthetic run, no integration)."""
+import base64
+import json
+import re
+
+import numpy as np
+import pytest
+
+import frbmodel as frb
+from frbmodel.cli import build_parser, main, parse_orders
+
+FS = 10000.0  # sampling rate of the synthetic run [Hz]
+
+
+def figure_data(path):
+    """The traces of a plotly HTML file as dicts, typed arrays ({"dtype", "bdata"[, "shape"]}) decoded to numpy.
+
+    Independent of plotly's Python side: reads the JSON argument of ``Plotly.newPlot`` in the file."""
+    text = path.read_text()
+    start = text.index("[", text.index("Plotly.newPlot("))
+    traces, _ = json.JSONDecoder().raw_decode(text[start:])
+
+    def decode(v):
+        if isinstance(v, dict) and "bdata" in v:
+            a = np.frombuffer(base64.b64decode(v["bdata"]), dtype=np.dtype(v["dtype"]))
+            shape = v.get("shape")
+            if shape is not None:
+                a = a.reshape([int(n) for n in re.split(r"\s*,\s*", str(shape))])
+            return a
+        if isinstance(v, dict):
+            return {k: decode(x) for k, x in v.items()}
+        return v
+
+    return [decode(t) for t in traces]
+
+
+def synthetic_run(speed_rpm=(30e3, 60e3), duration=0.3):
+    """A run-up of the Table 2 system (system in its metadata) with closed-form orbits: both wheels whirl 1X at
+    2 µm plus a forward 0.45X whirl of 4 µm; journals and rings at rest."""
+    tc = frb.turbocharger(36e-6)
+    t = np.arange(0.0, duration, 1.0 / FS)
+    rpm = np.linspace(*speed_rpm, t.size)
+    phase = 2 * np.pi * np.cumsum(rpm / 60.0) / FS
+    z = 2e-6 * np.exp(1j * phase) + 4e-6 * np.exp(0.45j * phase)
+    disc = {d.name: np.column_stack([z.real, z.imag]) for d in tc.rotor.discs}
+    names = [b.name for b in tc.bearings]
+    zeros2 = np.zeros((t.size, 2))
+    return frb.RunupResult(t, rpm, np.zeros((t.size, len(names))), {b: zeros2 for b in names},
+                           {b: zeros2 for b in names}, np.zeros((t.size, 2 * len(names))), disc,
+                           meta={"system": tc.to_dict()})
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run")
+    synthetic_run().save(out, nc=False)
+    return out
+
+
+def test_orders_option_default_and_parsing():
+    assert parse_orders(build_parser().parse_args(["plot", "d"]).orders) == (0.5, 1.0)  # 0.5X and 1X by default
+    assert parse_orders("1, 2,0.25") == (1.0, 2.0, 0.25) and parse_orders("none") == ()
+    with pytest.raises(frb.ParameterError, match="--orders"):
+        parse_orders("1,-0.5")
+
+
+def test_plot_draws_the_order_lines(run_dir, capsys):
+    assert main(["plot", str(run_dir), "--orders", "0.5,1,2", "--waterfall"]) == 0
+    for disc in ("turbine_wheel", "compressor_wheel"):
+        for stem in ("composite", "waterfall"):
+            assert (run_dir / f"{stem}_{disc}.png").stat().st_size > 0
+        traces = {t.get("name"): t for t in figure_data(run_dir / f"composite_{disc}.html")}
+        for k in (0.5, 1.0, 2.0):
+            line = traces[f"{k:g}X"]
+            x, y = np.asarray(line["x"], float), np.asarray(line["y"], float)
+            # the spectrogram's segment centres: within the run, half a 10 ms segment (500 rpm) from its ends
+            assert 30e3 < x.min() < 31e3 and 59e3 < x.max() < 60e3
+            # k × f_rot [Hz] of the speed [rpm]; 1e-6: the arrays may be stored in single precision (7 digits)
+            np.testing.assert_allclose(y, k * x / 60.0, rtol=1e-6)
+        waterfall = {t.get("name") for t in figure_data(run_dir / f"waterfall_{disc}.html")}
+        assert {"0.5X", "1X", "2X"} <= waterfall
+    assert main(["plot", str(run_dir), "--orders", "-1"]) == 2
+    assert "--orders = '-1' is invalid" in capsys.readouterr().err
