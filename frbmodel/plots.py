@@ -538,14 +538,67 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     return fig
 
 
-def composite_plotly(sp, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,)):
-    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and 1X; the speed axis increases
-    to the right for run-ups and run-downs alike (a run-down is titled as one).
+#: the largest heatmap an interactive spectrogram file keeps (``compact``): columns (speeds) × rows (frequencies),
+#: about the pixels of a full-screen plot area. Nothing is lost that the data holds: the segments overlap by 75 %
+#: and the spectrum is zero padded 4× (4 columns and 4 rows per independent value), and blocks keep their maximum.
+HTML_MAX_COLUMNS, HTML_MAX_ROWS = 1000, 250
+
+
+def peak_decimate(z, coord, max_n, axis):
+    """Merge consecutive entries of ``z`` along ``axis`` into blocks so that at most ``max_n`` remain, each block
+    keeping its largest value (so no peak is lost) at the mean coordinate of the block.
+
+    Parameters
+    ----------
+    z : ndarray
+        Values (e.g. a spectrogram, frequency × speed).
+    coord : (n,) ndarray
+        Coordinates of the entries along ``axis`` (increasing).
+    max_n : int
+        Largest number of blocks.
+    axis : int
+
+    Returns
+    -------
+    z : ndarray
+        Block maxima (NaN ignored).
+    coord : ndarray
+        Block mean coordinates.
+
+    Examples
+    --------
+    >>> z, c = peak_decimate(np.array([[1.0, 5.0, 2.0, 0.0, 3.0]]), np.arange(5.0), 3, axis=1)
+    >>> z.tolist(), c.tolist()
+    ([[5.0, 2.0, 3.0]], [0.5, 2.5, 4.0])
+    """
+    n = coord.size
+    size = -(-n // max(1, int(max_n)))
+    if size <= 1:
+        return z, coord
+    starts = np.arange(0, n, size)
+    counts = np.diff(np.append(starts, n))
+    return np.fmax.reduceat(z, starts, axis=axis), np.add.reduceat(coord, starts) / counts
+
+
+def _compact_heatmap(speeds, freqs, z):
+    """The heatmap of an interactive file: peak-decimated to the screen, in single precision."""
+    z, speeds = peak_decimate(z, speeds, HTML_MAX_COLUMNS, axis=1)
+    z, freqs = peak_decimate(z, freqs, HTML_MAX_ROWS, axis=0)
+    return speeds.astype(np.float32), freqs.astype(np.float32), z.astype(np.float32)
+
+
+def composite_plotly(sp, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,), compact=False):
+    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and order lines; the speed axis
+    increases to the right for run-ups and run-downs alike (a run-down is titled as one).
 
     Parameters
     ----------
     sp, campbell, fmax_hz, amplitude, orders
         As for :func:`composite_figure`.
+    compact : bool
+        For a file: at most :data:`HTML_MAX_COLUMNS` × :data:`HTML_MAX_ROWS` heatmap cells (blocks of segments /
+        frequencies merged by :func:`peak_decimate`, which keeps every peak's value), arrays in single precision
+        (7 digits), order lines by their end points (they are straight). Default: the full arrays.
 
     Returns
     -------
@@ -559,20 +612,26 @@ def composite_plotly(sp, campbell=None, fmax_hz=None, amplitude="db_max", orders
     order = _speed_order(sp)
     s_all = sp.speeds_rpm[order]
     z, vmin, vmax, _ = spectrogram_colour(sp, amplitude)
+    x, y, z = s_all, sp.freqs_hz[sel], z[sel][:, order]
+    num = (lambda a: np.asarray(a, dtype=np.float32)) if compact else np.asarray
+    if compact:
+        x, y, z = _compact_heatmap(x, y, z)
     unit = "µm" if amplitude == "um" else "dB"
-    fig = go.Figure(go.Heatmap(x=s_all, y=sp.freqs_hz[sel], z=z[sel][:, order], zmin=vmin, zmax=vmax,
-                               colorscale="Magma", colorbar=dict(title=unit),
+    fig = go.Figure(go.Heatmap(x=x, y=y, z=z, zmin=vmin, zmax=vmax, colorscale="Magma", colorbar=dict(title=unit),
                                hovertemplate="speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>%{z:.3g} " + unit
                                + "<extra></extra>"))
+    s_line = s_all[[0, -1]] if compact else s_all
     for k in orders:
-        fig.add_trace(go.Scatter(x=s_all, y=k * s_all / 60, mode="lines", name=order_label(k),
+        fig.add_trace(go.Scatter(x=num(s_line), y=num(k * s_line / 60), mode="lines", name=order_label(k),
                                  line=dict(dash="dot", color="white")))
     if campbell is not None:
         for sk, f, j in _unstable_lines(campbell, fmax):
-            fig.add_trace(go.Scatter(x=sk * 1e3, y=f, mode="lines", name=f"unstable mode {j}",
+            fig.add_trace(go.Scatter(x=num(sk * 1e3), y=num(f), mode="lines", name=f"unstable mode {j}",
                                      line=dict(color="#00e5ff")))
         for k, name, sp_, w in whirl_curves(campbell):
-            fig.add_trace(go.Scatter(x=sp_, y=w, mode="lines", name=f"whirl {name}",
+            if not np.nanmin(w) <= fmax:  # above the frequency axis: invisible
+                continue
+            fig.add_trace(go.Scatter(x=num(sp_), y=num(w), mode="lines", name=f"whirl {name}",
                                      line=dict(dash="dash", color=_whirl_style(k)[0])))
     fig.update_layout(xaxis_title=_speed_label(kind, "rpm"), yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
                       title=f"{kind.capitalize()} spectrogram, {sp.node}")

@@ -186,8 +186,23 @@ class SpectrogramResult(Result):
                                 components=components, title=title, xscale=xscale, amplitude=amplitude,
                                 orders=orders)
 
-    def plot_html(self, path=None, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,)):
+    def plot_html(self, path=None, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,), compact=True,
+                  include_plotlyjs="cdn"):
         """Interactive spectrogram (plotly); written to ``path`` (HTML) if given (options as :meth:`plot`).
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            The HTML file.
+        campbell, fmax_hz, amplitude, orders
+            As for :meth:`plot`.
+        compact : bool
+            Keep the file small (:func:`frbmodel.plots.composite_plotly`): at most about a screen of heatmap cells,
+            every peak kept, single precision.
+        include_plotlyjs : bool or str
+            How the file gets plotly.js (:meth:`plotly.graph_objects.Figure.write_html`): ``"cdn"`` (default, as
+            the other interactive figures of a results folder: a small file, shown where the CDN is reachable) or
+            ``True`` (embedded, 4.8 MB more; shown offline).
 
         Returns
         -------
@@ -195,9 +210,10 @@ class SpectrogramResult(Result):
         """
         from .plots import composite_plotly
 
-        fig = composite_plotly(self, campbell=campbell, fmax_hz=fmax_hz, amplitude=amplitude, orders=orders)
+        fig = composite_plotly(self, campbell=campbell, fmax_hz=fmax_hz, amplitude=amplitude, orders=orders,
+                               compact=compact)
         if path is not None:
-            fig.write_html(str(path))
+            fig.write_html(str(path), include_plotlyjs=include_plotlyjs)
         return fig
 
     def save(self, out_dir, campbell=None, xscale="linear", title=None, orders=(1.0,), png=True, html=True):
