@@ -735,32 +735,47 @@ def cmd_build_fmus(args):
 
 
 def cmd_cosim(args):
-    """``frb cosim``: co-simulated run-up of an SSP system, streamed to a folder, with figures; exit code."""
+    """``frb cosim``: co-simulated run-up of an SSP system (rotor speed from the parameter set's ramp, a drive torque
+    or a CSV speed profile), streamed to a folder, with figures; exit code."""
     from .cosim.master import cosimulate
     from .parameters import Turbocharger
+    from .runup import SpeedProfile
 
+    profile, overrides = None, {}
+    if args.profile is not None:
+        given = [f"{o} {v}" for o, v in (("--speed-source", args.speed_source), ("--drive-torque", args.drive_torque))
+                 if v]
+        if given:
+            raise ParameterError(f"--profile {args.profile} and {' / '.join(given)} are mutually exclusive: the "
+                                 "profile prescribes the rotor speed (the rotor FMU's speed_in)")
+        profile = SpeedProfile.from_csv(args.profile)
+    else:
+        source = args.speed_source or "ramp"
+        overrides = {"rotor": {"speed_source": ("String", source)}}
+        if source == "torque":
+            overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque, "N m"))
+        elif args.drive_torque:
+            raise ParameterError("--drive-torque applies only with --speed-source torque")
     out = writable_dir(args.out)
     trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
-    overrides = {"rotor": {"speed_source": ("String", args.speed_source)}}
-    if args.speed_source == "torque":
-        overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque, "N m"))
-    elif args.drive_torque:
-        raise ParameterError("--drive-torque applies only with --speed-source torque")
+    kw = dict(progress=True, rollback=args.rollback, unvalidated_step=args.unvalidated_step, overrides=overrides,
+              profile=profile)
+    if profile is not None:
+        print(f"rotor speed: {profile.description}")
     run, code = _stoppable("cosim", lambda: cosimulate(
-        args.ssp, args.parameter_set, args.stop_time, args.step, out, progress=True, rollback=args.rollback,
-        trace=trace, unvalidated_step=args.unvalidated_step, overrides=overrides), out)
+        args.ssp, args.parameter_set, args.stop_time, args.step, out, trace=trace, **kw), out)
     if "wall_time_s" in run.meta:
         wall = run.meta["wall_time_s"]
         print(f"wall time {wall:.1f} s ({run.meta['fmi_time_s'] / max(wall, 1e-9):.0%} in FMI calls), macro step "
               f"{run.meta['step_size_s']:g} s, {run.time.size} samples")
+    kind = "run-up" if profile is None else RUN_TITLES.get(profile.direction, "run-up")
     _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
-                title=f"co-simulated run-up ({args.parameter_set})")
+                title=f"co-simulated {kind} ({args.parameter_set})")
     if args.check_convergence and code == 0:
         h = run.meta["step_size_s"] / 2
         print(f"convergence check: the same co-simulation with half the macro step ({h:g} s)")
         check_convergence(run, lambda folder: cosimulate(
-            args.ssp, args.parameter_set, args.stop_time, h, folder, progress=True, rollback=args.rollback,
-            unvalidated_step=args.unvalidated_step, overrides=overrides), out, "macro step / 2")
+            args.ssp, args.parameter_set, args.stop_time, h, folder, **kw), out, "macro step / 2")
     return code
 
 
@@ -975,12 +990,17 @@ def _add_cosim(sub):
                        help="co-simulated run-up of an SSP system (fmpy master)")
     cs.add_argument("ssp", help=".ssp archive or folder (see frb build-fmus)")
     cs.add_argument("--parameter-set", default="co36", help="co36, co40, co42 or co46")
-    cs.add_argument("--stop-time", type=float, default=None, help="simulated time [s] (default: from the SSP)")
+    cs.add_argument("--stop-time", type=float, default=None,
+                    help="simulated time [s] (default: from the SSP; with --profile the table's last time)")
     cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 1e-5)")
     cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
-    cs.add_argument("--speed-source", choices=["ramp", "torque"], default="ramp",
-                    help="rotor speed: the parameter set's ramp, or a state driven by --drive-torque and braked by "
-                         "the bearings' film torques (starts at the set's speed_start)")
+    cs.add_argument("--speed-source", choices=["ramp", "torque"], default=None,
+                    help="rotor speed: the parameter set's ramp (default), or a state driven by --drive-torque and "
+                         "braked by the bearings' film torques (starts at the set's speed_start)")
+    cs.add_argument("--profile", default=None, metavar="FILE.csv",
+                    help="rotor speed from a CSV table 'time [s], speed [rpm]' (linear in between) through the rotor "
+                         "FMU's speed_in; excludes --speed-source and --drive-torque; the stop time defaults to the "
+                         "table's last time")
     cs.add_argument("--drive-torque", type=float, default=0.0,
                     help="net drive torque about +z [N m] for --speed-source torque")
     cs.add_argument("--check-convergence", action="store_true",

@@ -37,6 +37,37 @@ VALIDATED_STEP_S = (1e-7, 2e-5)
 BEARING_RECORD = ("ring.speed", "ring.x", "ring.y", "eps_inner", "eps_outer")
 #: bearing outputs recorded per bearing when the FMU has them (film torque on the journal [N m], power loss [W])
 BEARING_LOSSES = ("journal_torque", "power_loss")
+#: length [s] of the first sub-step of a profile-driven run. The rotor FMU's speed input (speed_source = "input")
+#: takes its angular acceleration from its last two inputs and has none before the first step, so a first macro
+#: step of full length would run at constant speed (an error of half a step's speed change in that step). After
+#: this sub-step it has the profile's slope; the sub-step's own missing acceleration changes the rotation angle by
+#: Ω̇ δ²/2 (~1e-14 rad at the main job's 24 000 rad/s²), far below round-off of the states.
+PRIME_STEP_S = 1e-9
+
+
+def _checked_profile(profile):
+    """``profile`` (None or a prescribed-speed SpeedProfile) or a ParameterError saying why not."""
+    if profile is None:
+        return None
+    if not all(hasattr(profile, a) for a in ("t", "omega", "description")) or not callable(profile):
+        raise ParameterError(f"profile = {profile!r} is invalid: use a frbmodel.runup.SpeedProfile (e.g. "
+                             "SpeedProfile.from_csv)")
+    if getattr(profile, "torque_driven", False):
+        raise ParameterError(f"profile = {profile.description!r} is torque-driven: a co-simulation takes a "
+                             "prescribed speed profile; for a torque-driven rotor use the rotor parameter "
+                             "speed_source = 'torque' (frb cosim --speed-source torque)")
+    return profile
+
+
+def _profile_stop_time(profile, stop_time):
+    """The stop time [s] of a profile-driven run: the profile's last time by default; later is an error."""
+    end = float(profile.t[-1])
+    if stop_time is None:
+        return end
+    if stop_time > end * (1.0 + 1e-12):
+        raise ParameterError(f"stop time = {stop_time:g} s is beyond the speed profile's last time {end:g} s "
+                             f"({profile.description}): valid range up to {end:g} s")
+    return stop_time
 
 
 def system_from_parameters(params, default=None):
@@ -84,18 +115,30 @@ class Master:
         Receives one line per FMI call (``frb cosim --trace-fmi``).
     unvalidated_step : bool
         Allow a macro step outside :data:`VALIDATED_STEP_S` (otherwise a ParameterError).
+    profile : SpeedProfile, optional
+        Prescribed rotor speed (:class:`frbmodel.runup.SpeedProfile`, e.g. ``SpeedProfile.from_csv``; not
+        torque-driven). The rotor runs with ``speed_source = "input"``: ``speed_in`` is the profile's speed at
+        t = 0 during initialization and the profile's speed at the start of every (sub)step before it is taken
+        (again after a rollback). The rotor FMU takes the angular acceleration over a step from its last two speed
+        inputs (none before the first step), so the first macro step starts with a sub-step of
+        :data:`PRIME_STEP_S`: from the second sub-step on, the rotor's speed is linear over each step with the
+        profile's slope, as in the ramp mode. Default stop time: the profile's last time; a later one is an error.
 
     Use as a context manager (or call :meth:`close`): the FMU instances are freed and the extracted files deleted.
     """
 
     def __init__(self, ssp, parameter_set="co36", stop_time=None, step_size=None, overrides=None,
-                 coupling="jacobian", rollback=False, max_halvings=6, trace=None, unvalidated_step=False):
+                 coupling="jacobian", rollback=False, max_halvings=6, trace=None, unvalidated_step=False,
+                 profile=None):
         if coupling not in ("jacobian", "force"):
             raise ParameterError(f"coupling = {coupling!r} is unknown; valid: 'jacobian', 'force'")
         self.ssp_path, self.parameter_set, self.coupling = ssp, parameter_set, coupling
         self.fmus, self._tmp = {}, None
+        self.profile = _checked_profile(profile)
         self.ssp = read_ssp(ssp)
         try:
+            if self.profile is not None:
+                stop_time = _profile_stop_time(self.profile, stop_time)
             self._configure(parameter_set, stop_time, step_size, overrides, rollback, max_halvings, trace,
                             unvalidated_step)
         except BaseException:
@@ -121,6 +164,18 @@ class Master:
         self.system = system_from_parameters(self.params, self._rotor_system())
         self.fmi_time_s = 0.0
         self.rejected_steps = 0
+        self.steps_taken = 0
+        if self.profile is not None:
+            self._profile_parameters(overrides)
+
+    def _profile_parameters(self, overrides):
+        """Refuse overrides that set another speed source than the profile's (set up in :meth:`setup`)."""
+        for comp, ov in (overrides or {}).items():
+            source = ov.get("speed_source", ("String", "input"))[1]
+            if source != "input":
+                raise ParameterError(f"{comp}.speed_source = {source!r} conflicts with the speed profile "
+                                     f"({self.profile.description}): a profile drives the rotor through speed_in "
+                                     "(speed_source = 'input')")
 
     def _rotor_system(self):
         """The system the SSP's rotor FMU was built for (None if the SSP has no rotor FMU file to read)."""
@@ -155,6 +210,11 @@ class Master:
         self._rec_rotor = self.rotor.vr(["rotor_speed"] + [f"{n}_bearing.journal.{q}" for n in names for q in "xy"] +
                                         [f"{d}.{q}" for d in self.schema.discs for q in "xy"])
         self._rec_bearing = [b.vr(BEARING_RECORD) for b in self.bearings]
+        if self.profile is not None:  # speed_source "input", speed_in = the profile at t = 0
+            self.params.setdefault(self.rotor.name, {}).update(speed_source=("String", "input"),
+                                                               speed_in=("Real", float(self.profile(0.0))))
+            self._speed_vr = self.rotor.vr(["speed_in"])
+        self._primed = self.profile is None
         return self
 
     def _plan_exchange(self):
@@ -243,6 +303,8 @@ class Master:
         """Bearings, end-of-step values, rotor, exchange. Returns None or (message, retryable)."""
         t0 = time.perf_counter()
         try:
+            if self.profile is not None:  # the prescribed speed at the start of this (sub)step
+                self.rotor.call("setReal", self._speed_vr, [float(self.profile(t))])
             for fmu in self.bearings:
                 fmu.call("doStep", t, h, True)
             if self._end_gets:
@@ -266,6 +328,8 @@ class Master:
         t_target, h = t + H, H
         while t < t_target - 1e-12 * H:
             h = min(h, t_target - t)
+            if not self._primed:  # a profile's first sub-step gives the rotor its speed-input history
+                h = min(h, PRIME_STEP_S)
             states = self._get_states() if self.rollback else None
             failure = self._do_step(t, h)
             retry = (failure is not None and failure[1] and self.rollback and bool(states)
@@ -284,6 +348,9 @@ class Master:
                 raise CosimStopped(f"{msg} in the interval t = {t:.6g} s + {h:.3g} s{tried}" +
                                    ("; see the FMU log above" if who else ""))
             t += h
+            self.steps_taken += 1
+            if not self._primed:
+                self._primed, h = True, H
         return t_target
 
     def _get_states(self):
@@ -320,7 +387,10 @@ class Master:
         return {"ssp": str(self.ssp_path), "parameter_set": self.parameter_set, "step_size_s": self.step_size,
                 "stop_time_s": self.stop_time, "output_rate_hz": output_rate_hz, "system": self.system.to_dict(),
                 "coupling": self.coupling, "rollback": self.rollback, "units": "SI; speed in rpm",
-                "master": "frbmodel.cosim (fmpy FMU2Slave, staggered interface-Jacobian coupling)"}
+                "master": "frbmodel.cosim (fmpy FMU2Slave, staggered interface-Jacobian coupling)",
+                **({} if self.profile is None else
+                   {"speed_source": "input", "speed_profile": self.profile.description,
+                    "speed_profile_end_s": float(self.profile.t[-1])})}
 
     # ------------------------------------------------------------------ run / close
     def run(self, out_dir=None, progress=False, output_rate_hz=20e3):
@@ -358,7 +428,7 @@ class Master:
                 sys.stderr.write(f"cosim: {status} after {wall:.1f} s wall "
                                  f"({self.fmi_time_s / max(wall, 1e-9):.0%} in FMI calls)\n")
             result = rec.close(status, message, wall_time_s=wall, fmi_time_s=self.fmi_time_s,
-                               rejected_steps=self.rejected_steps)
+                               rejected_steps=self.rejected_steps, steps_taken=self.steps_taken)
         if status != "finished":
             raise CosimStopped(message, result)
         return result
@@ -383,7 +453,7 @@ class Master:
 
 def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_dir=None, progress=False,
                rollback=False, output_rate_hz=20e3, overrides=None, max_halvings=6, coupling="jacobian",
-               trace=None, unvalidated_step=False):
+               trace=None, unvalidated_step=False, profile=None):
     """Run the SSP system with frbmodel's master (see :class:`Master` for the parameters).
 
     ``out_dir``: stream ``runup.csv`` / ``runup.json`` there; ``output_rate_hz``: sampling rate of the recorded
@@ -400,7 +470,7 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
         An FMU failed; the message names it; ``.result`` holds the samples so far (also on disk).
     """
     master = Master(ssp, parameter_set, stop_time, step_size, overrides, coupling, rollback, max_halvings, trace,
-                    unvalidated_step)
+                    unvalidated_step, profile=profile)
     return master.run(out_dir, progress, output_rate_hz)
 
 
