@@ -551,6 +551,13 @@ def cmd_plot(args):
 
     out = Path(args.dir)
     orders = parse_orders(args.orders)
+    if out.is_dir() and not (out / "runup.csv").exists() and any(out.glob("unbalance_*.json")):
+        if args.orbits or args.waterfall:
+            raise ParameterError(f"{out}: an unbalance response; --orbits and --waterfall need a run-up folder")
+        locations = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
+        print("wrote:\n  " + "\n  ".join(str(p) for p in replot_unbalance(out, locations)))
+        print(f"results in {out.resolve()}")
+        return
     run = RunupResult.load(out)
     if run.time.size < 64:
         raise ParameterError(f"{out}: {run.time.size} samples recorded; the figures need at least 64")
@@ -567,6 +574,56 @@ def cmd_plot(args):
     if args.waterfall:
         write_waterfalls(run, out, orders=orders)
     print(f"results in {out.resolve()}")
+
+
+def replot_unbalance(out, names=None):
+    """Redraw the figures of a folder written by ``frb unbalance`` from its saved data.
+
+    Every ``unbalance_<M>.json`` (with its ``_dofs.csv`` and ``_critical.csv``) is read back
+    (:meth:`UnbalanceResponse.load`) and drawn again as ``unbalance_<M>.png`` and ``.html``; with several methods
+    also the common Bode figure ``unbalance_bode_<methods>.png`` (methods in the order of an existing Bode figure's
+    name, else alphabetical). The tables are not rewritten.
+
+    Parameters
+    ----------
+    out : Path
+        The folder.
+    names : sequence of str, optional
+        Locations drawn (default: the discs).
+
+    Returns
+    -------
+    list of Path
+        The figures written.
+    """
+    import matplotlib.pyplot as plt
+
+    from .unbalance import UnbalanceResponse, bode_figure
+
+    stems = sorted(p.stem for p in out.glob("unbalance_*.json"))
+    results = [UnbalanceResponse.load(out, s) for s in stems]
+    bad = [n for n in names or [] if n not in results[0].names]
+    if bad:
+        raise ParameterError(f"--locations {bad[0]!r} is unknown; valid: {', '.join(results[0].names)}")
+    paths = []
+    for s, ur in zip(stems, results):
+        stem = out / s
+        fig = ur.plot(names)
+        fig.savefig(stem.with_suffix(".png"), dpi=130, bbox_inches="tight")
+        plt.close(fig)
+        ur.plot_html(stem.with_suffix(".html"), names)
+        paths += [stem.with_suffix(".png"), stem.with_suffix(".html")]
+    if len(results) > 1:
+        letters = sorted(r.method for r in results)
+        for p in out.glob("unbalance_bode_*.png"):  # keep the method order of the first drawing
+            if sorted(p.stem.removeprefix("unbalance_bode_")) == letters:
+                letters = list(p.stem.removeprefix("unbalance_bode_"))
+        results.sort(key=lambda r: letters.index(r.method))
+        fig = bode_figure(results, names)
+        paths.append(out / f"unbalance_bode_{''.join(letters)}.png")
+        fig.savefig(paths[-1], dpi=130, bbox_inches="tight")
+        plt.close(fig)
+    return paths
 
 
 def replot_composites(run, system, out, xscale="linear", title="run-up", orders=(1.0,)):
@@ -1076,8 +1133,9 @@ def _add_warmup(sub):
 
 def _add_plot(sub):
     pl = sub.add_parser("plot", formatter_class=_Formatter,
-                        help="re-render the figures of a run-up / co-simulation results folder")
-    pl.add_argument("dir", help="folder with runup.csv and runup.json")
+                        help="re-render the figures of a run-up / co-simulation or unbalance-response results folder")
+    pl.add_argument("dir", help="folder with runup.csv and runup.json, or with the unbalance_<M>.json/_dofs.csv files "
+                                "of frb unbalance (then the Bode, polar and film-orbit figures are redrawn)")
     pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
     pl.add_argument("--orbits", metavar="SPEEDS", default=None,
                     help="also write orbits_<rpm>.png/.html at these speeds [rpm] (comma list or start:stop:count; "
@@ -1087,6 +1145,8 @@ def _add_plot(sub):
     pl.add_argument("--orders", metavar="K", default="0.5,1",
                     help="order lines k × rotor frequency drawn on the spectrograms and waterfalls (comma list, "
                          "e.g. 0.5,1,2; 'none' for none)")
+    pl.add_argument("--locations", default=None,
+                    help="unbalance folders: locations drawn, comma list (default: the discs)")
     pl.set_defaults(func=cmd_plot)
 
 

@@ -17,7 +17,7 @@ def figure_data(path):
 
     Independent of plotly's Python side: reads the JSON argument of ``Plotly.newPlot`` in the file."""
     text = path.read_text()
-    start = text.index("[", text.index("Plotly.newPlot("))
+    start = text.index("[", text.rindex("Plotly.newPlot("))  # the call, after any embedded plotly.js
     traces, _ = json.JSONDecoder().raw_decode(text[start:])
 
     def decode(v):
