@@ -570,7 +570,7 @@ def cmd_plot(args):
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
     replot_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
     if args.orbits:
-        write_orbits(run, out, parse_speeds(args.orbits))
+        write_orbits(run, out, parse_speeds(args.orbits), data=True)
     if args.waterfall:
         write_waterfalls(run, out, orders=orders)
     print(f"results in {out.resolve()}")
@@ -666,8 +666,8 @@ def replot_composites(run, system, out, xscale="linear", title="run-up", orders=
     return paths
 
 
-def write_orbits(run, out, speeds_rpm, revolutions=20.0):
-    """Orbit figures of a run at given speeds: ``orbits_<rpm>.png`` and ``.html`` in ``out``.
+def write_orbits(run, out, speeds_rpm, revolutions=20.0, data=False):
+    """Orbit figures of a run at given speeds: ``orbits_<rpm>.png`` and ``.html`` in ``out`` (:meth:`Orbits.save`).
 
     Parameters
     ----------
@@ -679,26 +679,22 @@ def write_orbits(run, out, speeds_rpm, revolutions=20.0):
         Window centres [rpm] (each within the run's speeds).
     revolutions : float
         Half-width of each window in rotor revolutions.
+    data : bool
+        Also write the samples: ``orbits_<rpm>.csv`` and ``orbits_<rpm>.nc`` (:meth:`Orbits.to_xarray`).
 
     Returns
     -------
     list of Path
         The files written.
     """
-    import matplotlib.pyplot as plt
-
     from .orbits import orbits
 
     paths = []
     for s in speeds_rpm:
         o = orbits(run, speed_rpm=float(s), revolutions=revolutions)
-        stem = out / f"orbits_{float(s):.0f}"
-        fig = o.plot()
-        fig.savefig(stem.with_suffix(".png"), dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        o.plot_html(stem.with_suffix(".html"))
-        paths += [stem.with_suffix(".png"), stem.with_suffix(".html")]
-        print(f"wrote {stem}.png/.html")
+        written = o.save(out, csv=data, nc=data)
+        paths += written
+        print(f"wrote {out / o.stem}" + "/".join(p.suffix for p in written))
     return paths
 
 
@@ -1138,8 +1134,9 @@ def _add_plot(sub):
                                 "of frb unbalance (then the Bode, polar and film-orbit figures are redrawn)")
     pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
     pl.add_argument("--orbits", metavar="SPEEDS", default=None,
-                    help="also write orbits_<rpm>.png/.html at these speeds [rpm] (comma list or start:stop:count; "
-                         "±20 revolutions about each): journal in ring, ring in housing (µm and ε), wheels")
+                    help="also write orbits_<rpm>.png/.html/.csv/.nc at these speeds [rpm] (comma list or "
+                         "start:stop:count; ±20 revolutions about each): journal in ring, ring in housing (µm and ε), "
+                         "wheels")
     pl.add_argument("--waterfall", action="store_true",
                     help="also write the 3-D waterfall waterfall_<disc>.png/.html (amplitude in µm, order lines)")
     pl.add_argument("--orders", metavar="K", default="0.5,1",

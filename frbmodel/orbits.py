@@ -9,10 +9,12 @@ span.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from .errors import ParameterError
+from .results import Result, decode_attr, netcdf_attrs, variable
 
 
 def window_indices(run, speed_rpm=None, time_s=None, revolutions=20.0, span_rpm=None):
@@ -85,7 +87,7 @@ def _clearances(meta):
 
 
 @dataclass
-class Orbits:
+class Orbits(Result):
     """Orbits over a window of a run-up or co-simulation.
 
     Attributes
@@ -104,6 +106,9 @@ class Orbits:
         Bearing -> (inner, outer) radial clearance [m].
     label : str
         The window ("60000 rpm ± 20 rev", ...).
+    meta : dict
+        Where the orbits come from: the run's system (as :meth:`Turbocharger.to_dict`), status and source, the
+        window (``speed_rpm`` [rpm] and ``revolutions`` or ``span_rpm`` [rpm], or ``time_s`` [s]).
     """
 
     time: np.ndarray
@@ -144,6 +149,159 @@ class Orbits:
             for k, ax in enumerate("xy"):
                 cols[f"{d} {ax} [um]"] = xy[:, k] * 1e6
         return pd.DataFrame(cols)
+
+    def to_xarray(self):
+        """The orbits as an :class:`xarray.Dataset` with dimensions time × bearing / disc × axis.
+
+        Returns
+        -------
+        xarray.Dataset
+            Coordinates ``time`` [s], ``speed`` [rpm] (along time), ``bearing``, ``disc`` and ``axis`` ("x", "y");
+            variables ``journal_in_ring`` and ``ring_in_housing`` [m] (time, bearing, axis), ``eps_inner`` and
+            ``eps_outer`` [-] (the same over the film clearances), ``wheel`` [m] (time, disc, axis),
+            ``inner_clearance`` and ``outer_clearance`` [m] (bearing); each with ``units`` and ``long_name``.
+            Attributes: ``title``, ``window`` (:attr:`label`) and :attr:`meta` (dicts as JSON text).
+
+        Examples
+        --------
+        >>> t = np.linspace(0.0, 0.01, 5)
+        >>> xy = np.zeros((5, 2))
+        >>> o = Orbits(t, np.full(5, 3e4), {"b": xy}, {"b": xy}, {"wheel": xy}, {"b": (40e-6, 50e-6)}, "test")
+        >>> ds = o.to_xarray()
+        >>> dict(ds["journal_in_ring"].sizes), ds["eps_outer"].attrs["units"], ds["speed"].attrs["units"]
+        ({'time': 5, 'bearing': 1, 'axis': 2}, '-', 'rpm')
+        """
+        import xarray as xr
+
+        bearings, discs = list(self.clearances), list(self.wheels)
+        tba, tda = ("time", "bearing", "axis"), ("time", "disc", "axis")
+
+        def stack(arrays):  # (time, item, axis), also for no items
+            return np.stack(arrays, axis=1) if arrays else np.zeros((self.time.size, 0, 2))
+
+        def per_bearing(get):
+            return stack([get(b) for b in bearings])
+
+        data = {
+            "journal_in_ring": variable(tba, per_bearing(self.journal_in_ring.get), "m",
+                                        "journal centre relative to the ring centre"),
+            "ring_in_housing": variable(tba, per_bearing(self.ring.get), "m", "ring centre relative to the housing"),
+            "eps_inner": variable(tba, per_bearing(self.eps_inner), "-", "journal in ring / inner clearance"),
+            "eps_outer": variable(tba, per_bearing(self.eps_outer), "-", "ring in housing / outer clearance"),
+            "wheel": variable(tda, stack([self.wheels[d] for d in discs]), "m",
+                              "disc displacement relative to the housing"),
+            "inner_clearance": variable(("bearing",), [self.clearances[b][0] for b in bearings], "m",
+                                        "inner film radial clearance"),
+            "outer_clearance": variable(("bearing",), [self.clearances[b][1] for b in bearings], "m",
+                                        "outer film radial clearance")}
+        coords = {"time": variable(("time",), self.time, "s", "time"),
+                  "speed": variable(("time",), self.speed_rpm, "rpm", "rotor speed"),
+                  "bearing": variable(("bearing",), bearings, "", "bearing"),
+                  "disc": variable(("disc",), discs, "", "disc"),
+                  "axis": variable(("axis",), ["x", "y"], "", "x horizontal, y vertical")}
+        attrs = {"title": f"orbits, {self.label}", "window": self.label, **self.meta}
+        return xr.Dataset(data, coords, attrs=netcdf_attrs(attrs))
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The orbits from a dataset of :meth:`to_xarray` (e.g. read from a ``.nc`` of :meth:`save`).
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        Orbits
+        """
+        attrs = {k: decode_attr(v) for k, v in ds.attrs.items()}
+        label = str(attrs.pop("window", ""))
+        attrs.pop("title", None)
+        bearings = [str(b) for b in ds["bearing"].values]
+        discs = [str(d) for d in ds["disc"].values]
+        return cls(ds["time"].values, ds["speed"].values,
+                   {b: ds["journal_in_ring"].values[:, k] for k, b in enumerate(bearings)},
+                   {b: ds["ring_in_housing"].values[:, k] for k, b in enumerate(bearings)},
+                   {d: ds["wheel"].values[:, k] for k, d in enumerate(discs)},
+                   {b: (float(ds["inner_clearance"].values[k]), float(ds["outer_clearance"].values[k]))
+                    for k, b in enumerate(bearings)}, label, attrs)
+
+    @property
+    def stem(self) -> str:
+        """Default file name stem: ``orbits_<rpm>`` for a speed window, ``orbits_t<t0>-<t1>s`` for a time window."""
+        if "speed_rpm" in self.meta:
+            return f"orbits_{float(self.meta['speed_rpm']):.0f}"
+        return f"orbits_t{self.time[0]:g}-{self.time[-1]:g}s"
+
+    def save(self, out_dir, stem=None, png=True, html=True, csv=True, nc=True):
+        """Write the figures, the table and the dataset into ``out_dir``.
+
+        Parameters
+        ----------
+        out_dir : str or Path
+            Folder (created if missing).
+        stem : str, optional
+            File name stem (default :attr:`stem`).
+        png, html, csv, nc : bool
+            Write ``<stem>.png`` (:meth:`plot`), ``.html`` (:meth:`plot_html`), ``.csv`` (:meth:`to_dataframe`)
+            and ``.nc`` (:meth:`to_xarray`, read back by :meth:`load` and ``xarray.open_dataset``).
+
+        Returns
+        -------
+        list of Path
+        """
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        stem = stem or self.stem
+        paths = []
+        if png:
+            import matplotlib.pyplot as plt
+
+            fig = self.plot()
+            paths.append(out / f"{stem}.png")  # not with_suffix: a time window's stem holds dots
+            fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
+            plt.close(fig)
+        if html:
+            paths.append(out / f"{stem}.html")
+            self.plot_html(paths[-1])
+        if csv:
+            paths.append(out / f"{stem}.csv")
+            self.to_dataframe().to_csv(paths[-1], index=False)
+        if nc:
+            paths.append(self.to_netcdf(out / f"{stem}.nc"))
+        return paths
+
+    @classmethod
+    def load(cls, path):
+        """Read orbits saved by :meth:`save` (the ``.nc`` file).
+
+        Parameters
+        ----------
+        path : str or Path
+
+        Returns
+        -------
+        Orbits
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> t = np.linspace(0.0, 0.01, 5)
+        >>> xy = np.column_stack([t, -t])
+        >>> o = Orbits(t, np.full(5, 3e4), {"b": xy}, {"b": 2 * xy}, {}, {"b": (40e-6, 50e-6)}, "test")
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     back = Orbits.load(o.save(tmp, png=False, html=False, csv=False)[0])
+        >>> bool(np.array_equal(back.ring["b"], o.ring["b"])), back.clearances, back.label
+        (True, {'b': (4e-05, 5e-05)}, 'test')
+        """
+        import xarray as xr
+
+        from .results import NETCDF_ENGINE
+
+        path = Path(path)
+        if not path.is_file():
+            raise ParameterError(f"{path}: no orbits file there (file not found)")
+        return cls.from_xarray(xr.load_dataset(path, engine=NETCDF_ENGINE))
 
     def panels(self):
         """The panels of the figures: (title, x [unit], y [unit], clearance circle radius or None, unit).
@@ -310,11 +468,17 @@ def orbits(run, speed_rpm=None, time_s=None, revolutions=20.0, span_rpm=None):
                                            else f"± {revolutions:g} revolutions")
     else:
         label = f"t = {time_s[0]:g} ... {time_s[1]:g} s"
+    run_meta = run.meta or {}
+    window = ({"speed_rpm": float(speed_rpm)} | ({"span_rpm": float(span_rpm)} if span_rpm is not None else
+                                                 {"revolutions": float(revolutions)})
+              if speed_rpm is not None else {"time_s": [float(time_s[0]), float(time_s[1])]})
+    meta = {"system": run_meta.get("system"), "status": getattr(run, "status", ""),
+            "source": "frbmodel.orbits of a run-up / co-simulation", **window}
     return Orbits(np.asarray(run.time)[idx], np.asarray(run.speed_rpm)[idx],
                   {b: run.journal[b][idx] - run.ring[b][idx] for b in run.journal},
                   {b: run.ring[b][idx] for b in run.journal},
                   {d: xy[idx] for d, xy in run.displacement.items()},
-                  {b: clear[b] for b in run.journal}, label)
+                  {b: clear[b] for b in run.journal}, label, meta)
 
 
 __all__ = ["Orbits", "orbits", "orbits_figure", "window_indices"]
