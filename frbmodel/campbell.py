@@ -365,8 +365,8 @@ class CampbellResult(Result):
 
         return campbell_figure(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, ax=ax, title=title)
 
-    def plot_html(self, path=None, fmax_hz=None, whirl=True, one_x=True):
-        """Interactive plotly figure (hover: speed, frequency, D, stability, precession).
+    def plot_html(self, path=None, fmax_hz=None, whirl=True, one_x=True, shapes=True):
+        """Interactive plotly figure (hover: speed, frequency, D, stability, precession, mode kind and shape).
 
         Parameters
         ----------
@@ -376,6 +376,10 @@ class CampbellResult(Result):
             Upper frequency limit [Hz].
         whirl, one_x : bool
             Draw the film whirl curves and the 1X line.
+        shapes : bool
+            List each point's mode shape in its hover text: orbit semi-major axis (largest = 1), phase of x and
+            whirl direction at every disc, journal and ring (:func:`frbmodel.plots.shape_hover_text`; needs the
+            system in :attr:`meta`).
 
         Returns
         -------
@@ -383,7 +387,7 @@ class CampbellResult(Result):
         """
         from .plots import campbell_plotly
 
-        fig = campbell_plotly(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x)
+        fig = campbell_plotly(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, shapes=shapes)
         if path is not None:
             fig.write_html(str(path), include_plotlyjs="cdn" if self.meta.get("html_cdn") else True)
         return fig
