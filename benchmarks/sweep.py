@@ -1,13 +1,22 @@
-"""Benchmark of parameter studies (issue #5): an 8-case run-up study, Dask LocalCluster with 2 worker processes
-vs serial, measured in the same run on this machine.
+"""Benchmark of parameter studies (issues #5 and #13): an 8-case run-up study, serial vs a Dask LocalCluster with
+2 worker processes, measured in the same run on this machine.
 
 Usage::
 
-    python benchmarks/sweep.py [--duration 0.5]
+    python benchmarks/sweep.py [--duration 0.5] [--no-running-cluster]
 
-Cases: outer clearance 36, 38, 40, 42, 44, 46 um x unbalance 0 and 1e-6 kg m would be 12; we take the 8 cases
-36..42 um x {0, 1e-6} kg m, each a 20k -> 250k rpm run-up of ``--duration`` seconds. Both runs start from empty
-output folders; the Dask run includes starting the cluster (and the workers' numba cache loading).
+Cases: the outer clearances 36, 38, 40, 42 um x unbalance 0 and 1e-6 kg m, each a 20k -> 250k rpm ramp of
+``--duration`` seconds. Every run starts from an empty output folder.
+
+* serial: in this process, after loading the compiled kernels here (:func:`frbmodel.sweep.prepare_worker`, as the
+  Dask workers do), so its time is the cases' alone;
+* Dask, new cluster: ``run_study(..., n_workers=2)`` as ``frb sweep`` does it, starting the cluster, loading the
+  kernels on each worker once and closing the cluster all included;
+* Dask, running cluster (unless ``--no-running-cluster``): the same study on a 2-worker cluster that is already up
+  and prepared (``--scheduler tcp://...``): the cases, their scheduling and the two cores' contention only.
+
+Printed: wall times, speed-ups, the new cluster's fixed costs and each worker's busy time (its case wall times /
+the study's elapsed time).
 """
 from __future__ import annotations
 
@@ -17,31 +26,71 @@ import tempfile
 import time
 from pathlib import Path
 
-from frbmodel.sweep import grid, run_study
+from frbmodel.sweep import estimated_cost_s, grid, prepare_worker, run_study, run_summary
+
+
+def _timed_study(cases, out, **kw):
+    t0 = time.perf_counter()
+    idx = run_study(cases, out, progress=False, **kw)
+    wall = time.perf_counter() - t0
+    assert (idx["status"] == "finished").all(), idx[["case_id", "status", "error"]]
+    return wall, run_summary(out)
+
+
+def _running_cluster_study(cases, out):
+    """The study on a 2-worker LocalCluster started before the clock starts and prepared by an earlier (tiny)
+    study, as a shared cluster would be."""
+    import distributed
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cl:
+        tiny = grid({"outer_clearance": [40e-6]}, "campbell", methods=["J"], speeds_rpm=(1e3, 250e3, 10))
+        _timed_study(tiny, out.with_name(out.name + "_prep"), scheduler=cl.scheduler_address)
+        return _timed_study(cases, out, scheduler=cl.scheduler_address)
+
+
+def _worker_lines(summary):
+    lines = []
+    for name, w in summary["workers"].items():
+        lines.append(f"  {name:<38}{w['busy_s']:10.1f}   ({w['cases']} cases; busy {w['busy_fraction']:.0%} of "
+                     f"{summary['elapsed_s']:.1f} s)")
+    return lines
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--duration", type=float, default=0.5)
+    ap.add_argument("--no-running-cluster", action="store_true", help="skip the study on an already running cluster")
     args = ap.parse_args(argv)
     cases = grid({"outer_clearance": [36e-6, 38e-6, 40e-6, 42e-6], "unbalance_turbine": [0.0, 1e-6]}, "runup",
                  speed_rpm=(20e3, 250e3), duration=args.duration, profile="ramp")
     tmp = Path(tempfile.mkdtemp(prefix="frb_sweep_bench_"))
-    run_study(cases[:1], tmp / "warm", scheduler="serial", progress=lambda m: None)  # numba cache warm
-    t0 = time.perf_counter()
-    run_study(cases, tmp / "serial", scheduler="serial", progress=lambda m: None)
-    t_ser = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    idx = run_study(cases, tmp / "dask", n_workers=2, progress=lambda m: None)
-    t_dask = time.perf_counter() - t0
-    case_sum = float(idx["wall time [s]"].sum())
-    shutil.rmtree(tmp, ignore_errors=True)
-    print(f"{len(cases)} run-up cases (20k -> 250k rpm, {args.duration:g} s simulated each)")
-    print(f"{'serial, one process [s]':<40}{t_ser:10.1f}")
-    print(f"{'Dask LocalCluster, 2 workers [s]':<40}{t_dask:10.1f}")
-    print(f"{'speed-up':<40}{t_ser / t_dask:10.2f}   (2 cores; ideal 2.0)")
-    print(f"{'sum of case wall times on the workers [s]':<40}{case_sum:10.1f}   (parallel efficiency "
-          f"{case_sum / (2 * t_dask):.0%}; first case per worker loads the compiled kernels)")
+    try:
+        t_prep = prepare_worker()["warmup_s"]
+        t_ser, s_ser = _timed_study(cases, tmp / "serial", scheduler="serial")
+        t_dask, s_dask = _timed_study(cases, tmp / "dask", n_workers=2)
+        warm = None if args.no_running_cluster else _running_cluster_study(cases, tmp / "warm")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    est = {round(estimated_cost_s(c), 6) for c in cases}
+    print(f"{len(cases)} run-up cases (20k -> 250k rpm ramp, {args.duration:g} s simulated each; estimated cost "
+          f"{', '.join(f'{e:.1f}' for e in sorted(est))} s each, so longest-first keeps the given order)")
+    print(f"{'serial, one process [s]':<40}{t_ser:10.1f}   (kernels loaded before: {t_prep:.1f} s)")
+    print(f"{'Dask, new LocalCluster, 2 workers [s]':<40}{t_dask:10.1f}")
+    print(f"{'speed-up, new cluster':<40}{t_ser / t_dask:10.2f}   (2 cores; ideal 2.0)")
+    print(f"{'  cluster start [s]':<40}{s_dask['cluster_start_s']:10.1f}")
+    print(f"{'  kernel warm-up on the workers [s]':<40}{s_dask['warmup_s']:10.1f}")
+    print(f"{'  cases, first submitted to last done [s]':<40}{s_dask['cases_s']:10.1f}   (half the serial time: "
+          f"{t_ser / 2:.1f})")
+    print(f"{'  cluster close [s]':<40}{s_dask['close_s']:10.1f}")
+    print(f"{'  case wall times per worker [s]':<40}")
+    print("\n".join(_worker_lines(s_dask)))
+    if warm is not None:
+        t_warm, s_warm = warm
+        print(f"{'Dask, running prepared cluster [s]':<40}{t_warm:10.1f}")
+        print(f"{'speed-up, running cluster':<40}{t_ser / t_warm:10.2f}   (2 cores; ideal 2.0)")
+        print(f"{'  case wall times per worker [s]':<40}")
+        print("\n".join(_worker_lines(s_warm)))
+    print(f"{'sum of case wall times, serial [s]':<40}{s_ser['case_wall_sum_s']:10.1f}")
 
 
 if __name__ == "__main__":

@@ -8,11 +8,18 @@ process per core) by default, or on an existing cluster (``scheduler="tcp://host
 failing case too (with its error); ``<out>/index.csv`` lists all cases. Rerunning a study skips the finished
 ones, so a killed study loses no finished case.
 
+On Dask, every worker loads the compiled kernels and the analysis modules once before the cases
+(:func:`prepare_worker`), the cases go out longest-first by :func:`estimated_cost_s` and no more of them are in
+flight than the cluster has threads, so a worker that becomes free takes the longest case left (greedy list
+scheduling, no guessing by the scheduler). Each run writes ``<out>/run_summary.json`` (:func:`run_summary`):
+elapsed time, cluster start, warm-up and the busy time of each worker (its case wall times / elapsed).
+
 Dask and distributed (the ``[dist]`` extra) are imported only when a study runs on a cluster, so the serial
 scheduler and everything else work without them; a missing package raises :class:`ModuleNotFoundError` naming it.
 """
 from __future__ import annotations
 
+import asyncio
 import hashlib
 import json
 import os
@@ -348,7 +355,8 @@ def run_case(case: Case, out_dir) -> dict:
     Returns
     -------
     dict
-        ``case_id``, ``status`` ("finished" or "failed"), ``error``, ``wall_time_s``.
+        ``case_id``, ``status`` ("finished" or "failed"), ``error``, ``wall_time_s`` and ``worker`` (host:pid of
+        the process that ran the case).
 
     Examples
     --------
@@ -390,7 +398,127 @@ def run_case(case: Case, out_dir) -> dict:
     tmp.write_text(json.dumps(rec, indent=1, default=float))
     os.replace(tmp, out / "cases" / f"{case.case_id}.json")  # atomic: a case file is complete or absent
     return {"case_id": case.case_id, "status": rec["status"], "error": rec.get("error", ""),
-            "wall_time_s": rec["wall_time_s"]}
+            "wall_time_s": rec["wall_time_s"], "worker": f"{rec['host']}:{rec['pid']}"}
+
+
+# --------------------------------------------------------------------------------------------------
+# scheduling: cost estimate, worker preparation
+# --------------------------------------------------------------------------------------------------
+#: rough wall-time rates on the 2-core reference machine (issue #13), used only to order cases; a run-up's
+#: integrator takes a roughly fixed number of steps per revolution (the films' time scale is 1/speed)
+COST_RUNUP_S_PER_REV = 4e-3
+#: a co-simulation step is 10 us of simulated time whatever the speed: ~0.3 ms wall per step
+COST_COSIM_S_PER_SIMULATED_S = 30.0
+#: one Campbell speed of one method (eigenvalues, equilibria for the film methods)
+COST_CAMPBELL_S_PER_SPEED = 2e-3
+
+
+def _mean_speed_rpm(start, end, profile):
+    """Time-averaged speed [rpm] of a linear ramp or an exponential profile from ``start`` to ``end``."""
+    if profile != "exponential" or start == end or min(start, end) <= 0:
+        return 0.5 * (start + end)
+    return (end - start) / np.log(end / start)  # (1/T) int a (b/a)^(t/T) dt
+
+
+def estimated_cost_s(case) -> float:
+    """Rough wall time [s] of a case from its analysis and options (not its parameters), to order a study.
+
+    Run-ups: simulated revolutions (duration × mean speed of the profile) × :data:`COST_RUNUP_S_PER_REV`;
+    co-simulations: duration × :data:`COST_COSIM_S_PER_SIMULATED_S`; Campbell: speeds × methods ×
+    :data:`COST_CAMPBELL_S_PER_SPEED`. Only the order of the estimates matters; the defaults of the options are
+    those :func:`run_case` uses.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    float
+        Estimated wall time [s].
+
+    Examples
+    --------
+    A 0.5 s ramp from 20k to 250k rpm is 0.5 s × 135k rpm / 60 = 1125 revolutions:
+
+    >>> round(estimated_cost_s(Case({}, "runup", {"speed_rpm": (20e3, 250e3), "duration": 0.5,
+    ...                                              "profile": "ramp"})), 3)
+    4.5
+    """
+    o = case.options
+    if case.analysis == "campbell":
+        n = int(o.get("speeds_rpm", (10e3, 250e3, 100))[2])
+        return n * len(o.get("methods", ["J"])) * COST_CAMPBELL_S_PER_SPEED
+    if case.analysis == "cosim":
+        return float(o.get("duration", 1.0)) * COST_COSIM_S_PER_SIMULATED_S
+    start, end = o.get("speed_rpm", (1e3, 250e3))
+    dur = float(o.get("duration", 2.0))
+    return dur * _mean_speed_rpm(float(start), float(end), o.get("profile", "exponential")) / 60.0 \
+        * COST_RUNUP_S_PER_REV
+
+
+def longest_first(cases):
+    """The cases sorted by :func:`estimated_cost_s`, longest first; equal estimates keep their given order.
+
+    Parameters
+    ----------
+    cases : list of Case
+
+    Returns
+    -------
+    list of Case
+
+    Examples
+    --------
+    >>> cases = [Case({}, "runup", {"duration": d}) for d in (0.1, 0.4, 0.2)]
+    >>> [c.options["duration"] for c in longest_first(cases)]
+    [0.4, 0.2, 0.1]
+    """
+    return sorted(cases, key=lambda c: -estimated_cost_s(c))  # sorted() is stable
+
+
+#: this process's preparation as a study worker (see prepare_worker)
+_WORKER = {"prepare_calls": 0, "warmups": 0, "warmup_s": None}
+
+
+def worker_state() -> dict:
+    """This process's preparation for study cases: ``host``, ``pid``, ``prepare_calls`` (calls of
+    :func:`prepare_worker`), ``warmups`` (kernel warm-ups done: 0 or 1) and ``warmup_s`` [s] (None before).
+
+    Examples
+    --------
+    >>> sorted(worker_state())
+    ['host', 'pid', 'prepare_calls', 'warmup_s', 'warmups']
+    """
+    return {"host": os.uname().nodename, "pid": os.getpid(), **_WORKER}
+
+
+def prepare_worker() -> dict:
+    """Import the analysis modules and load the compiled kernels (:func:`frbmodel.warmup.warmup`) into this process
+    once; later calls return at once. Run on every Dask worker before the cases of a study.
+
+    Returns
+    -------
+    dict
+        :func:`worker_state` after the preparation.
+    """
+    _WORKER["prepare_calls"] += 1
+    if _WORKER["warmups"] == 0:
+        t0 = time.perf_counter()
+        from . import campbell, runup, spectral  # noqa: F401  (the analyses' modules: imported here, once)
+        from .warmup import warmup
+
+        warmup(progress=False)
+        _WORKER["warmup_s"] = time.perf_counter() - t0
+        _WORKER["warmups"] += 1
+    return worker_state()
+
+
+async def _prepare_worker_async():
+    """:func:`prepare_worker` off the worker's event loop (which keeps answering the scheduler meanwhile)."""
+    return await asyncio.to_thread(prepare_worker)
+
 
 
 # --------------------------------------------------------------------------------------------------
@@ -454,8 +582,13 @@ def _client(scheduler, n_workers):
     at address ``scheduler`` — which must answer within :data:`SCHEDULER_TIMEOUT_S`."""
     dist = _distributed()
     if scheduler is None:
-        cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
-                                    processes=True, dashboard_address=":0")
+        import dask
+
+        # Dask's statistical profiler samples the task thread every 10 ms: off, the cases' Python-heavy
+        # integrator loops have the GIL to themselves (the nanny hands this config to the worker processes)
+        with dask.config.set({"distributed.worker.profile.enabled": False}):
+            cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
+                                        processes=True, dashboard_address=":0")
         return dist.Client(cluster, set_as_default=False), cluster  # never the user's default client
     try:
         return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S, set_as_default=False), None
@@ -466,6 +599,12 @@ def _client(scheduler, n_workers):
 
 def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, retry_failed=False):
     """Run all unfinished cases of a study; returns the index DataFrame.
+
+    On Dask, each worker first loads the compiled kernels once (:func:`prepare_worker`; on a new LocalCluster the
+    kernels are compiled here first if they never were), then the cases run longest-first
+    (:func:`longest_first`), one per worker thread at a time. Every run that runs cases writes
+    ``<out_dir>/run_summary.json`` (:func:`run_summary`: elapsed time, cluster start, warm-up, each worker's busy
+    time) and, with ``progress``, prints it.
 
     Parameters
     ----------
@@ -481,8 +620,8 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
         Worker processes of the LocalCluster (>= 1).
     progress : bool
         Show a progress bar over the cases to run (done / total, elapsed, ETA; :mod:`frbmodel.progress`) and the
-        study's messages (cases finished before and to run, Dask dashboard address, failed cases); default off,
-        on in the CLI.
+        study's messages (cases finished before and to run, Dask dashboard address, failed cases, the run summary
+        with each worker's busy time); default off, on in the CLI.
     retry_failed : bool
         Also rerun cases that failed before.
 
@@ -508,7 +647,7 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
     >>> index["status"].tolist()
     ['failed']
     """
-    from .progress import counter_bar, note
+    from .progress import note
 
     if n_workers is not None and (int(n_workers) != n_workers or n_workers < 1):
         raise ParameterError(f"workers = {n_workers!r} is invalid: valid range integer >= 1 (worker processes)")
@@ -529,8 +668,23 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
     say(f"study: {n_total} cases, {n_skip} already finished, {len(todo)} to run -> {out.resolve()}")
     if not todo:
         return write_index(cases, out)
+    t0 = time.perf_counter()
+    results, info = _run_cases(cases, todo, out, scheduler, n_workers, progress, say)
+    summary = _summarize(results, time.perf_counter() - t0, "serial" if scheduler == "serial" else "dask", info)
+    (out / "run_summary.json").write_text(json.dumps(summary, indent=1))
+    say(_summary_text(summary))
+    return write_index(cases, out)
+
+
+def _run_cases(cases, todo, out, scheduler, n_workers, progress, say):
+    """Run the cases ``todo`` of the study ``cases`` serially or on Dask, behind a progress bar, re-indexing after
+    each; returns (the case results, the Dask timing and worker states)."""
+    from .progress import counter_bar
+
+    results, info = [], {}
     with counter_bar(len(todo), "study", progress, unit="case") as bar:
         def report(res):
+            results.append(res)
             bar.update(1)
             bar.set_postfix_str(f"{res['case_id']}: {res['status']} ({res['wall_time_s']:.1f} s)")
             if res["status"] == "failed":
@@ -541,26 +695,114 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
             for c in todo:
                 report(run_case(c, out))
         else:
-            _run_on_dask(todo, out, scheduler, n_workers, report, say)
-    return write_index(cases, out)
+            info = _run_on_dask(todo, out, scheduler, n_workers, report, say)
+    return results, info
 
 
 def _run_on_dask(todo, out, scheduler, n_workers, report, say):
-    """Submit the cases to Dask and ``report`` each result as it arrives."""
+    """Prepare every worker once, then run the cases longest-first with at most one case per worker thread in
+    flight, ``report`` each result as it arrives; returns timing and the workers' states for the summary."""
+    dist = _distributed()
+    if scheduler is None:
+        from .warmup import kernels_ready, warmup
+
+        if not kernels_ready():  # compile once here; the workers then load numba's cache instead of compiling
+            say("compiling the numba kernels once before starting the workers (first run only)")
+            warmup(progress=False)
+    t0 = time.perf_counter()
     client, cluster = _client(scheduler, n_workers)
+    info = {"cluster_start_s": time.perf_counter() - t0}
     try:
         say(f"dask: {len(client.scheduler_info().get('workers', {}))} workers, dashboard {client.dashboard_link}")
-        futures = [client.submit(run_case, c, str(out), key=f"frb-{c.case_id}", pure=False) for c in todo]
+        t1 = time.perf_counter()
+        try:
+            client.run(_prepare_worker_async)
+        except Exception as exc:  # noqa: BLE001  (the cases then load the kernels themselves)
+            say(f"  worker warm-up failed ({exc}); each worker's first case loads the kernels")
+        info["warmup_s"] = time.perf_counter() - t1
+        queue = longest_first(todo)
+        pending = dist.as_completed(loop=client.loop)
+
+        def fill():  # one case per worker thread (re-read: workers may join or leave)
+            while queue and pending.count() < max(1, sum(client.nthreads().values())):
+                c = queue.pop(0)
+                pending.add(client.submit(run_case, c, str(out), key=f"frb-{c.case_id}", pure=False))
+
+        t2 = time.perf_counter()
         with client.as_current():  # this study's client, not the session's default
-            for fut in _distributed().as_completed(futures):
+            fill()
+            for fut in pending:
+                fill()  # the next case goes out before this one is reported
                 try:
                     report(fut.result())
                 except Exception as exc:  # noqa: BLE001  (a lost worker: the case stays pending; a rerun does it)
                     say(f"  a task failed outside the case handler: {exc}")
+        info["cases_s"] = time.perf_counter() - t2
+        try:
+            info["workers"] = client.run(worker_state)
+        except Exception:  # noqa: BLE001  (a lost worker: the summary then lists the workers from the cases)
+            pass
     finally:
+        t3 = time.perf_counter()
         client.close()
         if cluster is not None:
             cluster.close()
+        info["close_s"] = time.perf_counter() - t3
+    return info
+
+
+def _summarize(results, elapsed_s, mode, info):
+    """The run summary (see :func:`run_summary`) from the case results of this run and the Dask timing."""
+    per = {}
+    for st in info.get("workers", {}).values():
+        per[f"{st['host']}:{st['pid']}"] = {"cases": 0, "busy_s": 0.0, "warmup_s": st.get("warmup_s")}
+    for r in results:
+        w = per.setdefault(r["worker"], {"cases": 0, "busy_s": 0.0, "warmup_s": None})
+        w["cases"] += 1
+        w["busy_s"] += float(r["wall_time_s"])
+    for w in per.values():
+        w["busy_fraction"] = w["busy_s"] / elapsed_s if elapsed_s > 0 else float("nan")
+    return {"scheduler": mode, "cases_run": len(results), "elapsed_s": elapsed_s,
+            **{k: info.get(k) for k in ("cluster_start_s", "warmup_s", "cases_s", "close_s")},
+            "case_wall_sum_s": sum(w["busy_s"] for w in per.values()), "workers": per}
+
+
+def _summary_text(summary):
+    """One line per worker: cases, busy time and busy fraction; a header with elapsed, cluster start, warm-up."""
+    head = f"{summary['cases_run']} cases in {summary['elapsed_s']:.1f} s ({summary['scheduler']}"
+    if summary["cluster_start_s"] is not None:
+        head += (f"; cluster start {summary['cluster_start_s']:.1f} s, worker warm-up {summary['warmup_s']:.1f} s, "
+                 f"cases {summary['cases_s']:.1f} s, cluster close {summary['close_s']:.1f} s")
+    lines = [head + "); worker busy time = its case wall times / elapsed:"]
+    for name, w in summary["workers"].items():
+        lines.append(f"  {name}: {w['cases']} cases, busy {w['busy_s']:.1f} s ({w['busy_fraction']:.0%})")
+    return "\n".join(lines)
+
+
+def run_summary(out_dir):
+    """The summary of the last :func:`run_study` call on ``out_dir`` that ran cases (``<out>/run_summary.json``).
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Study folder.
+
+    Returns
+    -------
+    dict
+        ``scheduler`` ("serial" or "dask"), ``cases_run``, ``elapsed_s`` (the run's wall time [s], cluster start
+        included), ``cluster_start_s`` (new cluster or connection), ``warmup_s`` (:func:`prepare_worker` on all
+        workers), ``cases_s`` (first case submitted to last result) and ``close_s`` [s] (Dask only, else None),
+        ``case_wall_sum_s`` and
+        ``workers``: {"host:pid": {``cases``, ``busy_s`` (sum of its case wall times [s]), ``busy_fraction``
+        (busy_s / elapsed_s), ``warmup_s`` (its kernel warm-up [s]; None if not warmed up by the study)}}.
+
+    Raises
+    ------
+    FileNotFoundError
+        If no run of the study has run cases yet.
+    """
+    return json.loads((Path(out_dir) / "run_summary.json").read_text())
 
 
 def stability_map(out_dir):
@@ -693,4 +935,5 @@ def example_cases(name):
 
 
 __all__ = ["Case", "grid", "check_options", "run_case", "run_study", "stability_map", "plot_stability_map",
-           "example_cases", "write_index", "PARAMETERS", "ANALYSES", "SCHEDULER_TIMEOUT_S", "build_case_system"]
+           "example_cases", "write_index", "PARAMETERS", "ANALYSES", "SCHEDULER_TIMEOUT_S", "build_case_system",
+           "estimated_cost_s", "longest_first", "prepare_worker", "worker_state", "run_summary"]

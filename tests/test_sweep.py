@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("distributed")
 
-from frbmodel.sweep import grid, run_study, stability_map  # noqa: E402
+from frbmodel.sweep import grid, run_study, run_summary, stability_map  # noqa: E402
 
 SMALL_RUNUP = ["--analysis", "runup", "--speeds", "20000:30000", "--duration", "0.04"]
 
@@ -28,6 +28,9 @@ def test_local_cluster_equals_serial(tmp_path):
     run_study(cases, tmp_path / "serial", scheduler="serial")
     idx = run_study(cases, tmp_path / "dask", n_workers=2)
     assert (idx["status"] == "finished").all() and len(idx) == 4
+    summary = run_summary(tmp_path / "dask")  # the new cluster's two workers, each warmed up before its cases
+    assert summary["cases_run"] == 4 and len(summary["workers"]) == 2
+    assert all(w["warmup_s"] is not None for w in summary["workers"].values())
     a, b = _rows(tmp_path / "serial"), _rows(tmp_path / "dask")
     assert len(a) > 0
     pd.testing.assert_frame_equal(a, b)  # same code, same inputs: identical results, wherever they ran
@@ -69,6 +72,10 @@ def test_failing_case_is_recorded_and_others_finish(tmp_path):
     cases = grid({"viscosity_turbine": [1e-7, 4.9e-3]}, "runup", speed_rpm=(20e3, 30e3), duration=0.04)
     idx = run_study(cases, tmp_path, scheduler="serial")  # the Dask path is test_local_cluster_equals_serial's
     st = dict(zip(idx["viscosity_turbine [Pa s]"], idx["status"]))
+    summary = run_summary(tmp_path)  # one worker, this process, busy for both cases (failed ones count)
+    assert summary["scheduler"] == "serial" and list(summary["workers"]) == [f"{os.uname().nodename}:{os.getpid()}"]
+    assert summary["workers"][f"{os.uname().nodename}:{os.getpid()}"]["busy_s"] == pytest.approx(
+        idx["wall time [s]"].sum(), rel=1e-9)  # the index's wall times are the case files'; 1e-9: summation order
     assert st == {1e-7: "failed", 4.9e-3: "finished"}
     err = idx.loc[idx["status"] == "failed", "error"].iloc[0]
     assert "turbine bearing" in err and "rpm" in err

@@ -1,0 +1,88 @@
+"""Scheduling of Dask studies (issue 13 item 3): longest-first order from the case options, every worker prepared
+(kernels loaded) once however many studies it serves, each worker running its cases longest-first, and the run
+summary's busy times. No timing is asserted: the machine is shared."""
+import json
+
+import numpy as np
+import pytest
+
+from frbmodel.sweep import Case, estimated_cost_s, longest_first, run_study, run_summary, worker_state
+
+
+def _revolutions(start_rpm, end_rpm, duration_s, profile):
+    """Revolutions of a speed profile by quadrature of the speed over time (independent of the closed forms in
+    frbmodel.sweep)."""
+    t = np.linspace(0.0, duration_s, 200_001)
+    if profile == "ramp":
+        rpm = start_rpm + (end_rpm - start_rpm) * t / duration_s
+    else:
+        rpm = start_rpm * (end_rpm / start_rpm) ** (t / duration_s)
+    return float(np.sum(0.5 * (rpm[1:] + rpm[:-1]) * np.diff(t)) / 60.0)
+
+
+def test_longest_first_order_from_the_options():
+    runups = [Case({}, "runup", {"speed_rpm": sp, "duration": d, "profile": pr})
+              for sp, d, pr in [((20e3, 250e3), 0.5, "ramp"), ((20e3, 250e3), 1.0, "exponential"),
+                                ((250e3, 20e3), 0.3, "exponential"), ((20e3, 30e3), 0.04, "ramp")]]
+    revs = [_revolutions(*c.options["speed_rpm"], c.options["duration"], c.options["profile"]) for c in runups]
+    # a run-up's estimate is proportional to its simulated revolutions; 1e-6: the trapezoidal rule on 2e5 intervals
+    # of a smooth profile is far more accurate than that
+    ratio = [estimated_cost_s(c) / r for c, r in zip(runups, revs)]
+    np.testing.assert_allclose(ratio, ratio[0], rtol=1e-6)
+    # a Campbell case costs speeds x methods
+    small = Case({}, "campbell", {"methods": ["J"], "speeds_rpm": (1e3, 250e3, 50)})
+    big = Case({}, "campbell", {"methods": ["J", "F"], "speeds_rpm": (1e3, 250e3, 100)})
+    assert estimated_cost_s(big) == pytest.approx(4 * estimated_cost_s(small), rel=1e-12)  # exact up to rounding
+    # the order: by revolutions for the run-ups (independent counts), equal estimates keep their given order
+    order = [runups[i] for i in np.argsort([-r for r in revs], kind="stable")]
+    twin = Case({"outer_clearance": 40e-6}, "runup", dict(runups[0].options))
+    assert longest_first(runups) == order
+    assert longest_first([runups[0], twin]) == [runups[0], twin]
+    assert longest_first([twin, runups[0]]) == [twin, runups[0]]
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """A 2-worker LocalCluster of this test module (its workers live across studies, as on a shared cluster)."""
+    dist = pytest.importorskip("distributed")
+    with dist.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cl, \
+            dist.Client(cl, set_as_default=False) as client:
+        yield cl, client
+
+
+def _records(out):
+    return [json.loads(f.read_text()) for f in (out / "cases").glob("*.json")]
+
+
+def test_workers_prepared_once_and_cases_longest_first(cluster, tmp_path):
+    cl, client = cluster
+    counts = [10, 20, 30, 40, 50, 60]  # speed-grid sizes, given shortest first
+    study = [Case({"outer_clearance": 40e-6}, "campbell", {"methods": ["J"], "speeds_rpm": (1e3, 250e3, n)})
+             for n in counts]
+    idx = run_study(study, tmp_path / "a", scheduler=cl.scheduler_address)
+    assert (idx["status"] == "finished").all()
+    second = [Case({"outer_clearance": 44e-6}, "campbell", {"methods": ["J"], "speeds_rpm": (1e3, 250e3, n)})
+              for n in counts[:2]]
+    run_study(second, tmp_path / "b", scheduler=cl.scheduler_address)
+
+    states = client.run(worker_state)
+    assert len(states) == 2
+    for st in states.values():  # two studies prepared each worker twice; its kernels were loaded once
+        assert st["prepare_calls"] == 2 and st["warmups"] == 1 and st["warmup_s"] > 0
+    pids = {st["pid"] for st in states.values()}
+    recs = _records(tmp_path / "a")
+    assert {r["pid"] for r in recs} <= pids
+    for pid in pids:  # each worker took the longest case left whenever it became free
+        mine = sorted((r for r in recs if r["pid"] == pid), key=lambda r: r["started"])
+        sizes = [r["options"]["speeds_rpm"][2] for r in mine]
+        assert sizes == sorted(sizes, reverse=True)
+    # the summary: both workers, their case counts and busy times from the case files of this run
+    s = run_summary(tmp_path / "a")
+    assert s["scheduler"] == "dask" and s["cases_run"] == 6 and len(s["workers"]) == 2
+    for name, w in s["workers"].items():
+        host, pid = name.rsplit(":", 1)
+        mine = [r for r in recs if r["pid"] == int(pid)]
+        assert w["cases"] == len(mine)
+        assert w["busy_s"] == pytest.approx(sum(r["wall_time_s"] for r in mine), rel=1e-9)  # 1e-9: summation order
+        assert w["busy_fraction"] == pytest.approx(w["busy_s"] / s["elapsed_s"], rel=1e-12)
+        assert 0 <= w["busy_fraction"] <= 1  # a worker cannot be busy longer than the run
