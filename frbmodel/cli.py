@@ -552,8 +552,9 @@ def cmd_plot(args):
     out = Path(args.dir)
     orders = parse_orders(args.orders)
     if out.is_dir() and not (out / "runup.csv").exists() and any(out.glob("unbalance_*.json")):
-        if args.orbits or args.waterfall:
-            raise ParameterError(f"{out}: an unbalance response; --orbits and --waterfall need a run-up folder")
+        if args.orbits or args.orbit_times or args.waterfall:
+            raise ParameterError(f"{out}: an unbalance response; --orbits, --orbit-times and --waterfall need a "
+                                 "run-up folder")
         locations = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
         print("wrote:\n  " + "\n  ".join(str(p) for p in replot_unbalance(out, locations)))
         print(f"results in {out.resolve()}")
@@ -569,8 +570,11 @@ def cmd_plot(args):
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
     replot_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
-    if args.orbits:
-        write_orbits(run, out, parse_speeds(args.orbits), data=True)
+    if args.orbits or args.orbit_times:
+        speeds = parse_speeds(args.orbits) if args.orbits else ()
+        times = parse_time_windows(args.orbit_times) if args.orbit_times else ()
+        write_orbits(run, out, speeds, check_positive("--revolutions", args.revolutions), data=True,
+                     time_windows=times)
     if args.waterfall:
         write_waterfalls(run, out, orders=orders)
     print(f"results in {out.resolve()}")
@@ -666,8 +670,38 @@ def replot_composites(run, system, out, xscale="linear", title="run-up", orders=
     return paths
 
 
-def write_orbits(run, out, speeds_rpm, revolutions=20.0, data=False):
-    """Orbit figures of a run at given speeds: ``orbits_<rpm>.png`` and ``.html`` in ``out`` (:meth:`Orbits.save`).
+def parse_time_windows(text: str) -> list:
+    """Time windows of ``frb plot --orbit-times``: ``"T0:T1"`` or a comma list of them, in seconds.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    list of (float, float)
+        Start and end [s], start < end.
+
+    Examples
+    --------
+    >>> parse_time_windows("1.1:1.5,0:0.2")
+    [(1.1, 1.5), (0.0, 0.2)]
+    """
+    out = []
+    for item in text.split(","):
+        try:
+            a, b = (float(x) for x in item.split(":"))
+        except ValueError:
+            raise ParameterError(f"--orbit-times {item!r} is invalid: use T0:T1 [s] (or a comma list)") from None
+        if not (np.isfinite(a) and np.isfinite(b) and a < b):
+            raise ParameterError(f"--orbit-times {item!r} is invalid: valid range T0 < T1 (finite) [s]")
+        out.append((a, b))
+    return out
+
+
+def write_orbits(run, out, speeds_rpm=(), revolutions=20.0, data=False, time_windows=()):
+    """Orbit figures of a run at given speeds or over time windows (:meth:`Orbits.save`): ``orbits_<rpm>.png`` and
+    ``.html``, or ``orbits_t<t0>-<t1>s.png`` and ``.html``, in ``out``.
 
     Parameters
     ----------
@@ -678,9 +712,11 @@ def write_orbits(run, out, speeds_rpm, revolutions=20.0, data=False):
     speeds_rpm : sequence of float
         Window centres [rpm] (each within the run's speeds).
     revolutions : float
-        Half-width of each window in rotor revolutions.
+        Half-width of each speed window in rotor revolutions.
     data : bool
-        Also write the samples: ``orbits_<rpm>.csv`` and ``orbits_<rpm>.nc`` (:meth:`Orbits.to_xarray`).
+        Also write the samples: ``orbits_<...>.csv`` and ``orbits_<...>.nc`` (:meth:`Orbits.to_xarray`).
+    time_windows : sequence of (float, float)
+        Time windows [s] (e.g. the settled end of a constant-speed run).
 
     Returns
     -------
@@ -689,9 +725,10 @@ def write_orbits(run, out, speeds_rpm, revolutions=20.0, data=False):
     """
     from .orbits import orbits
 
+    windows = [orbits(run, speed_rpm=float(s), revolutions=revolutions) for s in speeds_rpm]
+    windows += [orbits(run, time_s=w) for w in time_windows]
     paths = []
-    for s in speeds_rpm:
-        o = orbits(run, speed_rpm=float(s), revolutions=revolutions)
+    for o in windows:
         written = o.save(out, csv=data, nc=data)
         paths += written
         print(f"wrote {out / o.stem}" + "/".join(p.suffix for p in written))
@@ -1137,6 +1174,11 @@ def _add_plot(sub):
                     help="also write orbits_<rpm>.png/.html/.csv/.nc at these speeds [rpm] (comma list or "
                          "start:stop:count; ±20 revolutions about each): journal in ring, ring in housing (µm and ε), "
                          "wheels")
+    pl.add_argument("--revolutions", type=float, default=20.0,
+                    help="half-width of the --orbits windows in rotor revolutions")
+    pl.add_argument("--orbit-times", metavar="T0:T1", default=None,
+                    help="also write orbits_t<t0>-<t1>s.png/.html/.csv/.nc over these time windows [s] (comma list), "
+                         "e.g. the settled end of a constant-speed run")
     pl.add_argument("--waterfall", action="store_true",
                     help="also write the 3-D waterfall waterfall_<disc>.png/.html (amplitude in µm, order lines)")
     pl.add_argument("--orders", metavar="K", default="0.5,1",

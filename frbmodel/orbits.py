@@ -16,6 +16,9 @@ import numpy as np
 from .errors import ParameterError
 from .results import Result, decode_attr, netcdf_attrs, variable
 
+#: :meth:`Orbits.plot` zooms its µm panel onto a film orbit narrower than this share of the clearance diameter
+ZOOM_FRACTION = 0.1
+
 
 def window_indices(run, speed_rpm=None, time_s=None, revolutions=20.0, span_rpm=None):
     """Sample indices of a time or speed window of a run.
@@ -323,8 +326,16 @@ class Orbits(Result):
             um.append((f"{d}", xy[:, 0] * 1e6, xy[:, 1] * 1e6, None, "µm"))
         return [um, eps]
 
-    def plot(self, title=None):
+    def plot(self, title=None, zoom=True):
         """Orbits in µm (top row: films with their clearance circles, then the wheels) and in ε (bottom row).
+
+        Parameters
+        ----------
+        title : str, optional
+        zoom : bool
+            In the µm row, zoom onto a film orbit that spans less than :data:`ZOOM_FRACTION` of its clearance
+            circle's diameter (below a whirl onset the orbits are a small 1X ellipse about the static equilibrium);
+            the ε row always shows the whole clearance.
 
         Returns
         -------
@@ -347,7 +358,16 @@ class Orbits(Result):
                 ax.plot(x[-1], y[-1], "o", ms=3, color="C3")
                 if c is not None:
                     ax.plot(c * np.cos(th), c * np.sin(th), "k--", lw=0.8)
-                ax.set_aspect("equal", adjustable="datalim")
+                span = max(np.ptp(x), np.ptp(y))
+                if zoom and i == 0 and c is not None and span < ZOOM_FRACTION * 2 * c:
+                    half = 0.6 * max(span, 1e-3 * c)  # a margin of 10 % each side; a still journal: ±0.06 % of c
+                    xc, yc = 0.5 * (x.min() + x.max()), 0.5 * (y.min() + y.max())
+                    ax.set_xlim(xc - half, xc + half)
+                    ax.set_ylim(yc - half, yc + half)
+                    ax.set_aspect("equal", adjustable="box")
+                    name += " (zoomed)"
+                else:
+                    ax.set_aspect("equal", adjustable="datalim")
                 ax.set_title(name, fontsize=8)
                 ax.set_xlabel(f"x [{unit}]", fontsize=8)
                 ax.set_ylabel(f"y [{unit}]", fontsize=8)

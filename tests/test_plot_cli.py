@@ -81,3 +81,47 @@ def test_plot_draws_the_order_lines(run_dir, capsys):
         assert {"0.5X", "1X", "2X"} <= waterfall
     assert main(["plot", str(run_dir), "--orders", "-1"]) == 2
     assert "--orders = '-1' is invalid" in capsys.readouterr().err
+
+
+def test_plot_orbit_time_windows_and_revolutions(run_dir):
+    from frbmodel.cli import parse_time_windows
+
+    assert parse_time_windows("0.1:0.2,0:0.05") == [(0.1, 0.2), (0.0, 0.05)]
+    for bad in ("0.2:0.1", "0.1", "a:b"):
+        with pytest.raises(frb.ParameterError, match="--orbit-times"):
+            parse_time_windows(bad)
+    assert main(["plot", str(run_dir), "--orders", "none", "--orbit-times", "0.1:0.2", "--orbits", "45000",
+                 "--revolutions", "5"]) == 0
+    import xarray as xr
+
+    with xr.open_dataset(run_dir / "orbits_t0.1-0.2s.nc") as ds:
+        t = ds["time"].values
+        assert t[0] >= 0.1 and t[-1] <= 0.2 and t.size == pytest.approx(0.1 * FS, abs=1)  # ends included
+    with xr.open_dataset(run_dir / "orbits_45000.nc") as ds:
+        # ±5 revolutions at 45 krpm (750 Hz): 2 × 5 / 750 s, to a sample either side
+        assert ds["time"].values[-1] - ds["time"].values[0] == pytest.approx(10 / 750.0, abs=2 / FS)
+
+
+def test_orbit_figure_zooms_onto_small_film_orbits():
+    import matplotlib.pyplot as plt
+
+    from frbmodel.orbits import Orbits
+
+    t = np.linspace(0.0, 0.04, 401)
+    circle = np.column_stack([np.cos(2 * np.pi * 25.0 * t), np.sin(2 * np.pi * 25.0 * t)])
+    small = np.array([10e-6, -20e-6]) + 1e-6 * circle  # 1 µm about (10, -20) µm: spans 2 µm < 10 % of 60 µm
+    large = 20e-6 * circle  # spans 40 µm: the whole clearance is shown
+    o = Orbits(t, np.full(t.size, 1500.0), {"b": small}, {"b": large}, {}, {"b": (30e-6, 40e-6)}, "test")
+    fig = o.plot()
+    try:
+        ax = {a.get_title(): a for a in fig.axes if a.get_xlabel() == "x [µm]"}  # the µm row
+        zoomed = ax["b: journal in ring (zoomed)"]
+        # centre of the orbit ± 0.6 × its 2 µm span
+        assert zoomed.get_xlim() == pytest.approx((10 - 1.2, 10 + 1.2)) and \
+            zoomed.get_ylim() == pytest.approx((-20 - 1.2, -20 + 1.2))
+        lo, hi = ax["b: ring in housing"].get_xlim()
+        assert lo <= -40.0 and hi >= 40.0  # the clearance circle of radius 40 µm in view
+        eps = [a for a in fig.axes if a.get_xlabel() == "x [ε]"]
+        assert len(eps) == 2 and all(a.get_xlim()[0] <= -1.0 and a.get_xlim()[1] >= 1.0 for a in eps)
+    finally:
+        plt.close(fig)
