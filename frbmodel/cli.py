@@ -827,10 +827,13 @@ def cmd_build_fmus(args):
 def cmd_cosim(args):
     """``frb cosim``: co-simulated run-up of an SSP system (rotor speed from the parameter set's ramp, a drive torque
     or a CSV speed profile), streamed to a folder, with figures; exit code."""
-    from .cosim.master import cosimulate
+    from .cosim.master import COUPLING_TOL, cosimulate
     from .parameters import Turbocharger
     from .runup import SpeedProfile
 
+    if args.coupling_tol is not None and not args.adaptive:
+        raise ParameterError(f"--coupling-tol {args.coupling_tol:g} applies only with --adaptive")
+    tol = COUPLING_TOL if args.coupling_tol is None else check_positive("--coupling-tol", args.coupling_tol)
     profile, overrides = None, {}
     if args.profile is not None:
         given = [f"{o} {v}" for o, v in (("--speed-source", args.speed_source), ("--drive-torque", args.drive_torque))
@@ -849,19 +852,29 @@ def cmd_cosim(args):
     out = writable_dir(args.out)
     trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
     kw = dict(progress=True, rollback=args.rollback, unvalidated_step=args.unvalidated_step, overrides=overrides,
-              profile=profile)
+              profile=profile, adaptive=args.adaptive, tolerance=tol)
     if profile is not None:
         print(f"rotor speed: {profile.description}")
     run, code = _stoppable("cosim", lambda: cosimulate(
         args.ssp, args.parameter_set, args.stop_time, args.step, out, trace=trace, **kw), out)
     if "wall_time_s" in run.meta:
-        wall = run.meta["wall_time_s"]
-        print(f"wall time {wall:.1f} s ({run.meta['fmi_time_s'] / max(wall, 1e-9):.0%} in FMI calls), macro step "
-              f"{run.meta['step_size_s']:g} s, {run.time.size} samples")
+        m = run.meta
+        steps = (f"adaptive macro step {m['shortest_step_s']:g} ... {m['longest_step_s']:g} s (tolerance "
+                 f"{m['coupling_tol']:g}), {m['steps_taken']} steps taken, {m['rejected_steps']} rejected"
+                 if m.get("adaptive") and m.get("steps_taken") else f"macro step {m['step_size_s']:g} s")
+        print(f"wall time {m['wall_time_s']:.1f} s ({m['fmi_time_s'] / max(m['wall_time_s'], 1e-9):.0%} in FMI "
+              f"calls), {steps}, {run.time.size} samples")
     kind = "run-up" if profile is None else RUN_TITLES.get(profile.direction, "run-up")
     _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
                 title=f"co-simulated {kind} ({args.parameter_set})")
-    if args.check_convergence and code == 0:
+    if args.check_convergence and code == 0 and args.adaptive:
+        m = run.meta  # the path defect is O(h³): tolerance / 8 asks for about half the step
+        print(f"convergence check: the same co-simulation with half the longest step ({m['max_step_s'] / 2:g} s) "
+              f"and the coupling tolerance / 8 ({tol / 8:g})")
+        check_convergence(run, lambda folder: cosimulate(
+            args.ssp, args.parameter_set, args.stop_time, args.step, folder,
+            **{**kw, "tolerance": tol / 8, "max_step": m["max_step_s"] / 2}), out, "max step / 2, tolerance / 8")
+    elif args.check_convergence and code == 0:
         h = run.meta["step_size_s"] / 2
         print(f"convergence check: the same co-simulation with half the macro step ({h:g} s)")
         check_convergence(run, lambda folder: cosimulate(
@@ -1093,8 +1106,16 @@ def _add_cosim(sub):
                          "table's last time")
     cs.add_argument("--drive-torque", type=float, default=0.0,
                     help="net drive torque about +z [N m] for --speed-source torque")
+    cs.add_argument("--adaptive", action="store_true",
+                    help="error-controlled macro step: steps whose journal path defect exceeds --coupling-tol are "
+                         "rolled back and retried shorter, quiet phases grow the step (up to 12.5 us); outputs at "
+                         "the fixed output times")
+    cs.add_argument("--coupling-tol", type=float, default=None, metavar="X",
+                    help="--adaptive: largest journal path defect per macro step as a fraction of the inner "
+                         "clearance (default: 2e-4)")
     cs.add_argument("--check-convergence", action="store_true",
-                    help="rerun with half the macro step and label the onsets that move by > 1 %% as not converged")
+                    help="rerun with half the macro step (--adaptive: half the longest step and the tolerance / 8) "
+                         "and label the onsets that move by > 1 %% as not converged")
     cs.add_argument("--unvalidated-step", action="store_true",
                     help="allow a macro step outside the validated range 1e-7 ... 2e-5 s")
     cs.add_argument("--trace-fmi", action="store_true", help="print every FMI call with its arguments and status")
@@ -1172,7 +1193,7 @@ def _add_plot(sub):
     pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
     pl.add_argument("--orbits", metavar="SPEEDS", default=None,
                     help="also write orbits_<rpm>.png/.html/.csv/.nc at these speeds [rpm] (comma list or "
-                         "start:stop:count; ±20 revolutions about each): journal in ring, ring in housing (µm and ε), "
+                         "start:stop:count; ± --revolutions about each): journal in ring, ring in housing (µm and ε), "
                          "wheels")
     pl.add_argument("--revolutions", type=float, default=20.0,
                     help="half-width of the --orbits windows in rotor revolutions")
