@@ -582,13 +582,8 @@ def _client(scheduler, n_workers):
     at address ``scheduler`` — which must answer within :data:`SCHEDULER_TIMEOUT_S`."""
     dist = _distributed()
     if scheduler is None:
-        import dask
-
-        # Dask's statistical profiler samples the task thread every 10 ms: off, the cases' Python-heavy
-        # integrator loops have the GIL to themselves (the nanny hands this config to the worker processes)
-        with dask.config.set({"distributed.worker.profile.enabled": False}):
-            cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
-                                        processes=True, dashboard_address=":0")
+        cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
+                                    processes=True, dashboard_address=":0")
         return dist.Client(cluster, set_as_default=False), cluster  # never the user's default client
     try:
         return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S, set_as_default=False), None
