@@ -361,12 +361,14 @@ def cmd_runup(args):
     def run_at(tighten, folder):
         return runup(tc, profile=prof, duration=duration, unbalance=_parse_unbalance(args.unbalance),
                      output_rate_hz=args.rate, rtol=rtol * tighten, atol=atol * tighten, out_dir=folder,
-                     progress=True)
+                     progress=True, integrator=args.integrator)
 
     run, code = _stoppable("runup", lambda: run_at(1.0, out), out)
     if "wall_time_s" in run.meta:
-        print(f"wall time {run.meta['wall_time_s']:.1f} s, {run.meta['rhs_evaluations']} RHS and "
-              f"{run.meta['jacobian_evaluations']} Jacobian evaluations, {run.time.size} samples")
+        work = ", ".join(f"{run.meta[k]} {k.replace('_', ' ')}" for k in ("solver_steps", "rhs_evaluations",
+                                                                          "jacobian_evaluations") if k in run.meta)
+        print(f"wall time {run.meta['wall_time_s']:.1f} s ({run.meta.get('integrator', 'lsoda')}: {work}), "
+              f"{run.time.size} samples")
     if prof.direction == "up-down" and not args.no_figure:
         write_up_down_halves(run, tc, out)
     _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear", title=kind)
@@ -1032,7 +1034,7 @@ def _add_system(sub):
 
 
 def _add_runup(sub):
-    from .runup import DEFAULT_ATOL_M, DEFAULT_RTOL
+    from .runup import DEFAULT_ATOL_M, DEFAULT_RTOL, INTEGRATORS
 
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
@@ -1051,6 +1053,9 @@ def _add_runup(sub):
     r.add_argument("--rtol", type=float, default=DEFAULT_RTOL, help="integrator relative tolerance [-]")
     r.add_argument("--atol", type=float, default=DEFAULT_ATOL_M,
                    help="integrator absolute tolerance on displacements [m]")
+    r.add_argument("--integrator", choices=INTEGRATORS, default=INTEGRATORS[0],
+                   help="'radau': compiled Radau IIA, the whole integration in compiled code; 'lsoda': scipy's LSODA "
+                        "calling the compiled right-hand side from Python (the former path, slower)")
     r.add_argument("--check-convergence", action="store_true",
                    help="rerun with rtol and atol tightened tenfold and label the onsets that move by > 1 %% as seeded "
                         "by round-off")

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 #: the modules holding numba kernels (their sources stamp the marker)
-KERNEL_MODULES = ("film", "bearing", "dynamics", "components", "losses")
+KERNEL_MODULES = ("film", "bearing", "dynamics", "compiled", "components", "losses")
 
 
 def _stamp():
@@ -82,9 +82,12 @@ def _tasks():
                                      film_coefficients(film, [1e-6, -2e-6], 2e3))),
             ("equilibria, ring torques", lambda: equilibrium(tc, "J", 20e3)),
             ("run-up right-hand side and Jacobian", lambda: runup(tc, profile=SpeedProfile.constant(2e4, 2e-4),
-                                                                  duration=2e-4, output_rate_hz=1e4)),
-            ("torque-driven spin", lambda: runup(tc, profile=SpeedProfile.torque(1e-3, 2e4, 2e-4), duration=2e-4,
-                                                 output_rate_hz=1e4)),
+                                                                  duration=2e-4, output_rate_hz=1e4,
+                                                                  integrator="lsoda")),
+            ("compiled run-up integrator", lambda: runup(tc, profile=SpeedProfile.constant(2e4, 2e-4), duration=2e-4,
+                                                         output_rate_hz=1e4)),
+            ("torque-driven spin", lambda: [runup(tc, profile=SpeedProfile.torque(1e-3, 2e4, 2e-4), duration=2e-4,
+                                                  output_rate_hz=1e4, integrator=i) for i in ("radau", "lsoda")]),
             ("co-simulation components", component_step),
             ("bearing losses", lambda: bearing_losses(tc, 20e3))]
 
