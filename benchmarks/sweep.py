@@ -15,8 +15,8 @@ Cases: the outer clearances 36, 38, 40, 42 um x unbalance 0 and 1e-6 kg m, each 
 * Dask, running cluster (unless ``--no-running-cluster``): the same study on a 2-worker cluster that is already up
   and prepared (``--scheduler tcp://...``): the cases, their scheduling and the two cores' contention only.
 
-Printed: wall times, speed-ups, the new cluster's fixed costs and each worker's busy time (its case wall times /
-the study's elapsed time).
+Printed: wall times, speed-ups, the new cluster's fixed costs, each worker's busy time (its case wall times / the
+study's elapsed time) and the cases' CPU times (wall above CPU = waiting for a core).
 """
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ def _worker_lines(summary):
     lines = []
     for name, w in summary["workers"].items():
         lines.append(f"  {name:<38}{w['busy_s']:10.1f}   ({w['cases']} cases; busy {w['busy_fraction']:.0%} of "
-                     f"{summary['elapsed_s']:.1f} s)")
+                     f"{summary['elapsed_s']:.1f} s; CPU {w['cpu_s']:.1f} s)")
     return lines
 
 
@@ -90,7 +90,10 @@ def main(argv=None):
         print(f"{'speed-up, running cluster':<40}{t_ser / t_warm:10.2f}   (2 cores; ideal 2.0)")
         print(f"{'  case wall times per worker [s]':<40}")
         print("\n".join(_worker_lines(s_warm)))
-    print(f"{'sum of case wall times, serial [s]':<40}{s_ser['case_wall_sum_s']:10.1f}")
+    print(f"{'sum of case wall times, serial [s]':<40}{s_ser['case_wall_sum_s']:10.1f}   (CPU "
+          f"{s_ser['case_cpu_sum_s']:.1f} s; Dask, new cluster: wall {s_dask['case_wall_sum_s']:.1f} s, CPU "
+          f"{s_dask['case_cpu_sum_s']:.1f} s)")
+    print("(a case's wall time above its CPU time is time spent waiting for a core: other processes on the machine)")
 
 
 if __name__ == "__main__":

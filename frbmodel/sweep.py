@@ -339,7 +339,8 @@ def _cosim_rows(tc, unb, o):
 
 
 def run_case(case: Case, out_dir) -> dict:
-    """Run one case and write ``<out>/cases/<id>.json`` (status, parameters, onset rows, timing; or the error).
+    """Run one case and write ``<out>/cases/<id>.json`` (status, parameters, onset rows, wall and CPU time; or the
+    error).
 
     The case's system is the Table 2 system, or ``case.options["system"]`` (a dict as
     :meth:`Turbocharger.to_dict` writes it), with the case's parameters applied (:func:`build_case_system`).
@@ -355,8 +356,8 @@ def run_case(case: Case, out_dir) -> dict:
     Returns
     -------
     dict
-        ``case_id``, ``status`` ("finished" or "failed"), ``error``, ``wall_time_s`` and ``worker`` (host:pid of
-        the process that ran the case).
+        ``case_id``, ``status`` ("finished" or "failed"), ``error``, ``wall_time_s``, ``cpu_time_s`` (CPU time of
+        the process during the case) and ``worker`` (host:pid of the process that ran the case).
 
     Examples
     --------
@@ -373,6 +374,7 @@ def run_case(case: Case, out_dir) -> dict:
     (out / "cases").mkdir(parents=True, exist_ok=True)
     rec = {"case_id": case.case_id, "params": case.params, "analysis": case.analysis, "options": case.options,
            "host": os.uname().nodename, "pid": os.getpid(), "started": time.time()}
+    cpu0 = time.process_time()
     try:
         o = dict(case.options)
         base = None
@@ -394,11 +396,12 @@ def run_case(case: Case, out_dir) -> dict:
         rec.update({"status": "failed", "error": f"{type(exc).__name__}: {exc}",
                     "traceback": traceback.format_exc(limit=5)})
     rec["wall_time_s"] = time.time() - rec["started"]
+    rec["cpu_time_s"] = time.process_time() - cpu0  # this process's CPU: wall >> CPU means waiting for a core
     tmp = out / "cases" / f".{case.case_id}.json.tmp{os.getpid()}"
     tmp.write_text(json.dumps(rec, indent=1, default=float))
     os.replace(tmp, out / "cases" / f"{case.case_id}.json")  # atomic: a case file is complete or absent
     return {"case_id": case.case_id, "status": rec["status"], "error": rec.get("error", ""),
-            "wall_time_s": rec["wall_time_s"], "worker": f"{rec['host']}:{rec['pid']}"}
+            "wall_time_s": rec["wall_time_s"], "cpu_time_s": rec["cpu_time_s"], "worker": f"{rec['host']}:{rec['pid']}"}
 
 
 # --------------------------------------------------------------------------------------------------
@@ -750,16 +753,18 @@ def _summarize(results, elapsed_s, mode, info):
     """The run summary (see :func:`run_summary`) from the case results of this run and the Dask timing."""
     per = {}
     for st in info.get("workers", {}).values():
-        per[f"{st['host']}:{st['pid']}"] = {"cases": 0, "busy_s": 0.0, "warmup_s": st.get("warmup_s")}
+        per[f"{st['host']}:{st['pid']}"] = {"cases": 0, "busy_s": 0.0, "cpu_s": 0.0, "warmup_s": st.get("warmup_s")}
     for r in results:
-        w = per.setdefault(r["worker"], {"cases": 0, "busy_s": 0.0, "warmup_s": None})
+        w = per.setdefault(r["worker"], {"cases": 0, "busy_s": 0.0, "cpu_s": 0.0, "warmup_s": None})
         w["cases"] += 1
         w["busy_s"] += float(r["wall_time_s"])
+        w["cpu_s"] += float(r["cpu_time_s"])
     for w in per.values():
         w["busy_fraction"] = w["busy_s"] / elapsed_s if elapsed_s > 0 else float("nan")
     return {"scheduler": mode, "cases_run": len(results), "elapsed_s": elapsed_s,
             **{k: info.get(k) for k in ("cluster_start_s", "warmup_s", "cases_s", "close_s")},
-            "case_wall_sum_s": sum(w["busy_s"] for w in per.values()), "workers": per}
+            "case_wall_sum_s": sum(w["busy_s"] for w in per.values()),
+            "case_cpu_sum_s": sum(w["cpu_s"] for w in per.values()), "workers": per}
 
 
 def _summary_text(summary):
@@ -770,7 +775,8 @@ def _summary_text(summary):
                  f"cases {summary['cases_s']:.1f} s, cluster close {summary['close_s']:.1f} s")
     lines = [head + "); worker busy time = its case wall times / elapsed:"]
     for name, w in summary["workers"].items():
-        lines.append(f"  {name}: {w['cases']} cases, busy {w['busy_s']:.1f} s ({w['busy_fraction']:.0%})")
+        lines.append(f"  {name}: {w['cases']} cases, busy {w['busy_s']:.1f} s ({w['busy_fraction']:.0%}), CPU "
+                     f"{w['cpu_s']:.1f} s")
     return "\n".join(lines)
 
 
@@ -788,9 +794,10 @@ def run_summary(out_dir):
         ``scheduler`` ("serial" or "dask"), ``cases_run``, ``elapsed_s`` (the run's wall time [s], cluster start
         included), ``cluster_start_s`` (new cluster or connection), ``warmup_s`` (:func:`prepare_worker` on all
         workers), ``cases_s`` (first case submitted to last result) and ``close_s`` [s] (Dask only, else None),
-        ``case_wall_sum_s`` and
+        ``case_wall_sum_s``, ``case_cpu_sum_s`` and
         ``workers``: {"host:pid": {``cases``, ``busy_s`` (sum of its case wall times [s]), ``busy_fraction``
-        (busy_s / elapsed_s), ``warmup_s`` (its kernel warm-up [s]; None if not warmed up by the study)}}.
+        (busy_s / elapsed_s), ``cpu_s`` (its CPU time during the cases [s]), ``warmup_s`` (its kernel warm-up [s];
+        None if not warmed up by the study)}}.
 
     Raises
     ------

@@ -84,5 +84,6 @@ def test_workers_prepared_once_and_cases_longest_first(cluster, tmp_path):
         mine = [r for r in recs if r["pid"] == int(pid)]
         assert w["cases"] == len(mine)
         assert w["busy_s"] == pytest.approx(sum(r["wall_time_s"] for r in mine), rel=1e-9)  # 1e-9: summation order
+        assert w["cpu_s"] == pytest.approx(sum(r["cpu_time_s"] for r in mine), rel=1e-9)
         assert w["busy_fraction"] == pytest.approx(w["busy_s"] / s["elapsed_s"], rel=1e-12)
         assert 0 <= w["busy_fraction"] <= 1  # a worker cannot be busy longer than the run
