@@ -201,6 +201,7 @@ class Master:
         self.rollback, self.max_halvings, self.trace = bool(rollback), int(max_halvings), trace
         self.system = system_from_parameters(self.params, self._rotor_system())
         self.fmi_time_s = 0.0
+        self.fmi_calls = {}  # {function: [calls, wall time [s]]} over all FMU instances, collected at close()
         self.rejected_steps = 0
         self.steps_taken = 0
         self.forced_steps = 0  # adaptive steps accepted at min_step above the tolerance
@@ -324,14 +325,13 @@ class Master:
             return where
 
         after, end = positions(self._phases[1][0]), positions(self._end_gets)
-        try:
-            self._ref_ix = np.array([[after[(b.name, f"journal_ref.{q}")] for q in ("x", "y", "vx", "vy")]
-                                     for b in self.bearings])
-            self._acc_ix = np.array([[end[(b.name, f"journal_accel.{q}")] for q in "xy"] for b in self.bearings])
+        try:  # per bearing: positions of journal_ref x, y, vx, vy and journal_accel x, y; the inner clearance [m]
+            self._defect_plan = [(*(after[(f.name, f"journal_ref.{q}")] for q in ("x", "y", "vx", "vy")),
+                                  *(end[(f.name, f"journal_accel.{q}")] for q in "xy"), b.inner.clearance)
+                                 for f, b in zip(self.bearings, self.system.bearings)]
         except KeyError as exc:
             raise ParameterError(f"{self.ssp_path}: the adaptive macro step needs the connection of {exc.args[0]} "
                                  "to the rotor") from None
-        self._clearance = np.array([b.inner.clearance for b in self.system.bearings])
 
     def coupling_error(self, before, end, after, h):
         """Coupling error of the step just taken, relative to the tolerance (<= 1: accepted).
@@ -365,12 +365,14 @@ class Master:
         float
             The largest path defect over the bearings / (tolerance · inner clearance).
         """
-        r0, r1 = np.asarray(before)[self._ref_ix], np.asarray(after)[self._ref_ix]
-        acc = np.asarray(end)[self._acc_ix]
-        dx = r1[:, :2] - (r0[:, :2] + h * r0[:, 2:] + 0.5 * h * h * acc)
-        dv = r1[:, 2:] - (r0[:, 2:] + h * acc)
-        defect = np.maximum(np.hypot(dx[:, 0], dx[:, 1]), h * np.hypot(dv[:, 0], dv[:, 1])) / self._clearance
-        return float(defect.max()) / self.tolerance
+        worst = 0.0  # plain floats: a handful of values per bearing, once per step
+        for ix, iy, ivx, ivy, iax, iay, clearance in self._defect_plan:
+            ax, ay, vx, vy = end[iax], end[iay], before[ivx], before[ivy]
+            dx = after[ix] - (before[ix] + h * (vx + 0.5 * h * ax))
+            dy = after[iy] - (before[iy] + h * (vy + 0.5 * h * ay))
+            dvx, dvy = after[ivx] - (vx + h * ax), after[ivy] - (vy + h * ay)
+            worst = max(worst, math.hypot(dx, dy) / clearance, h * math.hypot(dvx, dvy) / clearance)
+        return worst / self.tolerance
 
     def _phase(self, links):
         gets, dests, pos = {}, {}, 0
@@ -642,15 +644,21 @@ class Master:
                                  f"({self.fmi_time_s / max(wall, 1e-9):.0%} in FMI calls)\n")
             result = rec.close(status, message, wall_time_s=wall, fmi_time_s=self.fmi_time_s,
                                rejected_steps=self.rejected_steps, steps_taken=self.steps_taken,
+                               fmi_calls={f: [n, round(w, 6)] for f, (n, w) in sorted(self.fmi_calls.items())},
                                **self._adaptive_stats())
         if status != "finished":
             raise CosimStopped(message, result)
         return result
 
     def close(self):
-        """Terminate and free every FMU instance and delete the extracted files."""
+        """Terminate and free every FMU instance and delete the extracted files (the instances' call counts and
+        times are added to :attr:`fmi_calls` first)."""
         for fmu in self.fmus.values():
             fmu.free()
+            for function, (n, wall) in fmu.calls.items():
+                stat = self.fmi_calls.setdefault(function, [0, 0.0])
+                stat[0] += n
+                stat[1] += wall
         self.fmus = {}
         if self._tmp is not None:
             self._tmp.cleanup()
@@ -677,8 +685,9 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
     Returns
     -------
     RunupResult
-        ``meta`` has the wall time, the time inside FMI calls and the numbers of steps taken and rejected
-        (adaptive: also the tolerance, the step bounds, the shortest and longest step taken).
+        ``meta`` has the wall time, the time inside FMI calls (in total and, as ``fmi_calls``, per FMI function:
+        number of calls and wall time [s]), the numbers of steps taken and rejected (adaptive: also the tolerance,
+        the step bounds, the shortest and longest step taken).
 
     Raises
     ------
