@@ -37,7 +37,8 @@ EPS_CAP = 0.999
 
 __all__ = ["CHUNK_SAMPLES", "DEFAULT_ATOL_M", "DEFAULT_RTOL", "INTEGRATORS", "MAX_PROFILE_POINTS", "MAX_SPEED_RPM",
            "PROFILE_HEADER", "Problem", "RunupResult", "RunupStopped", "SEGMENT_STEPS", "SpeedProfile", "Unbalance",
-           "atol_vector", "build_problem", "check_speed", "initial_state", "runup", "static_rotor_state"]
+           "atol_vector", "build_problem", "check_speed", "initial_state", "runup", "sample_row",
+           "static_rotor_state"]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1014,8 +1015,9 @@ def _losses(problem, y, w):
     return torque, power
 
 
-def _sample(problem, schema, t, y, buf):
-    """One named result row of state ``y`` at time ``t``."""
+def sample_row(problem, schema, t, y, buf):
+    """One named result row (:meth:`RunupSchema.row`) of the state ``y`` at time ``t`` [s]; ``buf`` (n_states,) is
+    work space. Fills ``problem.diag`` with the films' eccentricity ratios."""
     problem.rhs(t, y, buf)  # fills problem.diag with the films' eccentricities
     system, n_r = problem.system, problem.n_rotor
     journal = [y[4 * b.node:4 * b.node + 2] for b in system.bearings]
@@ -1124,7 +1126,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     integrator = solver_opts["integrator"]
     counts = ({"rhs_evaluations": 0, "jacobian_evaluations": 0} if integrator == "lsoda" else {"solver_steps": 0})
     samples = (_lsoda_samples if integrator == "lsoda" else _radau_samples)(problem, y0, t_out, solver_opts, counts)
-    rec.append(_sample(problem, rec.schema, 0.0, y0, f_buf))
+    rec.append(sample_row(problem, rec.schema, 0.0, y0, f_buf))
     status, message = "finished", ""
     label = {"down": "run-down", "up-down": "run-up/down"}.get(problem.profile.direction, "run-up")
     with deferred_signals() as signals, simulation_bar(t_out[-1], label, progress) as bar:
@@ -1132,7 +1134,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
             if failure:
                 status, message = "stopped", failure
                 break
-            row = _sample(problem, rec.schema, t_out[k], y, f_buf)
+            row = sample_row(problem, rec.schema, t_out[k], y, f_buf)
             rec.append(row)
             message = _contact_message(rec.schema, row, contact_eps) if problem.springs == 0 else None
             if not message and problem.torque_driven:

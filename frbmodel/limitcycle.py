@@ -1,0 +1,386 @@
+"""Periodic whirl orbits (limit cycles) of the full nonlinear model at a constant rotor speed.
+
+The model is the one of :func:`frbmodel.runup` (FE rotor, both rings' lateral DoFs and spin, nonlinear films,
+gravity, optional unbalance) at a constant speed Ω; its state without the rotation angle φ (which only grows,
+φ = Ω t) is z, of 2 n_r + 10 components. Without unbalance the system is autonomous: a whirl orbit has an unknown
+period, found by single shooting with a phase condition (:mod:`frbmodel.shooting`); with unbalance it is forced
+with the rotor period, and the orbit is locked to 1X or a sub-harmonic ``2π k / Ω``. The flow is integrated in
+compiled code (:mod:`frbmodel.compiled`, Radau IIA at tight tolerances), the monodromy matrix by forward
+differences of the flow, and its eigenvalues are the Floquet multipliers.
+
+The guess comes from a constant-speed simulation from the equilibrium (``settle_s``): the period is read from the
+upward crossings of the turbine journal's x through its mean, and the smallest multiple of that interval after
+which the state returns to itself is taken (a period-doubled orbit returns after two); if none returns, the
+response is not periodic (a torus: two whirl frequencies) and that is reported instead of an orbit.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import ConvergenceError, ParameterError
+from .results import Result, netcdf_attrs, variable
+from .units import RPM
+
+#: shooting tolerances: Radau IIA relative tolerance and absolute tolerance on displacements [m] of the flow; the
+#: monodromy's difference step (scaled units: 1e-4 of a micrometre, 1e-10 m, on displacements) is ~1e4 times the
+#: flow's error (1e-9 of a ~10 µm orbit), so its columns are accurate to ~1e-4
+SHOOT_RTOL, SHOOT_ATOL_M = 1e-9, 1e-13
+FD_STEP = 1e-4
+#: typical displacement [m] that scales the shooting variables (other states scaled alike, :func:`atol_vector`)
+SCALE_M = 1e-6
+#: threads integrating the monodromy's columns (the compiled solver runs without the GIL)
+WORKERS = 2
+#: a state returns to itself (period found) when it comes back within this fraction of the orbit's size
+RETURN_TOL = 0.02
+
+
+@dataclass
+class LimitCycle(Result):
+    """A periodic orbit of the full model at constant speed (:func:`limit_cycle`).
+
+    Attributes
+    ----------
+    speed_rpm : float
+        Rotor speed [rpm].
+    period : float
+        Minimal period [s] found (the forcing's multiple for an unbalanced rotor).
+    orbit : RunupResult
+        The orbit sampled over one period (recorded quantities, SI units), time from 0 to ``period``.
+    multipliers : ndarray (n,)
+        Floquet multipliers, largest modulus first (complex).
+    stable : bool
+        All non-trivial multipliers inside the unit circle.
+    state : ndarray (n,)
+        The full state (without the rotation angle) at the start of the period, SI units.
+    autonomous : bool
+        True without unbalance (the period was an unknown).
+    meta : dict
+        Speed, film model, tolerances, Newton iterations and residual, guess.
+    """
+
+    speed_rpm: float
+    period: float
+    orbit: object
+    multipliers: np.ndarray
+    stable: bool
+    state: np.ndarray
+    autonomous: bool = True
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def frequency_hz(self):
+        """Orbit frequency 1 / period [Hz]."""
+        return 1.0 / self.period
+
+    @property
+    def frequency_ratio(self):
+        """Orbit frequency over rotor frequency [-] (e.g. ~0.3-0.5 for oil whirl)."""
+        return self.frequency_hz / (self.speed_rpm / 60.0)
+
+    def orbit_radius(self, name):
+        """Largest distance [m] of a disc or journal (by name) from its time-averaged centre over one period.
+
+        Parameters
+        ----------
+        name : str
+            A disc name (e.g. ``"turbine_wheel"``) or bearing name (its journal).
+
+        Returns
+        -------
+        float
+            Radius [m].
+        """
+        o = self.orbit
+        xy = o.displacement.get(name, o.journal.get(name))
+        if xy is None:
+            raise ParameterError(f"orbit_radius: {name!r} is neither a disc ({', '.join(o.displacement)}) nor a "
+                                 f"bearing ({', '.join(o.journal)})")
+        xy = xy[:-1]  # one period, without the repeated end point
+        return float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T)))
+
+    @property
+    def max_eps(self):
+        """Largest eccentricity ratio [-] of each film over one period, in the order of ``orbit.film_labels``
+        (turbine inner, turbine outer, compressor inner, compressor outer)."""
+        return self.orbit.eccentricity.max(axis=0)
+
+    @property
+    def mean_ring_speed_ratio(self):
+        """Mean ring speed / rotor speed [-] of each bearing over one period."""
+        return self.orbit.ring_speed_ratio[:-1].mean(axis=0)
+
+    @property
+    def nontrivial_multipliers(self):
+        """The Floquet multipliers without the trivial one (closest to 1) of an autonomous orbit."""
+        if not self.autonomous:
+            return self.multipliers
+        return np.delete(self.multipliers, int(np.argmin(np.abs(self.multipliers - 1.0))))
+
+    def summary(self):
+        """One-line description: speed, frequency, stability, largest multiplier, radius, max ε."""
+        mu = self.nontrivial_multipliers
+        lead = mu[int(np.argmax(np.abs(mu)))]
+        return (f"{self.speed_rpm:.0f} rpm: {'stable' if self.stable else 'unstable'} orbit, {self.frequency_hz:.2f} Hz "
+                f"({self.frequency_ratio:.3f} X), largest multiplier |{abs(lead):.4f}|, turbine wheel radius "
+                f"{self.orbit_radius(self.orbit.schema.discs[0]) * 1e6:.2f} um, max eps "
+                f"{np.array2string(self.max_eps, precision=3)}")
+
+    def to_dataframe(self):
+        """The orbit over one period as a table (the run-up's columns, units in the names)."""
+        return self.orbit.to_dataframe()
+
+    def to_xarray(self):
+        """The orbit (:meth:`RunupResult.to_xarray`) with the multipliers and the orbit's scalars.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        ds = self.orbit.to_xarray()
+        ds["multiplier_real"] = variable(("multiplier",), self.multipliers.real, "-", "Floquet multiplier, real part")
+        ds["multiplier_imag"] = variable(("multiplier",), self.multipliers.imag, "-", "Floquet multiplier, imag part")
+        ds["state"] = variable(("state_index",), self.state, "SI", "state at the start of the period")
+        ds.attrs.update(netcdf_attrs({"limit_cycle": {"speed_rpm": self.speed_rpm, "period_s": self.period,
+                                                      "stable": self.stable, "autonomous": self.autonomous,
+                                                      **self.meta}}))
+        return ds
+
+    def save(self, path):
+        """Write :meth:`to_xarray` to a netCDF file (``.nc``); returns the path."""
+        return self.to_netcdf(path)
+
+    def plot(self, title=None):
+        """Orbits over one period (journal in ring, ring in housing, wheels; :class:`frbmodel.orbits.Orbits`)."""
+        from .orbits import orbits
+
+        return orbits(self.orbit, time_s=(0.0, self.period)).plot(title=title or self.summary())
+
+    def plot_html(self, path=None, title=None):
+        """Interactive orbits over one period (written to ``path`` if given)."""
+        from .orbits import orbits
+
+        return orbits(self.orbit, time_s=(0.0, self.period)).plot_html(path, title=title or self.summary())
+
+
+class _Flow:
+    """The flow z(0) -> z(T) of the constant-speed model (compiled Radau IIA), z = the state without φ."""
+
+    def __init__(self, problem, rtol, atol_m):
+        from .compiled import pack_problem
+        from .runup import atol_vector
+
+        self.problem, self.rtol = problem, rtol
+        self.packed = pack_problem(problem)
+        self.atol = atol_vector(problem, atol_m)[0]
+        self.evaluations = 0
+
+    def states(self, z0, t):
+        """Full states (with φ from 0) at the times ``t`` (from 0)."""
+        from .compiled import solve_chunk
+
+        y, _, message = solve_chunk(self.packed, np.append(z0, 0.0), t, self.rtol, self.atol)
+        self.evaluations += 1
+        if message:
+            raise ConvergenceError(f"limit cycle: the flow failed over {t[-1]:.6g} s ({message})")
+        return y
+
+    def __call__(self, z0, T):
+        return self.states(z0, np.array([0.0, T]))[-1, :-1]
+
+    def rhs(self, z):
+        return self.problem.rhs(0.0, np.append(z, 0.0), np.empty(z.size + 1))[:-1].copy()
+
+
+def _crossings(t, x):
+    """Times of the upward crossings of x through its mean (linear interpolation)."""
+    x = x - x.mean()
+    k = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))
+    return t[k] - x[k] * (t[k + 1] - t[k]) / (x[k + 1] - x[k]), k
+
+
+def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4):
+    """Guess (z0, period) from a constant-speed simulation of ``settle_s`` [s] from the method-J equilibrium.
+
+    Returns
+    -------
+    z0 : ndarray
+        State at the last upward crossing of the turbine journal's x through its mean.
+    period : float
+        Smallest multiple of the mean crossing interval after which the state returns within RETURN_TOL.
+    info : dict
+        Crossing interval, multiple, return distance.
+
+    Raises
+    ------
+    ConvergenceError
+        The response settles on no periodic orbit (no crossings, or no return: quasi-periodic).
+    """
+    from .compiled import pack_problem, solve_chunk
+    from .runup import atol_vector, initial_state
+
+    w = float(problem.profile.omega[0])
+    dt = 2 * math.pi / w / samples_per_rev
+    tail = min(settle_s / 2, 60 * 2 * math.pi / w)  # the last 60 revolutions (at most half the settling time)
+    y0 = initial_state(problem)
+    atol = atol_vector(problem)[0]
+    packed = pack_problem(problem)
+    y_mid, _, msg = solve_chunk(packed, y0, np.array([0.0, settle_s - tail]), 1e-8, atol)
+    if msg:
+        raise ConvergenceError(f"limit cycle guess: the settling run failed ({msg})")
+    t = settle_s - tail + np.arange(int(tail / dt) + 1) * dt
+    y, _, msg = solve_chunk(packed, y_mid[-1], t, 1e-8, atol)
+    if msg:
+        raise ConvergenceError(f"limit cycle guess: the settling run failed ({msg})")
+    j = 4 * problem.system.bearings[0].node
+    tc, k = _crossings(t, y[:, j])
+    if tc.size < 2 * max_multiple + 1 or np.ptp(y[:, j]) < 1e-9:
+        raise ConvergenceError(f"limit cycle guess: no whirl at {w / RPM:.0f} rpm after {settle_s:g} s (the journal "
+                               "stays at its equilibrium or drifts): no orbit to continue from")
+    size = np.ptp(y[:, :problem.n_rotor], axis=0).max()
+    last = k[-1]
+    for m in range(1, max_multiple + 1):
+        back = k[-1 - m]
+        dist = float(np.max(np.abs(y[last, :problem.n_rotor] - y[back, :problem.n_rotor]))) / size
+        if dist < RETURN_TOL:
+            return y[last, :-1].copy(), float(tc[-1] - tc[-1 - m]), {"crossing_interval_s": float(np.mean(np.diff(tc))),
+                                                                     "multiple": m, "return_distance": dist}
+    raise ConvergenceError(f"limit cycle guess: at {w / RPM:.0f} rpm the response does not repeat within "
+                           f"{max_multiple} whirl periods (closest return {dist:.2g} of the orbit size): it is not "
+                           "periodic (quasi-periodic: two whirl frequencies) or has not settled (longer settle_s)")
+
+
+def _forced_guess(problem, y, t, samples_per_rev, max_multiple):
+    """Guess of a forced (unbalanced) orbit: the state at the last whole rotor revolution and the smallest number of
+    revolutions after which it returns (samples every 1/samples_per_rev revolution from a whole revolution)."""
+    w = float(problem.profile.omega[0])
+    size = np.ptp(y[:, :problem.n_rotor], axis=0).max()
+    last = (y.shape[0] - 1) // samples_per_rev * samples_per_rev
+    dist = math.inf
+    for m in range(1, max_multiple + 1):
+        back = last - m * samples_per_rev
+        dist = float(np.max(np.abs(y[last, :problem.n_rotor] - y[back, :problem.n_rotor]))) / max(size, 1e-30)
+        if dist < RETURN_TOL:
+            return y[last, :-1].copy(), m * 2 * math.pi / w, {"multiple": m, "return_distance": dist}
+    raise ConvergenceError(f"limit cycle guess: at {w / RPM:.0f} rpm the unbalance response does not repeat within "
+                           f"{max_multiple} revolutions (closest return {dist:.2g} of the orbit size): not locked to "
+                           "1X or a sub-harmonic (quasi-periodic), or not settled (longer settle_s)")
+
+
+def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), settle_s=0.3, tol=1e-6,
+                samples=400, max_iter=25):
+    """Periodic whirl orbit of the full nonlinear model at a constant rotor speed, with its Floquet multipliers.
+
+    Parameters
+    ----------
+    system : Turbocharger
+        The system (two floating-ring bearings).
+    speed_rpm : float
+        Constant rotor speed [rpm].
+    guess : LimitCycle or (ndarray, float), optional
+        A nearby orbit (e.g. at a neighbouring speed) or (state without the rotation angle [SI], period [s]);
+        default: settle from the equilibrium for ``settle_s`` and read the orbit off (:func:`settle_guess`).
+    film_model : {"short", "short_corrected"}, optional
+        Default: the system's.
+    unbalance : sequence of Unbalance
+        With unbalance the orbit is forced: its period is a whole number of rotor revolutions.
+    settle_s : float
+        Settling time [s] of the guess simulation.
+    tol : float
+        Newton tolerance on the scaled residual (displacements in µm: 1e-6 is 1e-12 m).
+    samples : int
+        Samples of the returned orbit over one period.
+    max_iter : int
+        Newton iterations at most.
+
+    Returns
+    -------
+    LimitCycle
+
+    Raises
+    ------
+    ConvergenceError
+        No whirl, no periodic response (quasi-periodic), or Newton failed — with the reason.
+    ParameterError
+        Invalid speed or settling time.
+    """
+    from .film import check_model
+    from .runup import RunupSchema, SpeedProfile, atol_vector, build_problem, check_speed
+    from .shooting import shoot
+
+    speed_rpm = check_speed("speed", speed_rpm)
+    model = check_model(film_model or system.film_model)
+    problem = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), model, unbalance)
+    forced = any(u.amount > 0 for u in unbalance)
+    if guess is None:
+        z0, period, info = _guess(problem, settle_s, forced)
+    elif isinstance(guess, LimitCycle):
+        z0, period, info = guess.state.copy(), guess.period, {"from_orbit_at_rpm": guess.speed_rpm}
+    else:
+        z0, period, info = np.asarray(guess[0], dtype=float), float(guess[1]), {"given": True}
+    flow = _Flow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
+    scale = atol_vector(problem, SCALE_M)[0][:-1]
+    sol = shoot(flow, flow.rhs, z0, period, scale=scale, autonomous=not forced, tol=tol, max_iter=max_iter,
+                fd_step=FD_STEP, workers=WORKERS)
+    sol = _minimal_period(flow, sol, scale, forced, tol, max_iter)
+    t = np.linspace(0.0, sol.period, samples + 1)
+    y = flow.states(sol.z0, t)
+    orbit = _orbit_result(problem, RunupSchema.from_system(system), t, y)
+    meta = {"film_model": model, "rtol": SHOOT_RTOL, "atol_displacement_m": SHOOT_ATOL_M, "newton_iterations":
+            sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
+    return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, sol.stable, sol.z0, not forced, meta)
+
+
+def _minimal_period(flow, sol, scale, forced, tol, max_iter):
+    """The orbit with its minimal period: if the state already returns after T / d (d = 4, 3, 2; for a forced orbit
+    only divisors that leave whole revolutions), shoot again from there (a guess spanning two periods converges to
+    the doubled orbit, which is a solution too)."""
+    from .shooting import shoot
+
+    revs = round(sol.period * float(flow.problem.profile.omega[0]) / (2 * math.pi)) if forced else 0
+    for d in (4, 3, 2):
+        if forced and revs % d:
+            continue
+        end = flow(sol.z0, sol.period / d)
+        if np.max(np.abs(end - sol.z0) / scale) < 1e3 * tol:
+            return shoot(flow, flow.rhs, sol.z0, sol.period / d, scale=scale, autonomous=not forced, tol=tol,
+                         max_iter=max_iter, fd_step=FD_STEP, workers=WORKERS)
+    return sol
+
+
+def _guess(problem, settle_s, forced, samples_per_rev=40, max_multiple=4):
+    """(z0, period, info) from a settling simulation: forced by whole revolutions, autonomous by crossings."""
+    from .errors import check_positive
+
+    settle_s = check_positive("settle_s", settle_s, "s")
+    if not forced:
+        return settle_guess(problem, settle_s, samples_per_rev, max_multiple)
+    from .compiled import pack_problem, solve_chunk
+    from .runup import atol_vector, initial_state
+
+    rev = 2 * math.pi / float(problem.profile.omega[0])
+    n_rev = max(int(settle_s / rev), 2 * max_multiple + 1)
+    tail = min(n_rev // 2, 60)
+    t = (n_rev - tail) * rev + np.arange(tail * samples_per_rev + 1) * rev / samples_per_rev
+    packed, atol = pack_problem(problem), atol_vector(problem)[0]
+    y_mid, _, msg = solve_chunk(packed, initial_state(problem), np.array([0.0, t[0]]), 1e-8, atol)
+    y, _, msg2 = solve_chunk(packed, y_mid[-1], t, 1e-8, atol) if not msg else (None, 0, msg)
+    if msg or msg2:
+        raise ConvergenceError(f"limit cycle guess: the settling run failed ({msg or msg2})")
+    return _forced_guess(problem, y, t, samples_per_rev, max_multiple)
+
+
+def _orbit_result(problem, schema, t, y):
+    """The sampled orbit as a RunupResult (recorded quantities of each state)."""
+    from .recorder import RunupResult
+    from .runup import sample_row
+
+    buf = np.empty(problem.n_states)
+    rows = [sample_row(problem, schema, float(tk), yk, buf) for tk, yk in zip(t, y)]
+    return RunupResult.from_rows(schema, rows, {"system": problem.system.to_dict(), "film_model": problem.film_model,
+                                                "profile": problem.profile.description})
+
+
+__all__ = ["LimitCycle", "limit_cycle", "settle_guess"]

@@ -1,0 +1,114 @@
+"""Limit cycles by shooting (frbmodel.shooting, frbmodel.limitcycle): closed forms and the full model against long
+constant-speed simulations."""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import frbmodel as frb
+from frbmodel.limitcycle import limit_cycle
+from frbmodel.runup import SpeedProfile, runup
+from frbmodel.shooting import shoot
+
+
+def _flow(f, autonomous=True):
+    def flow(z0, T):
+        return solve_ivp(lambda t, z: f(t, z), (0.0, T), z0, method="DOP853", rtol=1e-12, atol=1e-13).y[:, -1]
+    return flow
+
+
+@pytest.mark.parametrize("mu, omega, b", [(0.25, 2.0, 0.0), (0.04, 5.0, 3.0)])
+def test_hopf_normal_form_cycle_equals_closed_form(mu, omega, b):
+    """r' = (mu - r^2) r, theta' = omega + b r^2: the cycle r = sqrt(mu), period 2 pi / (omega + b mu), Floquet
+    multipliers 1 and exp(-2 mu T) (the radial linearization mu - 3 r^2 = -2 mu). Tolerances: the flow is accurate
+    to ~1e-12, the monodromy's difference step is 1e-6 (scaled), so its entries carry ~1e-6 errors: 1e-4 on the
+    multipliers; amplitude and period to the Newton tolerance 1e-8 (1e-7)."""
+    def f(t, z):
+        r2 = z[0] ** 2 + z[1] ** 2
+        return np.array([(mu - r2) * z[0] - (omega + b * r2) * z[1], (mu - r2) * z[1] + (omega + b * r2) * z[0]])
+
+    sol = shoot(_flow(f), lambda z: f(0.0, z), np.array([1.3 * math.sqrt(mu), 0.1 * math.sqrt(mu)]),
+                0.9 * 2 * math.pi / omega)
+    T = 2 * math.pi / (omega + b * mu)
+    assert sol.period == pytest.approx(T, rel=1e-7)
+    assert np.hypot(*sol.z0) == pytest.approx(math.sqrt(mu), rel=1e-7)
+    mult = sorted(np.abs(sol.multipliers))
+    assert mult[0] == pytest.approx(math.exp(-2 * mu * T), abs=1e-4)
+    assert mult[1] == pytest.approx(1.0, abs=1e-4)
+    assert sol.stable
+
+
+def test_subcritical_cycle_is_unstable_with_the_closed_form_multiplier():
+    """r' = (mu + r^2 - r^4) r with mu = -0.1: two cycles, r^2 = (1 -/+ sqrt(1 + 4 mu)) / 2; the inner one is
+    unstable with multiplier exp(g T), g = d/dr[(mu + r^2 - r^4) r] = 2 r^2 - 4 r^4 at the cycle. Shooting must find
+    it (it is a zero of the residual like any other) and call it unstable. Tolerances as for the normal form."""
+    mu, omega = -0.1, 3.0
+
+    def f(t, z):
+        r2 = z[0] ** 2 + z[1] ** 2
+        g = mu + r2 - r2 * r2
+        return np.array([g * z[0] - omega * z[1], g * z[1] + omega * z[0]])
+
+    r2 = (1 - math.sqrt(1 + 4 * mu)) / 2
+    sol = shoot(_flow(f), lambda z: f(0.0, z), np.array([1.05 * math.sqrt(r2), 0.0]), 2 * math.pi / omega)
+    T = 2 * math.pi / omega
+    assert np.hypot(*sol.z0) == pytest.approx(math.sqrt(r2), rel=1e-7)
+    assert max(np.abs(sol.multipliers)) == pytest.approx(math.exp((2 * r2 - 4 * r2 * r2) * T), rel=1e-4)
+    assert not sol.stable
+
+
+def test_forced_oscillator_response_equals_closed_form():
+    """x'' + 2 zeta w x' + w^2 x = cos(W t): the periodic response of period 2 pi / W has amplitude
+    1 / sqrt((w^2 - W^2)^2 + (2 zeta w W)^2), and the multipliers are exp(lambda T), lambda = -zeta w +/- i w_d.
+    Non-autonomous shooting (fixed period, no phase condition); tolerances as above."""
+    zeta, w, W = 0.05, 3.0, 2.0
+
+    def f(t, z):
+        return np.array([z[1], math.cos(W * t) - 2 * zeta * w * z[1] - w * w * z[0]])
+
+    T = 2 * math.pi / W
+    sol = shoot(_flow(f), lambda z: f(0.0, z), np.array([0.0, 0.0]), T, scale=np.ones(2), autonomous=False)
+    t = np.linspace(0.0, T, 2001)
+    x = solve_ivp(lambda s, z: f(s, z), (0.0, T), sol.z0, t_eval=t, rtol=1e-12, atol=1e-13).y[0]
+    amp = 1 / math.hypot(w * w - W * W, 2 * zeta * w * W)
+    assert 0.5 * np.ptp(x) == pytest.approx(amp, rel=1e-5)  # sampled peak: (pi / 2000)^2 / 2 < 2e-6 relative
+    assert sol.period == T
+    assert np.abs(sol.multipliers) == pytest.approx(np.full(2, math.exp(-zeta * w * T)), rel=1e-4)
+
+
+def _run_period(run, T_guess, names):
+    """Period [s] of a settled run, independent of the shooting: the shift tau (within 10 % of the guess) that
+    minimizes the mean squared difference of the recorded positions at t and t + tau over the last 20 periods
+    (parabolic refinement between samples)."""
+    t = run.time
+    sig = np.column_stack([run.displacement[n] for n in names if n in run.displacement]
+                          + [run.journal[n] for n in names if n in run.journal])
+    dt = t[1] - t[0]
+    i0 = int(np.searchsorted(t, t[-1] - 20 * T_guess))
+    shifts = np.arange(int(0.9 * T_guess / dt), int(1.1 * T_guess / dt) + 1)
+    err = np.array([np.mean((sig[i0 + s:] - sig[i0:sig.shape[0] - s]) ** 2) for s in shifts])
+    k = int(np.argmin(err))
+    a, b, c = err[k - 1], err[k], err[k + 1]
+    return (shifts[k] + 0.5 * (a - c) / (a - 2 * b + c)) * dt
+
+
+@pytest.mark.parametrize("speed_rpm", [60e3, pytest.param(100e3, marks=pytest.mark.slow),
+                                       pytest.param(150e3, marks=pytest.mark.slow)])
+def test_limit_cycle_equals_long_constant_speed_run(speed_rpm):
+    """Acceptance (issue #14): at a constant speed where the whirl settles on a periodic orbit, the shooting result
+    equals a long constant-speed simulation by the other integrator (scipy's LSODA, tight tolerances): frequency
+    0.5 %, turbine-wheel orbit radius and the four films' max eps 2 %, and it is stable (the simulation settled on
+    it)."""
+    tc = frb.turbocharger(36e-6)
+    lc = limit_cycle(tc, speed_rpm)
+    assert lc.stable
+    run = runup(tc, profile=SpeedProfile.constant(speed_rpm, 0.5), duration=0.5, output_rate_hz=100e3, rtol=1e-8,
+                atol=1e-11, integrator="lsoda")
+    T = _run_period(run, lc.period, ("turbine_wheel", "compressor_wheel"))
+    assert 1 / lc.period == pytest.approx(1 / T, rel=0.005)
+    last = run.time >= run.time[-1] - lc.period
+    xy = run.displacement["turbine_wheel"][last]
+    radius = np.max(np.hypot(*(xy - xy.mean(axis=0)).T))
+    assert lc.orbit_radius("turbine_wheel") == pytest.approx(radius, rel=0.02)
+    np.testing.assert_allclose(lc.max_eps, run.eccentricity[last].max(axis=0), rtol=0.02)
