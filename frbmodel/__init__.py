@@ -34,6 +34,7 @@ from .film import (
     static_eccentricity,
     static_position,
 )
+from .limitcycle import LimitCycle, limit_cycle
 from .linear import LinearSystem, linear_system
 from .losses import bearing_loss, bearing_losses
 from .methods import METHODS, Method, get_method
@@ -42,7 +43,6 @@ from .parameters import FloatingRingBearing, Turbocharger, load_system
 from .presets import PAPER_OUTER_CLEARANCES, turbocharger
 from .recorder import Recorder, RunupResult, RunupSchema
 from .rotor import Disc, Rotor, ShaftElement
-from .limitcycle import LimitCycle, limit_cycle
 from .runup import SpeedProfile, Unbalance, runup
 from .spectral import SpectrogramResult, spectrogram
 from .tracking import Component
@@ -53,7 +53,8 @@ from .whirl import film_onset_speeds
 __all__ = [
     "__version__", "BearingEquilibrium", "CampbellResult", "Component", "ConvergenceError", "CosimStopped", "Disc",
     "EquilibriumResult", "FILM_MODELS", "FRBError", "Film", "FilmContactError", "FloatingRingBearing",
-    "IntegrationError", "LimitCycle", "LinearSystem", "METHODS", "Method", "Modes", "PAPER_OUTER_CLEARANCES", "ParameterError",
+    "IntegrationError", "LimitCycle", "LinearSystem", "METHODS", "Method", "Modes", "PAPER_OUTER_CLEARANCES",
+    "ParameterError",
     "Recorder", "Rotor", "RunStopped", "RunupResult", "RunupSchema", "RunupStopped", "ShaftElement",
     "SpectrogramResult", "SpeedProfile", "Turbocharger", "Unbalance", "bearing_loss", "bearing_losses", "campbell",
     "equilibrium", "film_coefficients", "film_force", "film_onset_speeds", "film_torques", "get_method", "limit_cycle",

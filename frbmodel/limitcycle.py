@@ -123,7 +123,8 @@ class LimitCycle(Result):
         """One-line description: speed, frequency, stability, largest multiplier, radius, max ε."""
         mu = self.nontrivial_multipliers
         lead = mu[int(np.argmax(np.abs(mu)))]
-        return (f"{self.speed_rpm:.0f} rpm: {'stable' if self.stable else 'unstable'} orbit, {self.frequency_hz:.2f} Hz "
+        kind = "stable" if self.stable else "unstable"
+        return (f"{self.speed_rpm:.0f} rpm: {kind} orbit, {self.frequency_hz:.2f} Hz "
                 f"({self.frequency_ratio:.3f} X), largest multiplier |{abs(lead):.4f}|, turbine wheel radius "
                 f"{self.orbit_radius(self.orbit.schema.discs[0]) * 1e6:.2f} um, max eps "
                 f"{np.array2string(self.max_eps, precision=3)}")
