@@ -30,11 +30,13 @@ from frbmodel.sweep import estimated_cost_s, grid, prepare_worker, run_study, ru
 
 
 def _timed_study(cases, out, **kw):
-    t0 = time.perf_counter()
+    """(wall time [s], run summary with this process's CPU time during the study and the index's case times)."""
+    t0, c0 = time.perf_counter(), time.process_time()
     idx = run_study(cases, out, progress=False, **kw)
     wall = time.perf_counter() - t0
     assert (idx["status"] == "finished").all(), idx[["case_id", "status", "error"]]
-    return wall, run_summary(out)
+    return wall, run_summary(out) | {"this_process_cpu_s": time.process_time() - c0,
+                                     "case_wall_s": idx["wall time [s]"].tolist()}
 
 
 def _running_cluster_study(cases, out):
@@ -75,6 +77,7 @@ def main(argv=None):
     print(f"{len(cases)} run-up cases (20k -> 250k rpm ramp, {args.duration:g} s simulated each; estimated cost "
           f"{', '.join(f'{e:.1f}' for e in sorted(est))} s each, so longest-first keeps the given order)")
     print(f"{'serial, one process [s]':<40}{t_ser:10.1f}   (kernels loaded before: {t_prep:.1f} s)")
+    print(f"{'  case wall times [s]':<40}{' '.join(f'{t:.1f}' for t in s_ser['case_wall_s'])}")
     print(f"{'Dask, new LocalCluster, 2 workers [s]':<40}{t_dask:10.1f}")
     print(f"{'speed-up, new cluster':<40}{t_ser / t_dask:10.2f}   (2 cores; ideal 2.0)")
     print(f"{'  cluster start [s]':<40}{s_dask['cluster_start_s']:10.1f}")
@@ -82,6 +85,7 @@ def main(argv=None):
     print(f"{'  cases, first submitted to last done [s]':<40}{s_dask['cases_s']:10.1f}   (half the serial time: "
           f"{t_ser / 2:.1f})")
     print(f"{'  cluster close [s]':<40}{s_dask['close_s']:10.1f}")
+    print(f"{'  CPU of this process (client, scheduler)':<40}{s_dask['this_process_cpu_s']:10.1f}")
     print(f"{'  case wall times per worker [s]':<40}")
     print("\n".join(_worker_lines(s_dask)))
     if warm is not None:

@@ -407,29 +407,23 @@ def run_case(case: Case, out_dir) -> dict:
 # --------------------------------------------------------------------------------------------------
 # scheduling: cost estimate, worker preparation
 # --------------------------------------------------------------------------------------------------
-#: rough wall-time rates on the 2-core reference machine (issue #13), used only to order cases; a run-up's
-#: integrator takes a roughly fixed number of steps per revolution (the films' time scale is 1/speed)
-COST_RUNUP_S_PER_REV = 4e-3
-#: a co-simulation step is 10 us of simulated time whatever the speed: ~0.3 ms wall per step
-COST_COSIM_S_PER_SIMULATED_S = 30.0
+#: rough wall-time rates on the 2-core reference machine (issue #13), used only to order cases. A run-up costs
+#: about the same per simulated second whatever its speeds (the implicit integrator's steps follow the whirl, a few
+#: hundred Hz, not the rotor speed): 5.4 s/s for the 0.5 s 20k -> 250k rpm ramp, 7.0 s/s for the 1 s exponential
+#: main job with the compiled Radau integrator, although the ramp turns 1.5x more revolutions per second
+COST_RUNUP_S_PER_SIMULATED_S = 6.0
+#: a co-simulation step is 10 us of simulated time: 0.27 ms wall per step
+COST_COSIM_S_PER_SIMULATED_S = 27.0
 #: one Campbell speed of one method (eigenvalues, equilibria for the film methods)
 COST_CAMPBELL_S_PER_SPEED = 2e-3
-
-
-def _mean_speed_rpm(start, end, profile):
-    """Time-averaged speed [rpm] of a linear ramp or an exponential profile from ``start`` to ``end``."""
-    if profile != "exponential" or start == end or min(start, end) <= 0:
-        return 0.5 * (start + end)
-    return (end - start) / np.log(end / start)  # (1/T) int a (b/a)^(t/T) dt
 
 
 def estimated_cost_s(case) -> float:
     """Rough wall time [s] of a case from its analysis and options (not its parameters), to order a study.
 
-    Run-ups: simulated revolutions (duration × mean speed of the profile) × :data:`COST_RUNUP_S_PER_REV`;
-    co-simulations: duration × :data:`COST_COSIM_S_PER_SIMULATED_S`; Campbell: speeds × methods ×
-    :data:`COST_CAMPBELL_S_PER_SPEED`. Only the order of the estimates matters; the defaults of the options are
-    those :func:`run_case` uses.
+    Run-ups: simulated duration × :data:`COST_RUNUP_S_PER_SIMULATED_S`; co-simulations: duration ×
+    :data:`COST_COSIM_S_PER_SIMULATED_S`; Campbell: speeds × methods × :data:`COST_CAMPBELL_S_PER_SPEED`. Only
+    the order of the estimates matters; the defaults of the options are those :func:`run_case` uses.
 
     Parameters
     ----------
@@ -443,11 +437,10 @@ def estimated_cost_s(case) -> float:
 
     Examples
     --------
-    A 0.5 s ramp from 20k to 250k rpm is 0.5 s × 135k rpm / 60 = 1125 revolutions:
-
-    >>> round(estimated_cost_s(Case({}, "runup", {"speed_rpm": (20e3, 250e3), "duration": 0.5,
-    ...                                              "profile": "ramp"})), 3)
-    4.5
+    >>> estimated_cost_s(Case({}, "runup", {"speed_rpm": (20e3, 250e3), "duration": 0.5}))
+    3.0
+    >>> estimated_cost_s(Case({}, "campbell", {"methods": ["A", "J"], "speeds_rpm": (1e3, 250e3, 200)}))
+    0.8
     """
     o = case.options
     if case.analysis == "campbell":
@@ -455,10 +448,7 @@ def estimated_cost_s(case) -> float:
         return n * len(o.get("methods", ["J"])) * COST_CAMPBELL_S_PER_SPEED
     if case.analysis == "cosim":
         return float(o.get("duration", 1.0)) * COST_COSIM_S_PER_SIMULATED_S
-    start, end = o.get("speed_rpm", (1e3, 250e3))
-    dur = float(o.get("duration", 2.0))
-    return dur * _mean_speed_rpm(float(start), float(end), o.get("profile", "exponential")) / 60.0 \
-        * COST_RUNUP_S_PER_REV
+    return float(o.get("duration", 2.0)) * COST_RUNUP_S_PER_SIMULATED_S
 
 
 def longest_first(cases):
