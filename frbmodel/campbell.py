@@ -365,7 +365,7 @@ class CampbellResult(Result):
 
         return campbell_figure(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, ax=ax, title=title)
 
-    def plot_html(self, path=None, fmax_hz=None, whirl=True, one_x=True, shapes=True):
+    def plot_html(self, path=None, fmax_hz=None, whirl=True, one_x=True, shapes=True, include_plotlyjs="directory"):
         """Interactive plotly figure (hover: speed, frequency, D, stability, precession, mode kind and shape).
 
         Parameters
@@ -380,16 +380,20 @@ class CampbellResult(Result):
             List each point's mode shape in its hover text: orbit semi-major axis (largest = 1), phase of x and
             whirl direction at every disc, journal and ring (:func:`frbmodel.plots.shape_hover_text`; needs the
             system in :attr:`meta`).
+        include_plotlyjs : {"directory", True}
+            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
+            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
+            :func:`frbmodel.plots.write_html`.
 
         Returns
         -------
         plotly.graph_objects.Figure
         """
-        from .plots import campbell_plotly
+        from .plots import campbell_plotly, write_html
 
         fig = campbell_plotly(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, shapes=shapes)
         if path is not None:
-            fig.write_html(str(path), include_plotlyjs="cdn" if self.meta.get("html_cdn") else True)
+            write_html(fig, path, include_plotlyjs)
         return fig
 
     def metadata(self) -> dict:

@@ -267,14 +267,23 @@ class ModeShape:
         """
         return plot_mode_shape(self, ax=ax, n_phases=n_phases, title=title)
 
-    def plot_html(self, path=None):
+    def plot_html(self, path=None, include_plotlyjs="directory"):
         """Interactive 3-D (plotly) figure of the whirling shaft; written to ``path`` if given.
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            The HTML file.
+        include_plotlyjs : {"directory", True}
+            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
+            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
+            :func:`frbmodel.plots.write_html`.
 
         Returns
         -------
         plotly.graph_objects.Figure
         """
-        return plot_mode_shape_html(self, path)
+        return plot_mode_shape_html(self, path, include_plotlyjs=include_plotlyjs)
 
 
 def _match_mode(cd, speed_rpm, mode, lam):
@@ -404,9 +413,12 @@ def plot_mode_shape(ms, ax=None, n_phases=8, title=None):
     return fig
 
 
-def plot_mode_shape_html(ms, path=None, n_frames=24):
-    """Interactive 3-D (plotly) whirling shaft with a phase slider (see :meth:`ModeShape.plot_html`)."""
+def plot_mode_shape_html(ms, path=None, n_frames=24, include_plotlyjs="directory"):
+    """Interactive 3-D (plotly) whirling shaft with a phase slider (see :meth:`ModeShape.plot_html`); written to
+    ``path`` by :func:`frbmodel.plots.write_html` if given."""
     import plotly.graph_objects as go
+
+    from .plots import write_html
 
     z = np.linspace(0.0, ms.node_z[-1], 120) * 1e3
     xc, yc = ms.complex_deflection(z / 1e3)
@@ -446,7 +458,7 @@ def plot_mode_shape_html(ms, path=None, n_frames=24):
                              "yaxis": {"range": [-1.1, 1.1]}, "zaxis": {"range": [-1.1, 1.1]},
                              "aspectmode": "manual", "aspectratio": {"x": 2.5, "y": 1, "z": 1}})
     if path is not None:
-        fig.write_html(str(path), include_plotlyjs="cdn")
+        write_html(fig, path, include_plotlyjs)
     return fig
 
 
@@ -512,11 +524,11 @@ def save_mode_shapes(cd, speed_rpm, out_dir, fmax_hz=None):
                                          "(x deflection at 8 phases; node orbits red forward, blue backward)")
     fig.savefig(stem.with_suffix(".png"), dpi=110)
     import matplotlib.pyplot as plt
+
+    from .plots import write_html
+
     plt.close(fig)
-    divs = [plot_mode_shape_html(ms).to_html(full_html=False, include_plotlyjs="cdn" if k == 0 else False)
-            for k, ms in enumerate(shapes)]
-    stem.with_suffix(".html").write_text("<html><head><meta charset='utf-8'></head><body>" + "\n".join(divs)
-                                         + "</body></html>", encoding="utf-8")
+    write_html([plot_mode_shape_html(ms) for ms in shapes], stem.with_suffix(".html"))
     frames = []
     for ms in shapes:
         df = ms.to_dataframe()

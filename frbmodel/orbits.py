@@ -377,8 +377,19 @@ class Orbits(Result):
         fig.tight_layout()
         return fig
 
-    def plot_html(self, path=None, title=None):
+    def plot_html(self, path=None, title=None, include_plotlyjs="directory"):
         """Interactive orbits (plotly), the panels of :meth:`plot`; written to ``path`` (HTML) if given.
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            The HTML file.
+        title : str, optional
+            Figure title.
+        include_plotlyjs : {"directory", True}
+            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
+            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
+            :func:`frbmodel.plots.write_html`.
 
         Returns
         -------
@@ -386,6 +397,8 @@ class Orbits(Result):
         """
         import plotly.graph_objects as go
         from plotly.subplots import make_subplots
+
+        from .plots import write_html
 
         rows = self.panels()
         ncol = max(len(r) for r in rows)
@@ -404,7 +417,7 @@ class Orbits(Result):
                                  col=j + 1)
         fig.update_layout(title=title or f"Orbits, {self.label}", showlegend=False)
         if path is not None:
-            fig.write_html(str(path), include_plotlyjs="cdn")
+            write_html(fig, path, include_plotlyjs)
         return fig
 
 

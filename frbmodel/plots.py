@@ -807,3 +807,88 @@ def waterfall_plotly(sp, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40
                       scene=dict(xaxis_title="frequency [Hz]", yaxis_title="rotor speed [rpm]",
                                  zaxis_title=f"orbit amplitude [{unit}]"))
     return fig
+
+
+#: the plotly.js bundle that the HTML figures of a folder share (the name plotly's ``include_plotlyjs="directory"``
+#: refers to, whatever the figure)
+PLOTLY_JS = "plotly.min.js"
+#: how interactive figures get plotly.js by default: from :data:`PLOTLY_JS` beside them (offline, small files)
+HTML_PLOTLYJS = "directory"
+
+
+def _plotlyjs_source():
+    from plotly.offline import get_plotlyjs
+
+    return get_plotlyjs()
+
+
+def plotly_bundle(folder):
+    """Make sure ``folder`` holds the installed plotly.js as :data:`PLOTLY_JS` (one copy per folder).
+
+    The file is written when missing or when its header (which names the plotly.js version) differs from the
+    installed one, so figures written by a newer plotly never load an older bundle. It is written to a temporary
+    name first and then renamed, so a reader never sees half a file.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The folder of the HTML figures (must exist).
+
+    Returns
+    -------
+    Path
+        The bundle.
+    """
+    import os
+    from pathlib import Path
+
+    path = Path(folder) / PLOTLY_JS
+    source = _plotlyjs_source()
+    head = source[:200].encode("utf-8")
+    if path.exists():
+        with open(path, "rb") as f:
+            if f.read(len(head)) == head:
+                return path
+    tmp = path.with_name(f".{PLOTLY_JS}.{os.getpid()}.tmp")
+    tmp.write_text(source, encoding="utf-8")
+    os.replace(tmp, path)
+    return path
+
+
+def write_html(fig, path, include_plotlyjs=HTML_PLOTLYJS):
+    """Write an interactive (plotly) figure as an HTML file: small, and shown offline.
+
+    Every interactive figure of the package is written here. By default (``"directory"``) the page loads plotly.js
+    from :data:`PLOTLY_JS` in its own folder, written there once (:func:`plotly_bundle`, 4.8 MB) and shared by all
+    figures of the folder: the figures open without a network and each file holds only its data. Copy or move the
+    folder as a whole (or a figure together with :data:`PLOTLY_JS`).
+
+    Parameters
+    ----------
+    fig : plotly.graph_objects.Figure or sequence of them
+        The figure; several figures are written one below the other into one page (plotly.js loaded once).
+    path : str or Path
+        The HTML file (its folder must exist).
+    include_plotlyjs : {"directory", True}
+        ``"directory"``: :data:`PLOTLY_JS` beside the file (default); ``True``: plotly.js embedded in the file (a
+        self-contained file, 4.8 MB larger). Any other value of :meth:`plotly.graph_objects.Figure.write_html` is
+        passed on as it is.
+
+    Returns
+    -------
+    Path
+        The HTML file.
+    """
+    from pathlib import Path
+
+    path = Path(path)
+    if include_plotlyjs == "directory":
+        plotly_bundle(path.parent)
+    if not isinstance(fig, (list, tuple)):
+        fig.write_html(str(path), include_plotlyjs=include_plotlyjs)
+        return path
+    divs = [f.to_html(full_html=False, include_plotlyjs=include_plotlyjs if k == 0 else False)
+            for k, f in enumerate(fig)]
+    path.write_text("<html><head><meta charset='utf-8'></head><body>" + "\n".join(divs) + "</body></html>",
+                    encoding="utf-8")
+    return path

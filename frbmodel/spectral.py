@@ -187,7 +187,7 @@ class SpectrogramResult(Result):
                                 orders=orders)
 
     def plot_html(self, path=None, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,), compact=True,
-                  include_plotlyjs="cdn"):
+                  include_plotlyjs="directory"):
         """Interactive spectrogram (plotly); written to ``path`` (HTML) if given (options as :meth:`plot`).
 
         Parameters
@@ -199,21 +199,21 @@ class SpectrogramResult(Result):
         compact : bool
             Keep the file small (:func:`frbmodel.plots.composite_plotly`): at most about a screen of heatmap cells,
             every peak kept, single precision.
-        include_plotlyjs : bool or str
-            How the file gets plotly.js (:meth:`plotly.graph_objects.Figure.write_html`): ``"cdn"`` (default, as
-            the other interactive figures of a results folder: a small file, shown where the CDN is reachable) or
-            ``True`` (embedded, 4.8 MB more; shown offline).
+        include_plotlyjs : {"directory", True}
+            How the file gets plotly.js (:func:`frbmodel.plots.write_html`): ``"directory"`` (default, as every
+            interactive figure of a results folder: ``plotly.min.js`` beside the file, one copy per folder; small
+            files, shown offline) or ``True`` (embedded: a self-contained file, 4.8 MB larger).
 
         Returns
         -------
         plotly.graph_objects.Figure
         """
-        from .plots import composite_plotly
+        from .plots import composite_plotly, write_html
 
         fig = composite_plotly(self, campbell=campbell, fmax_hz=fmax_hz, amplitude=amplitude, orders=orders,
                                compact=compact)
         if path is not None:
-            fig.write_html(str(path), include_plotlyjs=include_plotlyjs)
+            write_html(fig, path, include_plotlyjs)
         return fig
 
     def save(self, out_dir, campbell=None, xscale="linear", title=None, orders=(1.0,), png=True, html=True):
@@ -271,18 +271,21 @@ class SpectrogramResult(Result):
 
         return waterfall_figure(self, fmax_hz, amplitude, orders, n_lines, title)
 
-    def waterfall_html(self, path=None, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40):
-        """Interactive 3-D waterfall (plotly); written to ``path`` (HTML, plotly.js from the CDN) if given.
+    def waterfall_html(self, path=None, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40,
+                       include_plotlyjs="directory"):
+        """Interactive 3-D waterfall (plotly); written to ``path`` (HTML) if given.
+
+        ``include_plotlyjs`` as for :meth:`plot_html` (default: ``plotly.min.js`` beside the file).
 
         Returns
         -------
         plotly.graph_objects.Figure
         """
-        from .plots import waterfall_plotly
+        from .plots import waterfall_plotly, write_html
 
         fig = waterfall_plotly(self, fmax_hz, amplitude, orders, n_lines)
         if path is not None:
-            fig.write_html(str(path), include_plotlyjs="cdn")
+            write_html(fig, path, include_plotlyjs)
         return fig
 
 

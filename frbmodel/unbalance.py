@@ -524,7 +524,7 @@ class UnbalanceResponse(Result):
         """
         return response_figure(self, names, films, title)
 
-    def plot_html(self, path=None, names=None, films=None):
+    def plot_html(self, path=None, names=None, films=None, include_plotlyjs="directory"):
         """Interactive plotly Bode, clearance and polar plot (hover: speed, amplitude, phase).
 
         Parameters
@@ -533,14 +533,20 @@ class UnbalanceResponse(Result):
             Write the figure there as HTML.
         names, films : sequence of str, optional
             As for :meth:`plot`.
+        include_plotlyjs : {"directory", True}
+            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
+            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
+            :func:`frbmodel.plots.write_html`.
 
         Returns
         -------
         plotly.graph_objects.Figure
         """
+        from .plots import write_html
+
         fig = response_plotly(self, names, films)
         if path is not None:
-            fig.write_html(str(path), include_plotlyjs="cdn" if self.meta.get("html_cdn") else True)
+            write_html(fig, path, include_plotlyjs)
         return fig
 
     def save(self, out_dir, stem=None, png=True, html=True, netcdf=True, names=None):

@@ -1,5 +1,6 @@
 """The interactive spectrogram file stays small (issue 12): at most about a screen of heatmap cells, each block of
-cells keeping its largest value, single precision, plotly.js from the CDN — and the peaks stay where they are."""
+cells keeping its largest value, single precision, plotly.js in a shared file beside it — and the peaks stay where
+they are."""
 import numpy as np
 from test_plot_cli import figure_data
 
@@ -61,10 +62,14 @@ def test_main_job_sized_figure_is_kept_cell_for_cell(tmp_path):
     np.testing.assert_allclose(h["x"], sp.speeds_rpm, rtol=1e-7)
 
 
-def test_plotly_js_embedded_on_request(tmp_path):
+def test_plotly_js_beside_by_default_embedded_on_request(tmp_path):
     sp = _spectrogram(157, 1024, 20000.0 / 2048, (40, 80))
-    sp.plot_html(tmp_path / "offline.html", include_plotlyjs=True)
-    sp.plot_html(tmp_path / "online.html")
-    offline, online = ((tmp_path / f"{n}.html").read_text() for n in ("offline", "online"))
-    assert 'src="https://cdn.plot.ly' in online and 'src="https://cdn.plot.ly' not in offline
-    assert len(offline) - len(online) > 3e6  # plotly.js itself is several MB
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    sp.plot_html(tmp_path / "a" / "offline.html", include_plotlyjs=True)
+    sp.plot_html(tmp_path / "b" / "beside.html")
+    offline, beside = (tmp_path / "a" / "offline.html").read_text(), (tmp_path / "b" / "beside.html").read_text()
+    assert '<script charset="utf-8" src="plotly.min.js"></script>' in beside
+    assert 'src="plotly.min.js"' not in offline and not (tmp_path / "a" / "plotly.min.js").exists()
+    assert "cdn.plot.ly" not in beside
+    assert len(offline) - len(beside) > 3e6  # plotly.js itself is several MB
