@@ -307,11 +307,12 @@ def _speed_pair(text):
     return a, b
 
 
-def write_composites(run, system, out, xscale="linear", title="run-up"):
+def write_composites(run, system, out, xscale="linear", title="run-up", orders=(1.0,)):
     """Composite figures (PNG + HTML) and component tables of every disc, with the method-J Campbell diagram.
 
-    Writes ``composite_<disc>.png``, ``composite_<disc>.html`` and ``components_<disc>.csv`` into ``out`` and
-    prints the component tables.
+    Writes ``composite_<disc>.png``, ``composite_<disc>.html`` and ``components_<disc>.csv`` into ``out``
+    (:meth:`SpectrogramResult.save`; the HTML loads plotly.js from ``plotly.min.js`` in ``out``) and prints the
+    component tables. Used by ``frb runup``, ``frb cosim`` and ``frb plot``.
 
     Parameters
     ----------
@@ -322,27 +323,30 @@ def write_composites(run, system, out, xscale="linear", title="run-up"):
     out : Path
         Output folder (must exist).
     xscale : {"linear", "log"}
-        Speed axis scale of the figures.
+        Speed axis scale of the PNG figures.
     title : str
         Figure title prefix (e.g. ``"run-down"``).
-    """
-    import matplotlib.pyplot as plt
+    orders : sequence of float
+        Order lines k × f_rot (multiples of the rotor frequency) on the spectrograms; 1X by default.
 
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
     from .campbell import campbell
     from .spectral import spectrogram
 
     lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
     cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
+    paths = []
     for node in run.displacement:  # the system's discs
         sp = spectrogram(run, node)
-        fig = sp.plot(campbell=cd, xscale=xscale, title=f"{title}, {node}")
-        fig.savefig(out / f"composite_{node}.png", dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        sp.plot_html(out / f"composite_{node}.html", campbell=cd)
+        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {node}", orders=orders)
         tab = sp.components_table()
-        tab.to_csv(out / f"components_{node}.csv", index=False)
         print(f"components at the {node}:")
         print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
+    return paths
 
 
 def cmd_runup(args):
@@ -376,6 +380,73 @@ def cmd_runup(args):
         print("convergence check: the same run with rtol and atol tightened tenfold")
         check_convergence(run, lambda folder: run_at(0.1, folder), out, "tolerances x0.1")
     return code
+
+
+def cmd_bifurcation(args):
+    """``frb bifurcation``: Hopf points and limit-cycle branches vs speed (continuation), tables and diagram."""
+    from .continuation import BifurcationDiagram, continuation, hopf_points
+    from .runup import check_speed
+
+    tc = load_from_args(args)
+    lo, hi = sorted(check_speed(f"--speeds {name}", v) for name, v in zip(("START", "END"), _speed_pair(args.speeds)))
+    if args.start == "hopf":
+        start = "hopf"
+    else:
+        try:
+            start = check_speed("--start", float(args.start))
+        except ValueError:
+            raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm") from None
+    if args.max_points < 2:
+        raise ParameterError(f"--max-points = {args.max_points} is invalid: valid range >= 2")
+    out = writable_dir(args.out)
+    hps = hopf_points(tc, (lo, hi))
+    print(f"Hopf points of the full model, {lo:.0f} ... {hi:.0f} rpm (equilibrium loses stability):")
+    for hp in hps:
+        print(f"  {hp.speed_rpm:10.1f} rpm  {hp.frequency_hz:8.2f} Hz  ({hp.frequency_hz * 60 / hp.speed_rpm:.3f} X)")
+    if args.hopf_only:
+        return 0
+    points = []
+    partial = out / "branch_partial.csv"
+    partial.write_text("speed [rpm],frequency [Hz],turbine wheel orbit radius [um],stable\n")
+
+    def stream(p):
+        points.append(p)
+        with open(partial, "a") as fh:
+            fh.write(f"{p.speed_rpm:.6f},{1 / p.period:.6f},{p.turbine_radius_m * 1e6:.6f},{p.stable}\n")
+
+    try:
+        bd = continuation(tc, (lo, hi), start, max_points=args.max_points, progress=True, on_point=stream)
+        code = 0
+    except KeyboardInterrupt as exc:
+        code = 143 if isinstance(exc, Terminated) else 130
+        print(f"\nfrb bifurcation: interrupted; the {len(points)} points computed are kept in {out.resolve()}",
+              file=sys.stderr)
+        bd = BifurcationDiagram(points, [], {"status": "interrupted", "branches": [len(points)]})
+    bd.meta.setdefault("status", "finished")
+    envelopes = [_run_envelope(d) for d in (args.runs or "").split(",") if d]
+    bd.save(out, envelopes=envelopes)
+    partial.unlink()
+    tab = bd.bifurcation_table()
+    print("bifurcation points:" if len(tab) else "no bifurcation points on the branches")
+    if len(tab):
+        print(tab.to_string(index=False, float_format=lambda x: f"{x:.6g}"))
+    print(f"results in {out.resolve()} (branch.csv, bifurcations.csv, branch.nc, bifurcation.png)")
+    return code
+
+
+def _run_envelope(folder, segment_s=0.005):
+    """(label, speeds [rpm], turbine-wheel orbit radius [µm]) per segment of a run-up / run-down folder."""
+    from .recorder import RunupResult
+
+    run = RunupResult.load(folder)
+    name = run.schema.discs[0]
+    n = max(2, int(round(segment_s / float(run.time[1] - run.time[0]))))
+    speeds, radius = [], []
+    for k in range(0, run.time.size - n + 1, n):
+        xy = run.displacement[name][k:k + n]
+        speeds.append(float(np.mean(run.speed_rpm[k:k + n])))
+        radius.append(float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T))) * 1e6)
+    return (f"{run.meta.get('profile', folder)}", np.array(speeds), np.array(radius))
 
 
 def write_up_down_halves(run, system, out):
@@ -571,7 +642,7 @@ def cmd_plot(args):
 
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
-    replot_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
+    write_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
     if args.orbits or args.orbit_times:
         speeds = parse_speeds(args.orbits) if args.orbits else ()
         times = parse_time_windows(args.orbit_times) if args.orbit_times else ()
@@ -629,46 +700,6 @@ def replot_unbalance(out, names=None):
         paths.append(out / f"unbalance_bode_{''.join(letters)}.png")
         fig.savefig(paths[-1], dpi=130, bbox_inches="tight")
         plt.close(fig)
-    return paths
-
-
-def replot_composites(run, system, out, xscale="linear", title="run-up", orders=(1.0,)):
-    """The composite figures and component tables of every disc of a run, with order lines (``frb plot``).
-
-    As :func:`write_composites` (same files, the method-J Campbell overlay over the run's speed range), with the
-    order lines k × f_rot of ``orders``.
-
-    Parameters
-    ----------
-    run : RunupResult
-        At least 64 samples.
-    system : Turbocharger
-        The run's system.
-    out : Path
-        Output folder (must exist).
-    xscale : {"linear", "log"}
-    title : str
-        Figure title prefix.
-    orders : sequence of float
-        Order lines (multiples of the rotor frequency).
-
-    Returns
-    -------
-    list of Path
-        The files written.
-    """
-    from .campbell import campbell
-    from .spectral import spectrogram
-
-    lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
-    cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
-    paths = []
-    for node in run.displacement:  # the system's discs
-        sp = spectrogram(run, node)
-        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {node}", orders=orders)
-        tab = sp.components_table()
-        print(f"components at the {node}:")
-        print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
     return paths
 
 
@@ -1013,6 +1044,22 @@ def _add_unbalance(sub):
     u.set_defaults(func=cmd_unbalance)
 
 
+def _add_bifurcation(sub):
+    b = sub.add_parser("bifurcation", formatter_class=_Formatter,
+                       help="Hopf points, limit-cycle branches vs speed (continuation), bifurcation diagram")
+    b.add_argument("--speeds", default="1000:250000", help="START:END speed range [rpm]")
+    b.add_argument("--start", default="hopf",
+                   help="'hopf': a branch from each Hopf point in the range; or a speed [rpm]: the branch through "
+                        "the orbit the whirl settles on there (both directions)")
+    b.add_argument("--max-points", type=int, default=40, help="points per branch and direction at most")
+    b.add_argument("--runs", default=None, metavar="DIR[,DIR]",
+                   help="run-up / run-down folders whose turbine-wheel orbit envelopes are drawn behind the branches")
+    b.add_argument("--hopf-only", action="store_true", help="only list the Hopf points")
+    b.add_argument("--out", default="results/bifurcation", help="output folder")
+    _system_args(b)
+    b.set_defaults(func=cmd_bifurcation)
+
+
 def _add_equilibrium(sub):
     from .methods import METHODS
 
@@ -1248,6 +1295,7 @@ def build_parser():
     _add_plot(sub)
     _add_warmup(sub)
     _add_losses(sub)
+    _add_bifurcation(sub)
     return p
 
 

@@ -125,3 +125,29 @@ def test_orbit_figure_zooms_onto_small_film_orbits():
         assert len(eps) == 2 and all(a.get_xlim()[0] <= -1.0 and a.get_xlim()[1] >= 1.0 for a in eps)
     finally:
         plt.close(fig)
+
+
+def test_run_figures_and_replot_are_one_path(tmp_path):
+    """``frb runup``/``frb cosim`` (write_composites, 1X by default) and ``frb plot --orders 1`` write the same
+    files with the same traces: one code path draws both."""
+    from frbmodel.cli import write_composites
+
+    first, again = tmp_path / "first", tmp_path / "again"
+    for out in (first, again):
+        synthetic_run().save(out, nc=False)
+    run = frb.RunupResult.load(first)  # the data frb plot reads (the CSV round trip rounds in the last digit)
+    paths = write_composites(run, frb.turbocharger(36e-6), first, title="run-up (finished)")
+    discs = ("turbine_wheel", "compressor_wheel")
+    assert sorted(p.name for p in paths) == sorted(f"{s}_{d}.{e}" for d in discs
+                                                   for s, e in (("composite", "png"), ("composite", "html"),
+                                                                ("components", "csv")))
+    assert main(["plot", str(again), "--orders", "1"]) == 0
+    for d in discs:
+        drawn, redrawn = (figure_data(f / f"composite_{d}.html") for f in (first, again))
+        assert [t.get("name") for t in drawn] == [t.get("name") for t in redrawn]
+        assert "1X" in [t.get("name") for t in drawn] and "0.5X" not in [t.get("name") for t in drawn]
+        for a, b in zip(drawn, redrawn):
+            for key in ("x", "y", "z"):
+                if key in a:
+                    np.testing.assert_array_equal(np.asarray(a[key], float), np.asarray(b[key], float))
+        assert (first / f"components_{d}.csv").read_text() == (again / f"components_{d}.csv").read_text()
