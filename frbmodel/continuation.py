@@ -1,0 +1,556 @@
+"""Pseudo-arclength continuation of whirl limit cycles in rotor speed, with bifurcation detection.
+
+Unknowns X = (u0, τ, p): the scaled start state u0 = z0 / scale of a periodic orbit (:mod:`frbmodel.limitcycle`),
+its period τ = T / T_ref and the rotor speed p = Ω / Ω_ref. Equations: the shooting residual (Φ_T(z0; Ω) − z0) /
+scale, the phase condition (the start point on the hyperplane through the previous point normal to the flow there)
+and the arclength condition t·(X − X_prev) = Δs along the unit tangent t of the branch. A predictor step along the
+tangent is corrected by chord Newton iterations with the Jacobian (monodromy by forward differences of the flow,
+∂Φ/∂Ω by one more flow) computed at the predicted point; the step length adapts to the number of corrector
+iterations. Folds (the speed turns: a multiplier through +1), period doublings (a real multiplier through −1) and
+Neimark-Sacker points (a complex pair leaving the unit circle: a second whirl frequency, a torus) are detected from
+the Floquet multipliers of consecutive points and located by linear interpolation between them.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import ConvergenceError, ParameterError
+
+#: corrector: scaled residual tolerance, iterations at most; step control: wanted iterations
+TOL, MAX_CORRECTOR, GOOD_ITERATIONS = 1e-6, 8, 3
+#: difference step of the speed derivative, relative
+SPEED_FD = 1e-6
+
+
+@dataclass
+class BranchPoint:
+    """One computed orbit of a branch: speed [rpm], period [s], multipliers, and the orbit's measures."""
+
+    speed_rpm: float
+    period: float
+    multipliers: np.ndarray
+    stable: bool
+    turbine_radius_m: float
+    max_eps: np.ndarray
+    state: np.ndarray = field(repr=False, default=None)
+
+
+class _Branch:
+    """Flows and residuals of the continuation problem at any speed (problems built per speed and cached)."""
+
+    def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm):
+        from .limitcycle import _Flow
+        from .runup import atol_vector
+
+        self.system, self.model = system, model
+        self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
+        self._flows = {}
+        self._flow_cls = _Flow
+        #: one scaling of the states for the whole branch (that of the start speed): u = z / scale
+        self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
+
+    def flow(self, speed_rpm):
+        from .runup import SpeedProfile, build_problem
+
+        key = float(speed_rpm)
+        if key not in self._flows:
+            if len(self._flows) > 8:
+                self._flows.clear()
+            problem = build_problem(self.system, SpeedProfile.constant(key, 1.0), self.model)
+            self._flows[key] = self._flow_cls(problem, self.rtol, self.atol_m)
+        return self._flows[key]
+
+    def scale(self, speed_rpm=None):
+        return self.scale_vec
+
+
+def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref):
+    """Residual (n+1) and its Jacobian (n+1, n+2) in the scaled unknowns (u, τ, p) at (z, T, speed)."""
+    from .shooting import monodromy
+
+    fl = br.flow(speed)
+    end = fl(z, T)
+    n = z.size
+    m = monodromy(fl, z, T, scale, end, 1e-4, br.workers)
+    ds = SPEED_FD * speed
+    d_speed = (br.flow(speed + ds)(z, T) - end) / ds
+    jac = np.zeros((n + 1, n + 2))
+    jac[:n, :n] = m * scale[None, :] / scale[:, None] - np.eye(n)
+    jac[:n, n] = fl.rhs(end) / scale * t_ref
+    jac[:n, n + 1] = d_speed / scale * w_ref
+    jac[n, :n] = f_ref
+    res = np.append((end - z) / scale, 0.0)
+    return res, jac, m
+
+
+def _tangent(jac, previous):
+    """Unit tangent of the branch: the null vector of the (n+1, n+2) Jacobian, oriented along ``previous``."""
+    a = np.vstack([jac, previous])
+    b = np.zeros(a.shape[0])
+    b[-1] = 1.0
+    t = np.linalg.solve(a, b)
+    return t / np.linalg.norm(t)
+
+
+def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref):
+    """Chord Newton on [shooting residual; phase; arclength] from the predicted point; returns (x, jac, m, iters)."""
+    scale = br.scale(x_pred[n + 1] * w_ref)
+    x = x_pred.copy()
+    z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
+    res, jac, m = _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref)
+    a = np.vstack([jac, tangent])
+    for it in range(1, MAX_CORRECTOR + 1):
+        phase = float(f_ref @ (x[:n] - u_ref))
+        arc = float(tangent @ (x - x_prev)) - ds
+        rhs = np.append(res[:n], [phase, arc])
+        x = x - np.linalg.solve(a, rhs)
+        z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
+        if not (T > 0 and speed > 0):
+            break
+        end = br.flow(speed)(z, T)
+        res = np.append((end - z) / scale, 0.0)
+        if float(np.max(np.abs(res))) < TOL:
+            return x, jac, m, it
+    raise ConvergenceError("continuation: the corrector did not converge")
+
+
+def _point(br, x, n, t_ref, w_ref, m):
+    """A BranchPoint (orbit measures sampled from the flow) for the solution x with monodromy m."""
+    from .limitcycle import _orbit_result
+    from .recorder import RunupSchema
+
+    scale = br.scale(x[n + 1] * w_ref)
+    z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
+    fl = br.flow(speed)
+    t = np.linspace(0.0, T, 201)
+    orbit = _orbit_result(fl.problem, RunupSchema.from_system(br.system), t, fl.states(z, t))
+    xy = orbit.displacement[orbit.schema.discs[0]][:-1]
+    radius = float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T)))
+    mult = np.linalg.eigvals(m)
+    mult = mult[np.argsort(-np.abs(mult))]
+    nontrivial = np.delete(mult, int(np.argmin(np.abs(mult - 1.0))))
+    return BranchPoint(speed, T, mult, bool(np.all(np.abs(nontrivial) < 1.0)), radius,
+                       orbit.eccentricity.max(axis=0), z)
+
+
+@dataclass
+class HopfPoint:
+    """A Hopf point of the full model's equilibrium: a complex pair of eigenvalues of its Jacobian (rotor, rings and
+    ring spin, without the rotation angle) crosses the imaginary axis.
+
+    Attributes
+    ----------
+    speed_rpm : float
+        Speed [rpm] of the crossing (to 1e-6 relative).
+    frequency_hz : float
+        Imaginary part / 2π of the crossing pair [Hz].
+    eigenvector : ndarray (n,), complex
+        Right eigenvector of the pair (state units).
+    equilibrium : ndarray (n,)
+        The equilibrium state there.
+    """
+
+    speed_rpm: float
+    frequency_hz: float
+    eigenvector: np.ndarray = field(repr=False)
+    equilibrium: np.ndarray = field(repr=False)
+
+
+def equilibrium_jacobian(system, speed_rpm, film_model=None):
+    """Equilibrium state (method-J bearing equilibria: the full model's fixed point) and the full model's Jacobian
+    there, without the rotation angle.
+
+    Returns
+    -------
+    z_eq : ndarray (n,)
+        Equilibrium state [SI].
+    jac : ndarray (n, n)
+        ∂(dz/dt)/∂z by central differences of the compiled RHS (steps 1e-6 of each state's typical size: truncation
+        ~1e-12, round-off ~1e-10 relative, far below the forward differences' ~1e-8 that blurred Hopf speeds by
+        ~0.3 % at 2 krpm where the critical damping changes slowly with speed).
+    """
+    from .runup import SpeedProfile, atol_vector, build_problem, initial_state
+
+    p = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), film_model or system.film_model)
+    y = initial_state(p, "equilibrium", perturbation=0.0)
+    n = p.n_states - 1
+    typical = atol_vector(p, 1e-6)[0]
+    jac = np.empty((n, n))
+    buf = np.empty(p.n_states)
+    for k in range(n):
+        h = 1e-6 * max(abs(y[k]), typical[k])
+        yp, ym = y.copy(), y.copy()
+        yp[k] += h
+        ym[k] -= h
+        fp = p.rhs(0.0, yp, buf)[:n].copy()
+        jac[:, k] = (fp - p.rhs(0.0, ym, buf)[:n]) / (2 * h)
+    return y[:-1].copy(), jac
+
+
+def _unstable_pairs(system, speed_rpm, model):
+    lam = np.linalg.eigvals(equilibrium_jacobian(system, speed_rpm, model)[1])
+    return int(np.sum((lam.real > 0) & (lam.imag > 0)))
+
+
+def _crossing_real(system, speed_rpm, model, near_hz):
+    """Real part [1/s] of the eigenvalue whose frequency is closest to ``near_hz``."""
+    lam = np.linalg.eigvals(equilibrium_jacobian(system, speed_rpm, model)[1])
+    lam = lam[lam.imag > 0]
+    return float(lam[np.argmin(np.abs(lam.imag / (2 * math.pi) - near_hz))].real)
+
+
+def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60):
+    """Hopf points of the full model's equilibrium in a speed range: where the number of unstable complex pairs of
+    its Jacobian rises, refined by Brent's method on the real part of the crossing pair.
+
+    Parameters
+    ----------
+    system : Turbocharger
+        The system.
+    speeds_rpm : (float, float)
+        Search range [rpm] (geometric grid of ``n_grid`` speeds, then refined).
+    film_model : str, optional
+        Default: the system's.
+    n_grid : int
+        Grid speeds.
+
+    Returns
+    -------
+    list of HopfPoint
+        In increasing speed (only crossings to instability; a pair regaining stability is not listed).
+    """
+    from scipy.optimize import brentq
+
+    model = film_model or system.film_model
+    grid = np.geomspace(*sorted(speeds_rpm), n_grid)
+    counts = [_unstable_pairs(system, s, model) for s in grid]
+    out = []
+    for a, b, ca, cb in zip(grid[:-1], grid[1:], counts[:-1], counts[1:]):
+        if cb <= ca:
+            continue
+        lam_b = np.linalg.eigvals(equilibrium_jacobian(system, b, model)[1])
+        lam_a = np.linalg.eigvals(equilibrium_jacobian(system, a, model)[1])
+        new = [x for x in lam_b if x.real > 0 and x.imag > 0]
+        # the pair that crossed: unstable at b, with the closest stable partner at a
+        cand = min(new, key=lambda x: np.min(np.abs(lam_a[(lam_a.real <= 0) & (lam_a.imag > 0)] - x)))
+        f_hz = cand.imag / (2 * math.pi)
+        s_h = brentq(lambda s, f=f_hz: _crossing_real(system, s, model, f), a, b, xtol=1e-6 * a)
+        z_eq, jac = equilibrium_jacobian(system, s_h, model)
+        lam, vec = np.linalg.eig(jac)
+        k = int(np.argmin(np.abs(lam.imag / (2 * math.pi) - f_hz) + 1e9 * (lam.imag <= 0)))
+        out.append(HopfPoint(float(s_h), float(lam[k].imag / (2 * math.pi)), vec[:, k], z_eq))
+    return out
+
+
+def _nontrivial(p):
+    """Multipliers of a branch point without the trivial one (the one closest to 1)."""
+    return np.delete(p.multipliers, int(np.argmin(np.abs(p.multipliers - 1.0))))
+
+
+def _outside(p):
+    """Non-trivial multipliers of a branch point outside the unit circle."""
+    mu = _nontrivial(p)
+    return mu[np.abs(mu) > 1.0]
+
+
+def _classify(a, b):
+    """Bifurcations between consecutive branch points a, b: [(type, fraction along a -> b)]. The number of
+    multipliers outside the unit circle changes; the crossing one (outside on the unstable side, closest to the
+    circle) decides the type by its angle: ~0 fold, ~π period doubling, otherwise Neimark-Sacker (a complex pair
+    counts twice). Located where its modulus, interpolated linearly, is 1."""
+    out_a, out_b = _outside(a), _outside(b)
+    if out_a.size == out_b.size:
+        return []
+    side = out_b if out_b.size > out_a.size else out_a
+    mu = side[np.argmin(np.abs(side))]
+    angle = abs(float(np.angle(mu)))
+    kind = "fold" if angle < 0.05 else "period doubling" if angle > math.pi - 0.05 else "Neimark-Sacker"
+    other = b if side is out_a else a
+    mo = _nontrivial(other)
+    rest = mo[np.argsort(np.abs(mo - mu))][:1]
+    r_in = float(np.abs(rest[0])) if rest.size else 1.0
+    r_out = float(abs(mu))
+    frac = (1.0 - r_in) / (r_out - r_in) if r_out != r_in else 0.5
+    frac = float(np.clip(frac if side is out_b else 1.0 - frac, 0.0, 1.0))
+    return [(kind, frac)]
+
+
+@dataclass
+class BifurcationDiagram:
+    """Branches of limit cycles vs rotor speed and their bifurcation points (:func:`continuation`).
+
+    Attributes
+    ----------
+    points : list of BranchPoint
+        The computed orbits, in branch order (arclength).
+    bifurcations : list of dict
+        Each: ``speed_rpm``, ``type`` (fold, period doubling, Neimark-Sacker), ``frequency_hz``,
+        ``turbine_radius_um``, ``between`` (indices of the two points it lies between).
+    meta : dict
+        System, film model, tolerances, steps taken.
+    """
+
+    points: list
+    bifurcations: list
+    meta: dict = field(default_factory=dict)
+
+    def to_dataframe(self):
+        """The branch points as a table (units in the column names)."""
+        import pandas as pd
+
+        rows = [{"speed [rpm]": p.speed_rpm, "frequency [Hz]": 1 / p.period, "period [s]": p.period,
+                 "turbine wheel orbit radius [um]": p.turbine_radius_m * 1e6, "stable": p.stable,
+                 "max |multiplier| (nontrivial) [-]": float(np.max(np.abs(np.delete(
+                     p.multipliers, int(np.argmin(np.abs(p.multipliers - 1.0))))))),
+                 **{f"max eps {k} [-]": v for k, v in zip(("turbine inner", "turbine outer", "compressor inner",
+                                                          "compressor outer"), p.max_eps)}} for p in self.points]
+        return pd.DataFrame(rows)
+
+    def bifurcation_table(self):
+        """The bifurcation points as a table."""
+        import pandas as pd
+
+        return pd.DataFrame([{k: v for k, v in b.items() if k != "between"} for b in self.bifurcations],
+                            columns=["speed_rpm", "type", "frequency_hz", "turbine_radius_um"])
+
+    def to_xarray(self):
+        """Branch points as an :class:`xarray.Dataset` along ``point`` (units in the attributes)."""
+        import xarray as xr
+
+        from .results import netcdf_attrs, variable
+
+        df = self.to_dataframe()
+        ds = xr.Dataset({
+            "speed": variable(("point",), df["speed [rpm]"].values, "rpm", "rotor speed"),
+            "frequency": variable(("point",), df["frequency [Hz]"].values, "Hz", "orbit frequency 1/T"),
+            "turbine_radius": variable(("point",), df["turbine wheel orbit radius [um]"].values * 1e-6, "m",
+                                       "turbine wheel orbit radius"),
+            "stable": variable(("point",), df["stable"].values.astype(int), "-", "1: stable orbit"),
+            "max_eps": variable(("point", "film"), np.array([p.max_eps for p in self.points]), "-",
+                                "largest eccentricity ratio over one period"),
+        })
+        ds.attrs.update(netcdf_attrs({"bifurcations": self.bifurcations, **self.meta}))
+        return ds
+
+    def save(self, out_dir, envelopes=()):
+        """Write ``branch.csv``, ``bifurcations.csv``, ``branch.nc`` and the figure ``bifurcation.png`` (with the
+        run envelopes of :meth:`plot`) into ``out_dir``; returns the paths."""
+        from pathlib import Path
+
+        import matplotlib.pyplot as plt
+
+        from .results import NETCDF_ENGINE
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "branch.csv", out / "bifurcations.csv", out / "branch.nc", out / "bifurcation.png"]
+        self.to_dataframe().to_csv(paths[0], index=False)
+        self.bifurcation_table().to_csv(paths[1], index=False)
+        self.to_xarray().to_netcdf(paths[2], engine=NETCDF_ENGINE)
+        fig = self.plot(envelopes=envelopes)
+        fig.savefig(paths[3], dpi=130)
+        plt.close(fig)
+        return paths
+
+    def plot(self, title=None, envelopes=()):
+        """Bifurcation diagram: turbine-wheel orbit radius [µm] and orbit frequency [Hz] vs speed; stable solid,
+        unstable dashed, bifurcation points marked. ``envelopes``: (label, speeds [rpm], radius [µm]) curves of
+        run-ups / run-downs drawn behind."""
+        import matplotlib.pyplot as plt
+
+        fig, (ax, axf) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+        for label, s, r in envelopes:
+            ax.plot(s, r, lw=0.8, alpha=0.6, label=label)
+        start = 0
+        for count in self.meta.get("branches", [len(self.points)]):
+            pts = self.points[start:start + count]
+            start += count
+            sp = np.array([p.speed_rpm for p in pts])
+            rad = np.array([p.turbine_radius_m for p in pts]) * 1e6
+            freq = np.array([1 / p.period for p in pts])
+            stab = np.array([p.stable for p in pts])
+            for i in range(len(sp) - 1):
+                style = "-" if stab[i] and stab[i + 1] else "--"
+                ax.plot(sp[i:i + 2], rad[i:i + 2], style, color="k", lw=1.6)
+                axf.plot(sp[i:i + 2], freq[i:i + 2], style, color="k", lw=1.6)
+        marks = {"Hopf": "*", "fold": "o", "period doubling": "s", "Neimark-Sacker": "D"}
+        for b in self.bifurcations:
+            ax.plot(b["speed_rpm"], b["turbine_radius_um"], marks[b["type"]], color="C3", ms=7, label=b["type"])
+            axf.plot(b["speed_rpm"], b["frequency_hz"], marks[b["type"]], color="C3", ms=7)
+        handles, labels = ax.get_legend_handles_labels()
+        uniq = dict(zip(labels, handles))
+        if uniq:
+            ax.legend(uniq.values(), uniq.keys(), fontsize=8)
+        ax.set_ylabel("turbine wheel orbit radius [µm]")
+        axf.set_ylabel("orbit frequency [Hz]")
+        axf.set_xlabel("rotor speed [rpm]")
+        ax.set_title(title or "limit-cycle branch (solid: stable, dashed: unstable)")
+        ax.grid(alpha=0.3)
+        axf.grid(alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+
+def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_max=8.0, max_points=100,
+                 progress=False, on_point=None):
+    """Branches of limit cycles in rotor speed (pseudo-arclength), from the Hopf points or from a given orbit.
+
+    Parameters
+    ----------
+    system : Turbocharger
+        The system.
+    speeds_rpm : (float, float)
+        Speed range [rpm]; a branch is followed until it leaves it (or ``max_points`` are computed).
+    start : "hopf", LimitCycle or float
+        ``"hopf"``: one branch from each Hopf point of the full model in the range (:func:`hopf_points`), started
+        along the Hopf eigenvector; a limit cycle or a speed [rpm] to compute one at: the branch through it, both
+        directions.
+    film_model : str, optional
+        Default: the system's.
+    ds, ds_max : float
+        Initial and largest arclength step (scaled units: 1 ~ 1 % of the start speed or 1 µm of orbit).
+    max_points : int
+        Points per branch and direction at most.
+    progress : bool
+        Print a line per point on stderr.
+    on_point : callable, optional
+        Called with each new :class:`BranchPoint` as soon as it is computed (e.g. to stream it to a file).
+
+    Returns
+    -------
+    BifurcationDiagram
+    """
+    from .film import check_model
+    from .limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, LimitCycle, limit_cycle
+
+    lo, hi = sorted(float(s) for s in speeds_rpm)
+    model = check_model(film_model or system.film_model)
+    branches, hopfs = [], []
+    if isinstance(start, str):
+        if start != "hopf":
+            raise ParameterError(f"start = {start!r} is invalid: 'hopf', a LimitCycle or a speed [rpm]")
+        hopfs = hopf_points(system, (lo, hi), model)
+        for hp in hopfs:
+            br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm)
+            n = hp.equilibrium.size
+            t_ref, w_ref = 0.01 / hp.frequency_hz, 0.01 * hp.speed_rpm
+            x0, tangent, f0 = _hopf_start(br, hp, n, t_ref, w_ref)
+            branches.append(_follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, 0.2, ds_max, max_points, progress, f0,
+                                    on_point))
+    else:
+        lc = start if isinstance(start, LimitCycle) else limit_cycle(system, float(start), film_model=model)
+        if not lo <= lc.speed_rpm <= hi:
+            raise ParameterError(f"start speed {lc.speed_rpm:.0f} rpm is outside the speed range {lo:.0f} ... "
+                                 f"{hi:.0f} rpm")
+        br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm)
+        n = lc.state.size
+        t_ref, w_ref = 0.01 * lc.period, 0.01 * lc.speed_rpm
+        x0 = np.concatenate([lc.state / br.scale(), [lc.period / t_ref, lc.speed_rpm / w_ref]])
+        halves = []
+        for direction in (+1, -1):
+            tangent, first = _start_tangent(br, x0, n, t_ref, w_ref, direction)
+            halves.append([first] + _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points,
+                                            progress, on_point=on_point))
+        branches.append(halves[1][::-1] + halves[0][1:])
+    return _diagram(system, model, branches, hopfs, lo, hi)
+
+
+def _diagram(system, model, branches, hopfs, lo, hi):
+    """The BifurcationDiagram of computed branches: bifurcations between consecutive points, Hopf points."""
+    from .limitcycle import SHOOT_RTOL
+
+    points, bifs = [], []
+    for b, hp in zip(branches, hopfs or [None] * len(branches)):
+        if hp is not None:
+            bifs.append({"speed_rpm": hp.speed_rpm, "type": "Hopf", "frequency_hz": hp.frequency_hz,
+                         "turbine_radius_um": 0.0, "branch": len(points) and None, "between": []})
+        off = len(points)
+        for i in range(len(b) - 1):
+            for kind, frac in _classify(b[i], b[i + 1]):
+                a, c = b[i], b[i + 1]
+                bifs.append({"speed_rpm": a.speed_rpm + frac * (c.speed_rpm - a.speed_rpm), "type": kind,
+                             "frequency_hz": 1 / a.period + frac * (1 / c.period - 1 / a.period),
+                             "turbine_radius_um": 1e6 * (a.turbine_radius_m + frac * (c.turbine_radius_m -
+                                                                                      a.turbine_radius_m)),
+                             "between": [off + i, off + i + 1]})
+        points.extend(b)
+    for b in bifs:
+        b.pop("branch", None)
+    meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
+            "branches": [len(b) for b in branches]}
+    return BifurcationDiagram(points, bifs, meta)
+
+
+def _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first=None,
+            on_point=None):
+    """Branch points from x0 along ``tangent`` (x0 itself not included; ``f_first``: the phase normal at x0 if the
+    flow vanishes there, at a Hopf point). Ctrl-C / SIGTERM are raised between points."""
+    from .interrupt import deferred_signals
+
+    with deferred_signals() as signals:
+        return _follow_loop(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first,
+                            on_point, signals)
+
+
+def _follow_loop(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first, on_point,
+                 signals):
+    import sys
+
+    points = []
+    x = x0
+    while len(points) < max_points:
+        signals.check()
+        speed = x[n + 1] * w_ref
+        f_ref = f_first if f_first is not None and x is x0 else _phase_normal(br, x[:n] * br.scale(), speed)
+        try:
+            x_new, jac, m, iters = _correct(br, x + ds * tangent, tangent, x, ds, n, t_ref, w_ref, f_ref, x[:n])
+        except (ConvergenceError, np.linalg.LinAlgError):
+            ds *= 0.5
+            if ds < 1e-3:
+                break
+            continue
+        tangent = _tangent(jac, tangent)
+        x = x_new
+        points.append(_point(br, x, n, t_ref, w_ref, m))
+        if on_point is not None:
+            on_point(points[-1])
+        if progress:
+            p = points[-1]
+            sys.stderr.write(f"continuation: {p.speed_rpm:9.0f} rpm, {1 / p.period:8.2f} Hz, radius "
+                             f"{p.turbine_radius_m * 1e6:6.2f} um, {'stable' if p.stable else 'unstable'}\n")
+        if not lo <= points[-1].speed_rpm <= hi:
+            break
+        ds = min(ds_max, ds * (1.5 if iters <= GOOD_ITERATIONS else 0.6))
+    return points
+
+
+def _start_tangent(br, x0, n, t_ref, w_ref, direction):
+    """Unit tangent at a computed orbit x0, its speed component of sign ``direction``, and the orbit as a point."""
+    z0 = x0[:n] * br.scale()
+    speed = x0[n + 1] * w_ref
+    _, jac, m = _jacobian(br, z0, x0[n] * t_ref, speed, br.scale(), t_ref, w_ref, _phase_normal(br, z0, speed))
+    guide = np.zeros(n + 2)
+    guide[n + 1] = direction
+    return _tangent(jac, guide), _point(br, x0, n, t_ref, w_ref, m)
+
+
+def _hopf_start(br, hp, n, t_ref, w_ref):
+    """Start point (the equilibrium at the Hopf point, period 2π/ω), tangent (the eigenvector's real part) and
+    phase normal (its imaginary part) of the periodic branch born at a Hopf point, in scaled unknowns."""
+    v = hp.eigenvector / br.scale()
+    v = v * np.exp(-1j * np.angle(v[np.argmax(np.abs(v))]))
+    x0 = np.concatenate([hp.equilibrium / br.scale(), [1.0 / hp.frequency_hz / t_ref, hp.speed_rpm / w_ref]])
+    tangent = np.concatenate([v.real / np.linalg.norm(v.real), [0.0, 0.0]])
+    return x0, tangent, v.imag / np.linalg.norm(v.imag)
+
+
+def _phase_normal(br, z, speed):
+    """Unit normal of the phase condition: the flow at z, scaled."""
+    f = br.flow(speed).rhs(z) * br.scale() / br.scale() ** 2  # d(u)/dt = f / scale
+    return f / np.linalg.norm(f)
+
+
+__all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_points"]

@@ -1,0 +1,92 @@
+"""Hopf points, branch continuation and bifurcation detection (frbmodel.continuation)."""
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, curve_fit
+
+import frbmodel as frb
+from frbmodel.continuation import BifurcationDiagram, BranchPoint, _classify, continuation, hopf_points
+from frbmodel.modal import state_matrix
+
+
+@pytest.fixture(scope="module")
+def tc():
+    return frb.turbocharger(36e-6)
+
+
+def _method_j_crossing(tc, near_rpm, f_hz):
+    """Speed [rpm] and frequency [Hz] where the method-J linear mode near f_hz crosses to instability (the paper's
+    linear analysis: equilibrium, film coefficients, ring speed fixed by the torque balance), by Brent's method."""
+    def lam(s):
+        ls = frb.linear_system(tc, "J", s)
+        ev = np.linalg.eigvals(state_matrix(ls.M, ls.C, ls.K))
+        ev = ev[ev.imag > 0]
+        return ev[np.argmin(np.abs(ev.imag / (2 * math.pi) - f_hz))]
+    s = brentq(lambda s: lam(s).real, 0.95 * near_rpm, 1.05 * near_rpm, xtol=1e-3)
+    return s, lam(s).imag / (2 * math.pi)
+
+
+def test_hopf_points_are_the_method_j_onsets(tc):
+    """Acceptance (issue #14): the branches start at the linear Hopf speeds of method J (0.5 %) with the linear
+    frequency (0.5 %). The full model's Jacobian also has the rings' spin, which method J fixes by the torque balance;
+    measured agreement <= 0.03 %."""
+    hps = hopf_points(tc, (1e3, 120e3))
+    assert len(hps) == 4  # 2.0, 14.1, 58.5, 95.9 krpm: each a forward mode of the Campbell diagram going unstable
+    for hp in hps:
+        s, f = _method_j_crossing(tc, hp.speed_rpm, hp.frequency_hz)
+        assert hp.speed_rpm == pytest.approx(s, rel=0.005)
+        assert hp.frequency_hz == pytest.approx(f, rel=0.005)
+
+
+def _bp(speed, mults):
+    return BranchPoint(speed, 1e-3, np.array([1.0] + list(mults), dtype=complex), bool(np.all(np.abs(mults) < 1)),
+                       1e-6, np.zeros(4))
+
+
+@pytest.mark.parametrize("a, b, kind, frac", [
+    ([0.9, 0.5], [1.1, 0.5], "fold", 0.5),
+    ([-0.8, 0.5], [-1.2, 0.5], "period doubling", 0.5),
+    ([0.95 * np.exp(1j), 0.95 * np.exp(-1j)], [1.05 * np.exp(1.1j), 1.05 * np.exp(-1.1j)], "Neimark-Sacker", 0.5),
+    ([1.3, 0.5], [0.9, 0.5], "fold", 0.75),
+    ([0.5, 0.4], [0.6, 0.3], None, None),
+])
+def test_bifurcation_type_and_location_from_multipliers(a, b, kind, frac):
+    """A multiplier leaving (or entering) the unit circle at angle 0 is a fold, at pi a period doubling, a complex
+    pair a Neimark-Sacker point; located where its modulus, linear between the points, is 1 (closed form here)."""
+    found = _classify(_bp(1e4, a), _bp(2e4, b))
+    if kind is None:
+        assert found == []
+    else:
+        assert found == [(kind, pytest.approx(frac, abs=1e-12))]
+
+
+def test_diagram_writes_readable_files(tc, tmp_path):
+    import xarray as xr
+
+    pts = [_bp(1e4 + 1e3 * i, [0.5 + 0.2 * i]) for i in range(4)]
+    bd = BifurcationDiagram(pts, [{"speed_rpm": 1.25e4, "type": "fold", "frequency_hz": 1e3, "turbine_radius_um": 1.0,
+                                   "between": [2, 3]}], {"branches": [4]})
+    paths = bd.save(tmp_path)
+    assert all(p.exists() for p in paths)
+    with xr.open_dataset(tmp_path / "branch.nc") as ds:
+        assert ds["speed"].attrs["units"] == "rpm" and ds["turbine_radius"].attrs["units"] == "m"
+        np.testing.assert_allclose(ds["speed"].values, [1e4, 1.1e4, 1.2e4, 1.3e4])
+
+
+@pytest.mark.slow
+def test_branch_from_a_hopf_point_grows_as_a_square_root(tc):
+    """Acceptance (issue #14): near a Hopf point the orbit amplitude grows as |Omega - Omega_H|^beta with
+    beta = 0.5 +/- 0.05 (the normal form's square root), and the branch's own onset (fitted Omega_H) is the Hopf
+    speed (0.5 %). The 14.1 krpm branch (the cylindrical forward mode); points with radius < 1 um keep the fit in the
+    square-root regime."""
+    bd = continuation(tc, (13.5e3, 15e3), "hopf", max_points=6)
+    s = np.array([p.speed_rpm for p in bd.points])
+    r = np.array([p.turbine_radius_m for p in bd.points]) * 1e6
+    keep = r < 1.0
+    hopf = [b["speed_rpm"] for b in bd.bifurcations if b["type"] == "Hopf"][0]
+    sign = np.sign(np.mean(s[keep]) - hopf)
+    (a, s0, beta), _ = curve_fit(lambda x, a, s0, beta: a * np.abs(x - s0) ** beta, s[keep], r[keep],
+                                 p0=(0.1, hopf, 0.5), bounds=([0, hopf - 50 * sign - 50, 0.1], [10, hopf + 50, 2]))
+    assert beta == pytest.approx(0.5, abs=0.05)
+    assert s0 == pytest.approx(hopf, rel=0.005)
