@@ -5,8 +5,8 @@ position, the eccentricity ratio of its inner and outer film), per disc (its dis
 film torque on the journal and the bearing's friction power (:mod:`frbmodel.losses`). Files written before the
 last two existed load with NaN there. The monolithic
 run-up (:func:`frbmodel.runup.runup`) and the co-simulation master (:mod:`frbmodel.cosim.master`) both fill rows by
-name through :meth:`RunupSchema.row` and stream them with a :class:`Recorder`, so their files are read back by the
-same :meth:`RunupResult.load`.
+name through :meth:`RunupSchema.row` (the run-up a solver call's worth at a time through :meth:`RunupSchema.rows`)
+and stream them with a :class:`Recorder`, so their files are read back by the same :meth:`RunupResult.load`.
 
 >>> schema = RunupSchema(bearings=("front", "rear"), discs=("impeller",))
 >>> schema.columns[:4]
@@ -181,6 +181,56 @@ class RunupSchema:
                                np.asarray(discs, dtype=float).reshape(2 * nd),
                                np.column_stack([torque.reshape(nb), power.reshape(nb)]).ravel()])
 
+    def rows(self, time_s, speed_rpm, ring_speed, journal, ring, eps, discs, journal_torque=None, power_loss=None):
+        """n rows at once, equal to n calls of :meth:`row` (which stays the cheaper way to build a single row, e.g.
+        one per co-simulation macro step): each argument of :meth:`row` with a leading axis of n samples.
+
+        Parameters
+        ----------
+        time_s, speed_rpm : array_like (n,)
+            Times [s] and rotor speeds [rpm].
+        ring_speed : array_like (n, nb)
+            Ring spin speeds [rad/s].
+        journal, ring : array_like (n, nb, 2)
+            Journal and ring centre x, y [m] relative to the housing.
+        eps : array_like (n, nb, 2) or (n, 2 nb)
+            Inner and outer film eccentricity ratios [-] per bearing.
+        discs : array_like (n, nd, 2)
+            Disc displacements x, y [m].
+        journal_torque, power_loss : array_like (n, nb), optional
+            Film torques on the journals [N m] and friction power per bearing [W] (NaN when not given).
+
+        Returns
+        -------
+        ndarray (n, len(columns))
+            The rows; RSR = ring speed / (speed_rpm × 2π/60), NaN at zero rotor speed.
+
+        Examples
+        --------
+        >>> s = RunupSchema(("b",), ())
+        >>> s.rows([0.0, 1.0], [0.0, 30 / np.pi], [[5.0], [5.0]], np.zeros((2, 1, 2)), np.zeros((2, 1, 2)),
+        ...        np.zeros((2, 2)), np.zeros((2, 0, 2)))[:, :4].tolist()
+        [[0.0, 0.0, 5.0, nan], [1.0, 9.549296585513721, 5.0, 5.0]]
+        """
+        nb, nd = len(self.bearings), len(self.discs)
+        time_s, speed_rpm = np.asarray(time_s, dtype=float).ravel(), np.asarray(speed_rpm, dtype=float).ravel()
+        n = time_s.size
+        ring_speed = np.asarray(ring_speed, dtype=float).reshape(n, nb)
+        omega = speed_rpm * RPM
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rsr = ring_speed / omega[:, None]
+        rsr[omega == 0.0] = math.nan
+        out = np.empty((n, len(self.columns)))
+        out[:, 0], out[:, 1] = time_s, speed_rpm
+        out[:, 2:2 + 2 * nb:2], out[:, 3:2 + 2 * nb:2] = ring_speed, rsr
+        k = 2 + 2 * nb
+        for block, width in ((journal, 2 * nb), (ring, 2 * nb), (eps, 2 * nb), (discs, 2 * nd)):
+            out[:, k:k + width] = np.asarray(block, dtype=float).reshape(n, width)
+            k += width
+        for i, values in enumerate((journal_torque, power_loss)):
+            out[:, k + i::2] = math.nan if values is None else np.asarray(values, dtype=float).reshape(n, nb)
+        return out
+
     def eps_slice(self):
         """Slice of the eccentricity columns in a row.
 
@@ -273,6 +323,31 @@ class Recorder:
         self.n += 1
         if self.dir is not None and self.n - self.flushed >= self.flush_rows:
             self.flush()
+
+    def extend(self, rows):
+        """Add several rows at once; streams at the same rows as the same :meth:`append` calls would.
+
+        Parameters
+        ----------
+        rows : ndarray (n, len(schema.columns))
+            Rows from :meth:`RunupSchema.rows` (n may be 0).
+        """
+        rows = np.asarray(rows, dtype=float).reshape(-1, len(self.columns))
+        need = self.n + rows.shape[0]
+        if need > self.rows.shape[0]:
+            grown = np.full((max(need, 2 * self.rows.shape[0]), len(self.columns)), np.nan)
+            grown[:self.n] = self.rows[:self.n]
+            self.rows = grown
+        start = 0
+        while start < rows.shape[0]:
+            take = rows.shape[0] - start
+            if self.dir is not None:  # up to the row at which append would flush
+                take = min(take, max(self.flush_rows - (self.n - self.flushed), 1))
+            self.rows[self.n:self.n + take] = rows[start:start + take]
+            self.n += take
+            start += take
+            if self.dir is not None and self.n - self.flushed >= self.flush_rows:
+                self.flush()
 
     @property
     def last(self):

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from .dynamics import monolithic_jac as _jac
 from .dynamics import monolithic_rhs as _rhs
@@ -38,7 +39,7 @@ EPS_CAP = 0.999
 __all__ = ["CHUNK_SAMPLES", "DEFAULT_ATOL_M", "DEFAULT_RTOL", "INTEGRATORS", "MAX_PROFILE_POINTS", "MAX_SPEED_RPM",
            "PROFILE_HEADER", "Problem", "RunupResult", "RunupStopped", "SEGMENT_STEPS", "SpeedProfile", "Unbalance",
            "atol_vector", "build_problem", "check_speed", "initial_state", "runup", "sample_row",
-           "static_rotor_state"]
+           "sample_rows", "static_rotor_state"]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1030,6 +1031,82 @@ def sample_row(problem, schema, t, y, buf):
                       power_loss=power)
 
 
+@njit(cache=True)
+def _film_samples(ts, ys, ws, args, diag, geom, polys, journal_at, ring_at, ring_speed_at, n_r, eps_cap, eps, torque,
+                  power):
+    """For each state ys[k] at time ts[k] [s] and rotor speed ws[k] [rad/s]: the films' eccentricity ratios as the
+    RHS fills ``diag`` (one :func:`frbmodel.dynamics.monolithic_rhs` call with ``args``) into eps[k], and, per
+    bearing b, the journal torque [N m] and friction power [W] of :func:`frbmodel.losses.bearing_loss_kernel` into
+    torque[k, b], power[k, b] (as :func:`_losses`)."""
+    buf = np.empty(ys.shape[1])
+    ring = np.empty(5)
+    for k in range(ts.size):
+        y = ys[k]
+        _rhs(ts[k], y, buf, *args)
+        for i in range(diag.size):
+            eps[k, i] = diag[i]
+        for b in range(journal_at.size):
+            j, r = journal_at[b], ring_at[b]
+            for m in range(4):
+                ring[m] = y[r + m]
+            ring[4] = y[ring_speed_at[b]]
+            t_j, p_i, p_o = bearing_loss_kernel(geom[b], polys[b], y[j], y[j + 1], y[n_r + j], y[n_r + j + 1], ring,
+                                                ws[k], eps_cap)
+            torque[k, b] = t_j
+            power[k, b] = p_i + p_o
+
+
+def sample_rows(problem, schema, ts, ys):
+    """The result rows of many states at once: row k equals :func:`sample_row` of ``ys[k]`` at ``ts[k]``, bit for
+    bit (the same kernels, called in one compiled loop instead of once per sample from Python).
+
+    Parameters
+    ----------
+    problem : Problem
+        The run-up problem; :attr:`Problem.diag` is left holding the last state's eccentricity ratios.
+    schema : RunupSchema
+        Column layout of the rows.
+    ts : ndarray (n,)
+        Times [s].
+    ys : ndarray (n, n_states)
+        States (SI units; layout of :class:`Problem`).
+
+    Returns
+    -------
+    ndarray (n, len(schema.columns))
+        The rows (:meth:`RunupSchema.rows`).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> p = build_problem(frb.turbocharger(), SpeedProfile.constant(30e3, 1e-3), "short")
+    >>> schema, y0 = RunupSchema.from_system(p.system), initial_state(p)
+    >>> rows = sample_rows(p, schema, np.array([0.0, 1e-4]), np.array([y0, y0]))
+    >>> bool(np.array_equal(rows[1], sample_row(p, schema, 1e-4, y0, np.empty(p.n_states))))
+    True
+    """
+    ts = np.ascontiguousarray(ts, dtype=float).ravel()
+    ys = np.ascontiguousarray(ys, dtype=float).reshape(ts.size, problem.n_states)
+    system, n_r, n = problem.system, problem.n_rotor, ts.size
+    nb = len(system.bearings)
+    journal_at = np.array([4 * b.node for b in system.bearings], dtype=np.int64)
+    ring_at = np.array([problem.ring_index(i) for i in range(nb)], dtype=np.int64)
+    ring_speed_at = np.array([problem.ring_speed_index(i) for i in range(nb)], dtype=np.int64)
+    if problem.torque_driven:
+        w = ys[:, problem.speed_index].copy()
+    else:  # np.interp of an array: value by value as problem.speed's np.interp of a float
+        w = np.interp(ts, problem.profile.t, problem.profile.omega)
+    eps, torque, power = np.zeros((n, 2 * nb)), np.full((n, nb), np.nan), np.full((n, nb), np.nan)
+    if problem.springs == 0 and n:
+        _film_samples(ts, ys, w, problem.args, problem.diag, problem.geom, problem.polys, journal_at, ring_at,
+                      ring_speed_at, n_r, EPS_CAP, eps, torque, power)
+    pairs = np.stack([journal_at, journal_at + 1], axis=1)
+    rings = np.stack([ring_at, ring_at + 1], axis=1)
+    discs = np.array([[4 * d.node, 4 * d.node + 1] for d in system.rotor.discs], dtype=np.int64).reshape(-1, 2)
+    return schema.rows(ts, w / RPM, ys[:, ring_speed_at], ys[:, pairs], ys[:, rings], eps, ys[:, discs],
+                       journal_torque=torque, power_loss=power)
+
+
 def _contact_message(schema, row, contact_eps):
     """Message when a film's ε in ``row`` exceeds ``contact_eps`` (the member reaches its wall), else None."""
     ecc = row[schema.eps_slice()]
@@ -1062,8 +1139,9 @@ CHUNK_SAMPLES = 100
 
 
 def _lsoda_samples(problem, y0, t_out, opts, counts):
-    """scipy's LSODA from sample to sample, calling the compiled RHS and Jacobian from Python. Yields (k, y_k, "")
-    for each output time t_out[k], k >= 1, or (None, None, message) once when it fails."""
+    """scipy's LSODA from sample to sample, calling the compiled RHS and Jacobian from Python. Yields (k, ys, "")
+    with the state ys (1, n_states) at each output time t_out[k], k >= 1, or (k, empty ys, message) once when it
+    fails."""
     from scipy.integrate import ode
 
     n = problem.n_states
@@ -1085,15 +1163,16 @@ def _lsoda_samples(problem, y0, t_out, opts, counts):
         y = solver.integrate(t_out[k])
         if not solver.successful() or not np.all(np.isfinite(y)):
             w_fail = problem.speed(solver.t, solver.y)
-            yield None, None, (f"integrator failed at t = {solver.t:.6g} s, speed {w_fail / RPM:.0f} rpm (LSODA return "
-                               f"code {solver.get_return_code()}); results up to there are kept")
+            yield k, np.empty((0, n)), (f"integrator failed at t = {solver.t:.6g} s, speed {w_fail / RPM:.0f} rpm "
+                                        f"(LSODA return code {solver.get_return_code()}); results up to there are kept")
             return
-        yield k, y, ""
+        yield k, y[None, :], ""
 
 
 def _radau_samples(problem, y0, t_out, opts, counts):
-    """The compiled Radau IIA solver (:mod:`frbmodel.compiled`), CHUNK_SAMPLES output times per call. Yields as
-    :func:`_lsoda_samples`."""
+    """The compiled Radau IIA solver (:mod:`frbmodel.compiled`), CHUNK_SAMPLES output times per call. Yields
+    (k, ys, message) per call: the states ys (m, n_states) at the output times t_out[k:k + m] and "" or, when the
+    solver failed after them, the reason (then it stops)."""
     from .compiled import pack_problem, solve_chunk
 
     packed = pack_problem(problem)
@@ -1108,45 +1187,64 @@ def _radau_samples(problem, y0, t_out, opts, counts):
         bad = np.flatnonzero(~np.all(np.isfinite(ys), axis=1))
         if bad.size:
             good, message = int(bad[0]), message or "compiled Radau solver: non-finite state"
-        for i in range(1, good):
-            yield a + i, ys[i], ""
         if message or good < ts.size:
             t_fail = ts[max(good - 1, 0)]
             w_fail = problem.speed(t_fail, ys[good - 1] if good else y)
-            yield None, None, (f"integrator failed after t = {t_fail:.6g} s, speed {w_fail / RPM:.0f} rpm ({message});"
-                               " results up to there are kept")
+            yield a + 1, ys[1:max(good, 1)], (f"integrator failed after t = {t_fail:.6g} s, speed "
+                                              f"{w_fail / RPM:.0f} rpm ({message}); results up to there are kept")
             return
+        yield a + 1, ys[1:], ""
         y = ys[-1]
 
 
+def _first_stop(problem, schema, rows, contact_eps):
+    """(i, message) for the first of ``rows`` at which the run stops (wall contact, :func:`_contact_message`,
+    checked first; a torque-driven speed out of range, :func:`_speed_message`), or (None, "")."""
+    stop = np.zeros(rows.shape[0], dtype=bool)
+    if problem.springs == 0:
+        ecc = rows[:, schema.eps_slice()]
+        worst = ecc[np.arange(rows.shape[0]), np.argmax(ecc, axis=1)]  # the film _contact_message looks at
+        stop |= worst > contact_eps
+    if problem.torque_driven:
+        stop |= ~((rows[:, 1] > 0.0) & (rows[:, 1] <= MAX_SPEED_RPM))
+    hit = np.flatnonzero(stop)
+    if not hit.size:
+        return None, ""
+    row = rows[int(hit[0])]
+    message = _contact_message(schema, row, contact_eps) if problem.springs == 0 else None
+    return int(hit[0]), message or _speed_message(row)
+
+
+def _show_progress(bar, t_out, rows, k):
+    """Progress as after each sample k, k + 1, ... of ``rows``: at the last sample whose index is a multiple of
+    200, the simulated time and the speed."""
+    last = (k + rows.shape[0] - 1) // 200 * 200
+    if rows.shape[0] and last >= k:
+        bar.update(float(t_out[last]) - bar.n)
+        bar.set_postfix_str(f"{rows[last - k, 1]:.0f} rpm", refresh=False)
+
+
 def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
-    """The integration loop: the chosen integrator's samples recorded one by one, wall contact checked.
-    Returns (status, message, counts)."""
-    f_buf = np.zeros(problem.n_states)
+    """The integration loop: the chosen integrator's samples recorded a solver call's worth at a time (their rows
+    built in one compiled pass, :func:`sample_rows`), wall contact and speed checked on every row (the run stops at
+    the first offending row, recorded). Returns (status, message, counts)."""
     integrator = solver_opts["integrator"]
     counts = ({"rhs_evaluations": 0, "jacobian_evaluations": 0} if integrator == "lsoda" else {"solver_steps": 0})
     samples = (_lsoda_samples if integrator == "lsoda" else _radau_samples)(problem, y0, t_out, solver_opts, counts)
-    rec.append(sample_row(problem, rec.schema, 0.0, y0, f_buf))
+    rec.extend(sample_rows(problem, rec.schema, t_out[:1], y0[None, :]))
     status, message = "finished", ""
     label = {"down": "run-down", "up-down": "run-up/down"}.get(problem.profile.direction, "run-up")
     with deferred_signals() as signals, simulation_bar(t_out[-1], label, progress) as bar:
-        for k, y, failure in samples:
-            if failure:
-                status, message = "stopped", failure
-                break
-            row = sample_row(problem, rec.schema, t_out[k], y, f_buf)
-            rec.append(row)
-            message = _contact_message(rec.schema, row, contact_eps) if problem.springs == 0 else None
-            if not message and problem.torque_driven:
-                message = _speed_message(row)
+        for k, ys, failure in samples:
+            rows = sample_rows(problem, rec.schema, t_out[k:k + ys.shape[0]], ys)
+            stop, message = _first_stop(problem, rec.schema, rows, contact_eps)
+            rec.extend(rows if stop is None else rows[:stop + 1])
+            _show_progress(bar, t_out, rows if stop is None else rows[:stop], k)
+            message = message or failure
             if message:
                 status = "stopped"
                 break
-            message = ""
-            signals.check()  # Ctrl-C / SIGTERM between samples, never inside the compiled callbacks
-            if k % 200 == 0:
-                bar.update(float(t_out[k]) - bar.n)
-                bar.set_postfix_str(f"{row[1]:.0f} rpm", refresh=False)
+            signals.check()  # Ctrl-C / SIGTERM between solver calls, never inside the compiled callbacks
     return status, message, counts
 
 
