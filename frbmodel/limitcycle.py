@@ -376,10 +376,9 @@ def _guess(problem, settle_s, forced, samples_per_rev=40, max_multiple=4):
 def _orbit_result(problem, schema, t, y):
     """The sampled orbit as a RunupResult (recorded quantities of each state)."""
     from .recorder import RunupResult
-    from .runup import sample_row
+    from .runup import sample_rows
 
-    buf = np.empty(problem.n_states)
-    rows = [sample_row(problem, schema, float(tk), yk, buf) for tk, yk in zip(t, y)]
+    rows = sample_rows(problem, schema, t, y)
     return RunupResult.from_rows(schema, rows, {"system": problem.system.to_dict(), "film_model": problem.film_model,
                                                 "profile": problem.profile.description})
 

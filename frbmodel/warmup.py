@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 #: the modules holding numba kernels (their sources stamp the marker)
-KERNEL_MODULES = ("film", "bearing", "dynamics", "compiled", "components", "losses")
+KERNEL_MODULES = ("film", "bearing", "dynamics", "compiled", "runup", "components", "losses")
 
 
 def _stamp():
