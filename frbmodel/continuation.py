@@ -331,9 +331,41 @@ class BifurcationDiagram:
             "stable": variable(("point",), df["stable"].values.astype(int), "-", "1: stable orbit"),
             "max_eps": variable(("point", "film"), np.array([p.max_eps for p in self.points]), "-",
                                 "largest eccentricity ratio over one period"),
+            "multiplier_real": variable(("point", "multiplier"), np.array([p.multipliers.real for p in self.points]),
+                                        "-", "Floquet multipliers, real part (largest modulus first)"),
+            "multiplier_imag": variable(("point", "multiplier"), np.array([p.multipliers.imag for p in self.points]),
+                                        "-", "Floquet multipliers, imaginary part"),
         })
         ds.attrs.update(netcdf_attrs({"bifurcations": self.bifurcations, **self.meta}))
         return ds
+
+    @classmethod
+    def load(cls, path):
+        """Read a diagram written by :meth:`save` (``branch.nc``, or the folder holding it).
+
+        Parameters
+        ----------
+        path : str or Path
+
+        Returns
+        -------
+        BifurcationDiagram
+        """
+        from pathlib import Path
+
+        import xarray as xr
+
+        from .results import NETCDF_ENGINE, decode_attr
+
+        path = Path(path)
+        path = path / "branch.nc" if path.is_dir() else path
+        with xr.open_dataset(path, engine=NETCDF_ENGINE) as ds:
+            mult = ds["multiplier_real"].values + 1j * ds["multiplier_imag"].values
+            pts = [BranchPoint(float(s), 1.0 / float(f), m, bool(st), float(r), e) for s, f, m, st, r, e in
+                   zip(ds["speed"].values, ds["frequency"].values, mult, ds["stable"].values,
+                       ds["turbine_radius"].values, ds["max_eps"].values)]
+            meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
+        return cls(pts, meta.pop("bifurcations", []), meta)
 
     def save(self, out_dir, envelopes=()):
         """Write ``branch.csv``, ``bifurcations.csv``, ``branch.nc`` and the figure ``bifurcation.png`` (with the
@@ -373,9 +405,10 @@ class BifurcationDiagram:
             freq = np.array([1 / p.period for p in pts])
             stab = np.array([p.stable for p in pts])
             for i in range(len(sp) - 1):
-                style = "-" if stab[i] and stab[i + 1] else "--"
-                ax.plot(sp[i:i + 2], rad[i:i + 2], style, color="k", lw=1.6)
-                axf.plot(sp[i:i + 2], freq[i:i + 2], style, color="k", lw=1.6)
+                stable = stab[i] and stab[i + 1]
+                kw = dict(color="k", lw=2.2, ls="-") if stable else dict(color="0.45", lw=1.4, ls="--")
+                ax.plot(sp[i:i + 2], rad[i:i + 2], **kw)
+                axf.plot(sp[i:i + 2], freq[i:i + 2], **kw)
         marks = {"Hopf": "*", "fold": "o", "period doubling": "s", "Neimark-Sacker": "D"}
         for b in self.bifurcations:
             ax.plot(b["speed_rpm"], b["turbine_radius_um"], marks[b["type"]], color="C3", ms=7, label=b["type"])
@@ -384,10 +417,12 @@ class BifurcationDiagram:
         uniq = dict(zip(labels, handles))
         if uniq:
             ax.legend(uniq.values(), uniq.keys(), fontsize=8)
+        if envelopes:
+            ax.set_yscale("log")  # branches of a few µm next to whirls of 100 µm
         ax.set_ylabel("turbine wheel orbit radius [µm]")
         axf.set_ylabel("orbit frequency [Hz]")
         axf.set_xlabel("rotor speed [rpm]")
-        ax.set_title(title or "limit-cycle branch (solid: stable, dashed: unstable)")
+        ax.set_title(title or "limit-cycle branches (black solid: stable, grey dashed: unstable)")
         ax.grid(alpha=0.3)
         axf.grid(alpha=0.3)
         fig.tight_layout()
