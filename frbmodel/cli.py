@@ -1101,8 +1101,9 @@ def _add_runup(sub):
     r.add_argument("--atol", type=float, default=DEFAULT_ATOL_M,
                    help="integrator absolute tolerance on displacements [m]")
     r.add_argument("--integrator", choices=INTEGRATORS, default=INTEGRATORS[0],
-                   help="'radau': compiled Radau IIA, the whole integration in compiled code; 'lsoda': scipy's LSODA "
-                        "calling the compiled right-hand side from Python (the former path, slower)")
+                   help="'rodas': compiled Rosenbrock method (rotor Jacobian exact, film columns by differences); "
+                        "'radau': compiled Radau IIA (CyRK); 'lsoda': scipy's LSODA calling the compiled right-hand "
+                        "side from Python (the former path, slowest)")
     r.add_argument("--check-convergence", action="store_true",
                    help="rerun with rtol and atol tightened tenfold and label the onsets that move by > 1 %% as seeded "
                         "by round-off")

@@ -7,8 +7,9 @@ The rotor speed follows a prescribed profile, or, torque-driven (:meth:`SpeedPro
 drive torque and braked by the journals' film torques (:func:`frbmodel.dynamics.spin_acceleration`). The
 recorded results include the film torque on each journal and each bearing's friction power
 (:func:`frbmodel.losses.bearing_loss_kernel`). The right-hand side and its finite-difference Jacobian are
-compiled with numba; the stiff, error-controlled integration runs in compiled code too (Radau IIA,
-:mod:`frbmodel.compiled`), or, as the reference, in scipy's LSODA (``integrator="lsoda"``).
+compiled with numba; the stiff, error-controlled integration runs in compiled code too (the Rosenbrock method RODAS,
+:mod:`frbmodel.rosenbrock`, or Radau IIA, :mod:`frbmodel.compiled`), or, as the reference, in scipy's LSODA
+(``integrator="lsoda"``).
 """
 from __future__ import annotations
 
@@ -38,7 +39,7 @@ EPS_CAP = 0.999
 
 __all__ = ["CHUNK_SAMPLES", "DEFAULT_ATOL_M", "DEFAULT_RTOL", "INTEGRATORS", "MAX_PROFILE_POINTS", "MAX_SPEED_RPM",
            "PROFILE_HEADER", "Problem", "RunupResult", "RunupStopped", "SEGMENT_STEPS", "SpeedProfile", "Unbalance",
-           "atol_vector", "build_problem", "check_speed", "initial_state", "runup", "sample_row",
+           "atol_vector", "build_problem", "check_speed", "initial_state", "runup", "sample_row", "typical_sizes",
            "sample_rows", "static_rotor_state"]
 
 
@@ -969,6 +970,33 @@ def atol_vector(problem, atol=DEFAULT_ATOL_M):
     return atol, np.maximum(atol * 1e3, 1e-12)
 
 
+def typical_sizes(problem, displacement_m=1e-5):
+    """Typical size of each state, the floor of the compiled Rosenbrock integrator's difference steps
+    (:func:`frbmodel.rosenbrock.jacobian`): ``displacement_m`` (about a film clearance) on displacements and, scaled
+    from it as in :func:`atol_vector`, on rotations and velocities; the largest rotor speed on the ring speeds and
+    the rotor speed, 1 rad on the rotation angle (the scales on which the model's forces change).
+
+    Parameters
+    ----------
+    problem : Problem
+        The run-up problem.
+    displacement_m : float
+        Typical displacement [m].
+
+    Returns
+    -------
+    ndarray (problem.n_states,)
+        Typical size per state (in each state's unit).
+    """
+    size = atol_vector(problem, displacement_m)[0]
+    w_max = _speed_bound(problem)
+    size[[problem.ring_speed_index(0), problem.ring_speed_index(1)]] = w_max
+    size[2 * problem.n_rotor + 10] = 1.0
+    if problem.torque_driven:
+        size[problem.speed_index] = w_max
+    return size
+
+
 def static_rotor_state(system, journal_positions):
     """Rotor DoFs q [m, rad] of the static equilibrium with prescribed journal centres (list of (x, y)).
 
@@ -1129,9 +1157,9 @@ def _speed_message(row):
             "results up to there are kept")
 
 
-#: time integrators of the run-up: the compiled Radau IIA path (default) and scipy's LSODA (the former path, kept as
-#: the reference it is checked against)
-INTEGRATORS = ("radau", "lsoda")
+#: time integrators of the run-up: the compiled Rosenbrock method (default), the compiled Radau IIA path and scipy's
+#: LSODA (the former path, kept as the reference they are checked against)
+INTEGRATORS = ("rodas", "radau", "lsoda")
 #: output samples per call of the compiled solver (it restarts at each call; between calls the run-up records,
 #: checks contact, signals and progress). Measured on the 1 s benchmark run-up: 100 samples took 8.7 s, 1000 took
 #: 21 s (the solver's cost grows with the number of output times per call)
@@ -1197,6 +1225,37 @@ def _radau_samples(problem, y0, t_out, opts, counts):
         y = ys[-1]
 
 
+def _rodas_samples(problem, y0, t_out, opts, counts):
+    """The compiled Rosenbrock solver (:mod:`frbmodel.rosenbrock`), CHUNK_SAMPLES output times per call, the step
+    size carried from call to call. Yields as :func:`_radau_samples`."""
+    from .rosenbrock import FD_TYPICAL_M, STATUS, film_columns, rodas_chunk
+
+    atol = opts["atol"][0]
+    scale = typical_sizes(problem, FD_TYPICAL_M)
+    cols = film_columns(problem.n_rotor, problem.args[3], problem.torque_driven, problem.args[10].size > 0)
+    y, h = y0, 1e-7
+    max_step = opts["max_step"] or float(t_out[-1])
+    for a in range(0, t_out.size - 1, CHUNK_SAMPLES):
+        ts = t_out[a:a + CHUNK_SAMPLES + 1]
+        ys, good, h, steps, rejected, status = rodas_chunk(y, ts, h, opts["rtol"], atol, scale, cols,
+                                                           opts["nsteps"] * (ts.size - 1), max_step, problem.args)
+        counts["solver_steps"] += steps
+        counts["rejected_steps"] += rejected
+        bad = np.flatnonzero(~np.all(np.isfinite(ys[:good]), axis=1))
+        message = STATUS[status] if status else ""
+        if bad.size:
+            good, message = int(bad[0]), message or "non-finite state"
+        if message:
+            t_fail = ts[max(good - 1, 0)]
+            w_fail = problem.speed(t_fail, ys[good - 1] if good else y)
+            yield a + 1, ys[1:max(good, 1)], (f"integrator failed after t = {t_fail:.6g} s, speed "
+                                              f"{w_fail / RPM:.0f} rpm (compiled Rosenbrock solver: {message}); "
+                                              "results up to there are kept")
+            return
+        yield a + 1, ys[1:], ""
+        y = ys[-1]
+
+
 def _first_stop(problem, schema, rows, contact_eps):
     """(i, message) for the first of ``rows`` at which the run stops (wall contact, :func:`_contact_message`,
     checked first; a torque-driven speed out of range, :func:`_speed_message`), or (None, "")."""
@@ -1229,8 +1288,10 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     built in one compiled pass, :func:`sample_rows`), wall contact and speed checked on every row (the run stops at
     the first offending row, recorded). Returns (status, message, counts)."""
     integrator = solver_opts["integrator"]
-    counts = ({"rhs_evaluations": 0, "jacobian_evaluations": 0} if integrator == "lsoda" else {"solver_steps": 0})
-    samples = (_lsoda_samples if integrator == "lsoda" else _radau_samples)(problem, y0, t_out, solver_opts, counts)
+    counts = {"lsoda": {"rhs_evaluations": 0, "jacobian_evaluations": 0}, "radau": {"solver_steps": 0},
+              "rodas": {"solver_steps": 0, "rejected_steps": 0}}[integrator]
+    stepper = {"lsoda": _lsoda_samples, "radau": _radau_samples, "rodas": _rodas_samples}[integrator]
+    samples = stepper(problem, y0, t_out, solver_opts, counts)
     rec.extend(sample_rows(problem, rec.schema, t_out[:1], y0[None, :]))
     status, message = "finished", ""
     label = {"down": "run-down", "up-down": "run-up/down"}.get(problem.profile.direction, "run-up")
@@ -1251,7 +1312,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
 def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_model=None, unbalance=(),
           output_rate_hz=20e3, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL_M, perturbation=0.05, out_dir=None, progress=False,
           contact_eps=0.98, linear_springs=None, initial="equilibrium", max_step=None, nsteps=500_000,
-          integrator="radau"):
+          integrator="rodas"):
     """Nonlinear run-up simulation (the monolithic reference).
 
     Parameters
@@ -1291,10 +1352,11 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
         Start from the method-J static equilibrium at the start speed (plus ``perturbation``), or centred.
     max_step, nsteps : optional
         The integrator's largest step [s] and step budget per output interval.
-    integrator : {"radau", "lsoda"}
-        ``"radau"`` (default): compiled Radau IIA, the whole loop in compiled code (:mod:`frbmodel.compiled`);
-        ``"lsoda"``: scipy's LSODA calling the compiled right-hand side and Jacobian from Python (the former path,
-        kept as the reference; slower).
+    integrator : {"rodas", "radau", "lsoda"}
+        ``"rodas"`` (default): compiled Rosenbrock method RODAS with the rotor's Jacobian block exact and only the
+        film columns by differences (:mod:`frbmodel.rosenbrock`); ``"radau"``: CyRK's compiled Radau IIA
+        (:mod:`frbmodel.compiled`); ``"lsoda"``: scipy's LSODA calling the compiled right-hand side and Jacobian from
+        Python (the former path, kept as the reference; slowest).
 
     Returns
     -------
