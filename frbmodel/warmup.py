@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 #: the modules holding numba kernels (their sources stamp the marker)
-KERNEL_MODULES = ("film", "bearing", "dynamics", "compiled", "runup", "components", "losses")
+KERNEL_MODULES = ("film", "bearing", "dynamics", "compiled", "rosenbrock", "runup", "components", "losses")
 
 
 def _stamp():
@@ -64,7 +64,7 @@ def _tasks():
     from .film import film_coefficients, film_force
     from .losses import bearing_losses
     from .presets import turbocharger
-    from .runup import SpeedProfile, runup
+    from .runup import INTEGRATORS, SpeedProfile, runup
 
     tc = turbocharger()
     film = tc.bearings[0].inner
@@ -84,10 +84,11 @@ def _tasks():
             ("run-up right-hand side and Jacobian", lambda: runup(tc, profile=SpeedProfile.constant(2e4, 2e-4),
                                                                   duration=2e-4, output_rate_hz=1e4,
                                                                   integrator="lsoda")),
-            ("compiled run-up integrator", lambda: runup(tc, profile=SpeedProfile.constant(2e4, 2e-4), duration=2e-4,
-                                                         output_rate_hz=1e4)),
+            ("compiled run-up integrators", lambda: [runup(tc, profile=SpeedProfile.constant(2e4, 2e-4),
+                                                           duration=2e-4, output_rate_hz=1e4, integrator=i)
+                                                     for i in ("rodas", "radau")]),
             ("torque-driven spin", lambda: [runup(tc, profile=SpeedProfile.torque(1e-3, 2e4, 2e-4), duration=2e-4,
-                                                  output_rate_hz=1e4, integrator=i) for i in ("radau", "lsoda")]),
+                                                  output_rate_hz=1e4, integrator=i) for i in INTEGRATORS]),
             ("co-simulation components", component_step),
             ("bearing losses", lambda: bearing_losses(tc, 20e3))]
 
