@@ -493,30 +493,43 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     return _diagram(system, model, branches, hopfs, lo, hi)
 
 
+def _event(kind, a, c, frac, between):
+    """A bifurcation record between branch points a and c at fraction ``frac`` (linear interpolation)."""
+    return {"speed_rpm": a.speed_rpm + frac * (c.speed_rpm - a.speed_rpm), "type": kind,
+            "frequency_hz": 1 / a.period + frac * (1 / c.period - 1 / a.period),
+            "turbine_radius_um": 1e6 * (a.turbine_radius_m + frac * (c.turbine_radius_m - a.turbine_radius_m)),
+            "between": between}
+
+
+def _branch_events(b, off):
+    """Bifurcations along one branch: folds where the speed turns (the branch point of extreme speed; a multiplier
+    passes +1 there, which the multipliers near the turn, with the trivial one beside it, cannot tell reliably), and
+    the multiplier crossings of :func:`_classify` away from the folds (2 points or more)."""
+    s = np.array([p.speed_rpm for p in b])
+    turns = [i for i in range(1, len(b) - 1) if (s[i] - s[i - 1]) * (s[i + 1] - s[i]) < 0]
+    events = [_event("fold", b[i], b[i], 0.0, [off + i]) for i in turns]
+    for i in range(len(b) - 1):
+        if any(abs(i - j) <= 2 or abs(i + 1 - j) <= 2 for j in turns):
+            continue
+        events += [_event(kind, b[i], b[i + 1], frac, [off + i, off + i + 1])
+                   for kind, frac in _classify(b[i], b[i + 1])]
+    return events
+
+
 def _diagram(system, model, branches, hopfs, lo, hi):
-    """The BifurcationDiagram of computed branches: bifurcations between consecutive points, Hopf points."""
+    """The BifurcationDiagram of computed branches: Hopf points, folds and multiplier crossings."""
     from .limitcycle import SHOOT_RTOL
 
     points, bifs = [], []
     for b, hp in zip(branches, hopfs or [None] * len(branches)):
         if hp is not None:
             bifs.append({"speed_rpm": hp.speed_rpm, "type": "Hopf", "frequency_hz": hp.frequency_hz,
-                         "turbine_radius_um": 0.0, "branch": len(points) and None, "between": []})
-        off = len(points)
-        for i in range(len(b) - 1):
-            for kind, frac in _classify(b[i], b[i + 1]):
-                a, c = b[i], b[i + 1]
-                bifs.append({"speed_rpm": a.speed_rpm + frac * (c.speed_rpm - a.speed_rpm), "type": kind,
-                             "frequency_hz": 1 / a.period + frac * (1 / c.period - 1 / a.period),
-                             "turbine_radius_um": 1e6 * (a.turbine_radius_m + frac * (c.turbine_radius_m -
-                                                                                      a.turbine_radius_m)),
-                             "between": [off + i, off + i + 1]})
+                         "turbine_radius_um": 0.0, "between": []})
+        bifs += _branch_events(b, len(points))
         points.extend(b)
-    for b in bifs:
-        b.pop("branch", None)
     meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
             "branches": [len(b) for b in branches]}
-    return BifurcationDiagram(points, bifs, meta)
+    return BifurcationDiagram(points, sorted(bifs, key=lambda e: e["speed_rpm"]), meta)
 
 
 def _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first=None,

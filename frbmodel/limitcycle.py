@@ -235,6 +235,9 @@ def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4):
     y, _, msg = solve_chunk(packed, y_mid[-1], t, 1e-8, atol)
     if msg:
         raise ConvergenceError(f"limit cycle guess: the settling run failed ({msg})")
+    if not np.all(np.isfinite(y)):
+        raise ConvergenceError(f"limit cycle guess: the settling run at {w / RPM:.0f} rpm left the valid states "
+                               "(non-finite: the journal or ring reached its wall)")
     j = 4 * problem.system.bearings[0].node
     tc, k = _crossings(t, y[:, j])
     if tc.size < 2 * max_multiple + 1 or np.ptp(y[:, j]) < 1e-9:

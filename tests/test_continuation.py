@@ -61,6 +61,18 @@ def test_bifurcation_type_and_location_from_multipliers(a, b, kind, frac):
         assert found == [(kind, pytest.approx(frac, abs=1e-12))]
 
 
+def test_fold_where_the_branch_turns_back_in_speed():
+    """A branch that turns back in speed has a fold at the turning point (the point of extreme speed); multiplier
+    changes right beside it are the fold's, not separate events (the synthetic multipliers would otherwise read as a
+    Neimark-Sacker pair)."""
+    from frbmodel.continuation import _branch_events
+
+    speeds = [1.0e4, 1.1e4, 1.2e4, 1.25e4, 1.2e4, 1.1e4, 1.0e4, 0.9e4]
+    mults = [[0.5], [0.6], [0.8], [0.9 + 0.2j, 0.9 - 0.2j], [1.1 + 0.1j, 1.1 - 0.1j], [1.2], [1.3], [1.4]]
+    events = _branch_events([_bp(s, m) for s, m in zip(speeds, mults)], 0)
+    assert [e["type"] for e in events] == ["fold"] and events[0]["speed_rpm"] == 1.25e4
+
+
 def test_diagram_writes_readable_files(tc, tmp_path):
     import xarray as xr
 
