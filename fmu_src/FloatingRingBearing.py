@@ -29,14 +29,19 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._init_state()
-        self._cache = None
-        self._loss = None
+        from frbmodel.components import EXCHANGE_OUTPUTS
+
+        self._cache = np.empty(len(EXCHANGE_OUTPUTS) + 4)  # BearingComponent.exchange, then journal_ref x, y, vx, vy
+        self._cache_gen = None  # self._gen at which _cache was computed
         self._lin = None
+        self._lin_gen = None
         self._parameters()
         for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
                         ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
             self._input(f"journal.{q}", f"{d} [{u}]", unit=u)
         self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s")
+        self._journal_idx = np.array([self._input_pos[f"journal.{q}"] for q in ("x", "y", "vx", "vy")])
+        self._speed_idx = self._input_pos["rotor_speed"]
         self._outputs()
         self._linearization_outputs(["m", "m", "m/s", "m/s"], ["m", "m", "m/s", "m/s"], ["N", "N"],
                                     ("states: ring x, y, vx, vy", "inputs: journal x, y, vx, vy",
@@ -75,73 +80,75 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
 
     def _outputs(self):
-        """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units)."""
-        self._output("force.x", "film force on the journal, x [N]", lambda: self._out()[0][0], unit="N")
-        self._output("force.y", "film force on the journal, y [N]", lambda: self._out()[0][1], unit="N")
+        """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units). Those
+        of the communication point (force, Jacobian, journal_ref, losses, ε) are one array computed by one
+        compiled call (:meth:`_out`), the others one array of the state (:meth:`_state_out`)."""
+        from frbmodel.components import EXCHANGE_OUTPUTS
+
+        where = {n: k for k, n in enumerate(EXCHANGE_OUTPUTS)}
+
+        def point(name, desc, unit, k=None):
+            k = where[name] if k is None else k
+            self._output(name, desc, lambda: self._out()[k], unit=unit, block=(self._out, k))
+
+        def state(name, desc, unit, k):
+            self._output(name, desc, lambda: self._state_out()[k], unit=unit, block=(self._state_out, k))
+
+        point("force.x", "film force on the journal, x [N]", "N")
+        point("force.y", "film force on the journal, y [N]", "N")
         for i in range(2):
             for k in range(2):
-                self._output(f"stiffness[{i + 1},{k + 1}]", "interface Jacobian -dF/dx_journal [N/m]",
-                             lambda i=i, k=k: self._out()[1][i, k], unit="N/m")
-                self._output(f"damping[{i + 1},{k + 1}]", "interface Jacobian -dF/dv_journal [N s/m]",
-                             lambda i=i, k=k: self._out()[2][i, k], unit="N.s/m")
+                point(f"stiffness[{i + 1},{k + 1}]", "interface Jacobian -dF/dx_journal [N/m]", "N/m")
+                point(f"damping[{i + 1},{k + 1}]", "interface Jacobian -dF/dv_journal [N s/m]", "N.s/m")
         for qi, (q, u) in enumerate((("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))):
-            self._output(f"journal_ref.{q}", f"journal {q} at which force and Jacobian were evaluated [{u}]",
-                         lambda qi=qi: self._ref()[qi], unit=u)
-        self._output("force_end.x", "force on the journal at the end of the last step along the extrapolated journal "
-                     "path, x [N] (staggered coupling)", lambda: self._comp.force_end[0], unit="N")
-        self._output("force_end.y", "force on the journal at the end of the last step, y [N]",
-                     lambda: self._comp.force_end[1], unit="N")
-        self._output("journal_accel.x", "journal acceleration of the quadratic path the ring was integrated on in the "
-                     "last step, x [m/s2] (staggered coupling)", lambda: self._comp.path_accel[0], unit="m/s2")
-        self._output("journal_accel.y", "journal acceleration of that path, y [m/s2]", lambda: self._comp.path_accel[1],
-                     unit="m/s2")
-        self._output("journal_torque", "inner-film torque on the journal about +z [N m] (negative: it brakes the "
-                     "rotor; input <bearing>_bearing.torque of the rotor)", lambda: self._losses()[0], unit="N.m")
-        self._output("power_loss", "friction power of the inner and outer film [W]", lambda: self._losses()[1],
-                     unit="W")
-        self._output("ring.x", "ring centre x [m]", lambda: self._comp.ring[0], unit="m")
-        self._output("ring.y", "ring centre y [m]", lambda: self._comp.ring[1], unit="m")
-        self._output("ring.speed", "ring spin speed [rad/s]", lambda: self._ring_speed(), unit="rad/s")
-        self._output("eps_inner", "inner film eccentricity ratio [-]", lambda: self._out()[3][0], unit="1")
-        self._output("eps_outer", "outer film eccentricity ratio [-]", lambda: self._out()[3][1], unit="1")
-        self._output("ring_speed_ratio", "ring speed / rotor speed [-]",
-                     lambda: self._ring_speed() / self._values["rotor_speed"] if self._values["rotor_speed"] else 0.0,
-                     unit="1")
+            point(f"journal_ref.{q}", f"journal {q} at which force and Jacobian were evaluated [{u}]", u,
+                  len(EXCHANGE_OUTPUTS) + qi)
+        state("force_end.x", "force on the journal at the end of the last step along the extrapolated journal "
+              "path, x [N] (staggered coupling)", "N", 0)
+        state("force_end.y", "force on the journal at the end of the last step, y [N]", "N", 1)
+        state("journal_accel.x", "journal acceleration of the quadratic path the ring was integrated on in the "
+              "last step, x [m/s2] (staggered coupling)", "m/s2", 2)
+        state("journal_accel.y", "journal acceleration of that path, y [m/s2]", "m/s2", 3)
+        point("journal_torque", "inner-film torque on the journal about +z [N m] (negative: it brakes the "
+              "rotor; input <bearing>_bearing.torque of the rotor)", "N.m")
+        point("power_loss", "friction power of the inner and outer film [W]", "W")
+        state("ring.x", "ring centre x [m]", "m", 4)
+        state("ring.y", "ring centre y [m]", "m", 5)
+        state("ring.speed", "ring spin speed [rad/s]", "rad/s", 6)
+        point("eps_inner", "inner film eccentricity ratio [-]", "1")
+        point("eps_outer", "outer film eccentricity ratio [-]", "1")
+        state("ring_speed_ratio", "ring speed / rotor speed [-]", "1", 7)
 
     # ------------------------------------------------------------------ helpers
     def _journal(self):
-        v = self._values
-        return np.array([v["journal.x"], v["journal.y"], v["journal.vx"], v["journal.vy"]])
-
-    def _ring_speed(self):
-        return self._comp._ring_for_force(self._values["rotor_speed"])[4]
+        return self._input_values[self._journal_idx]
 
     def _out(self):
-        if self._dirty or self._cache is None:
-            self._ref_state = self._journal()
-            self._cache = self._comp.outputs(self._ref_state, self._values["rotor_speed"])
-            self._loss = None
-            self._lin = None
-            self._dirty = False
+        """The outputs of the communication point: :meth:`BearingComponent.exchange` at the current inputs and ring
+        state (layout EXCHANGE_OUTPUTS), then the journal state they belong to; computed once per change."""
+        if self._cache_gen != self._gen:
+            j = self._journal()
+            self._cache_gen = None
+            self._comp.exchange(j, float(self._input_values[self._speed_idx]), out=self._cache[:-4])
+            self._cache[-4:] = j
+            self._cache_gen = self._gen
         return self._cache
 
-    def _losses(self):
-        """(journal torque [N m], power loss [W]) at the journal and ring state of the force (:meth:`_out`)."""
-        self._out()
-        if self._loss is None:
-            self._loss = self._comp.losses(self._ref_state, self._values["rotor_speed"])
-        return self._loss
-
-    def _ref(self):
-        self._out()
-        return self._ref_state
+    def _state_out(self):
+        """force_end x, y [N], journal_accel x, y [m/s2], ring x, y [m], ring speed [rad/s], ring speed ratio [-]."""
+        c = self._comp
+        w = float(self._input_values[self._speed_idx])
+        speed = c.ring_speed(w)
+        return np.array([c.force_end[0], c.force_end[1], c.path_accel[0], c.path_accel[1], c.ring[0], c.ring[1],
+                         speed, speed / w if w else 0.0])
 
     def _linear(self):
         if not self._values["linearization"]:
             return {k: np.zeros((4, 4)) for k in "ABCD"}
-        if self._lin is None or self._dirty:
-            A, B, C, D = self._comp.linearization(self._journal(), self._values["rotor_speed"])
+        if self._lin is None or self._lin_gen != self._gen:
+            A, B, C, D = self._comp.linearization(self._journal(), self._in("rotor_speed"))
             self._lin = {"A": A, "B": B, "C": C, "D": D}
+            self._lin_gen = self._gen
         return self._lin
 
     # ------------------------------------------------------------------ FMI (FrbSlaveMixin hooks)
@@ -159,10 +166,11 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         comp = BearingComponent(b, v["film_model"], v["ring_speed_model"], float(v["gravity"]), float(v["substep"]),
                                 float(v["contact_eps"]))
         comp.ring[:] = [v["ring.x0"], v["ring.y0"], 0.0, 0.0, v["ring.speed0"]]
-        j = [v["journal.x"], v["journal.y"], v["journal.vx"], v["journal.vy"]]
-        if math.isfinite(sum(j)) and v["rotor_speed"] > 0 and abs(j[0]) + abs(j[1]) > 0:
-            comp.force_end[:] = comp.outputs(j, v["rotor_speed"])[0]
+        j, w = self._journal(), self._in("rotor_speed")
+        if math.isfinite(j.sum()) and w > 0 and abs(j[0]) + abs(j[1]) > 0:
+            comp.force_end[:] = comp.outputs(j, w)[0]
         self._comp = comp
+        self._changed()
 
     def _check_geometry(self):
         """ValueError naming the FMU parameters of a film geometry the model does not cover."""
@@ -178,24 +186,25 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                              f"< outer.radius = {v['outer.radius']!r} m")
 
     def _advance(self, current_time, step_size):
-        self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
-        self._comp.step(self._ref_state, self._values["rotor_speed"], 0.0, step_size, t=current_time)
+        out = self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
+        self._comp.step(out[-4:].copy(), float(self._input_values[self._speed_idx]), 0.0, step_size, t=current_time)
 
     def _step_context(self):
         from frbmodel.units import rad_s_to_rpm
 
-        w = self._values["rotor_speed"]
+        w = self._in("rotor_speed")
         return f"rotor speed {rad_s_to_rpm(w):.0f} rpm: " if math.isfinite(w) else ""
 
     def _component_state(self):
+        """Ring state, journal history, last ε, end-of-step force and path acceleration (copies)."""
         c = self._comp
-        return {"ring": [float(x) for x in c.ring], "history": c.history.state(), "eps": [float(e) for e in c.eps],
-                "force_end": [float(x) for x in c.force_end], "path_accel": [float(x) for x in c.path_accel]}
+        return {"ring": c.ring.copy(), "history": c.history.state(), "eps": tuple(c.eps),
+                "force_end": c.force_end.copy(), "path_accel": c.path_accel.copy()}
 
     def _set_component_state(self, st):
         c = self._comp
         c.ring[:] = st["ring"]
         c.history.set_state(st["history"])
         c.eps = tuple(st["eps"])
-        c.force_end[:] = st["force_end"]
-        c.path_accel = np.array(st["path_accel"])
+        c.force_end = np.array(st["force_end"], dtype=float)
+        c.path_accel = np.array(st["path_accel"], dtype=float)

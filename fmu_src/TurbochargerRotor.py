@@ -43,6 +43,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._init_state()
+        self._out_gen = None  # self._gen at which the output array of the state was computed
         from frbmodel.cosim.fmu_system import rotor_system
 
         self._built_for = rotor_system(self.resources)  # the system the variables are made for
@@ -94,7 +95,6 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                     "is the speed before the first step)", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), unit="rad/s")
         self._input("drive_torque", "net external torque on the rotor about +z [N m], e.g. turbine minus compressor "
                     "(speed_source = torque)", unit="N.m")
-        self._keys = {}
         for b in self._bearings:
             self._input(f"{b}.force.x", "bearing force on the journal, x [N]", unit="N")
             self._input(f"{b}.force.y", "bearing force on the journal, y [N]", unit="N")
@@ -115,26 +115,30 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                     self._input(f"{b}.damping[{i + 1},{k + 1}]", "bearing interface damping [N s/m]", unit="N.s/m")
             self._input(f"{b}.torque", "film torque on the journal about +z [N m] (the bearing's journal_torque; "
                         "brakes the rotor when speed_source = torque)", unit="N.m")
-            self._keys[b] = ([f"{b}.force.x", f"{b}.force.y"],
-                             [f"{b}.stiffness[{i},{k}]" for i in (1, 2) for k in (1, 2)],
-                             [f"{b}.damping[{i},{k}]" for i in (1, 2) for k in (1, 2)],
-                             [f"{b}.journal_ref.{q}" for q, _ in JOURNAL],
-                             [f"{b}.force_end.x", f"{b}.force_end.y"],
-                             [f"{b}.journal_accel.x", f"{b}.journal_accel.y"])
+        from frbmodel.components import COUPLING_COLUMNS
+
+        pos = self._input_pos
+        # positions in self._input_values of the rotor component's packed coupling array (bearings x COUPLING_COLUMNS)
+        self._coupling_idx = np.array([[pos[f"{b}.{c}"] for c in COUPLING_COLUMNS] for b in self._bearings])
+        self._torque_idx = np.array([pos[f"{b}.torque"] for b in self._bearings])
 
     def _outputs(self):
-        """Speed, journal states per bearing, disc centres per disc, linearization sized by the node count."""
-        self._output("rotor_speed", "rotor spin speed [rad/s]", lambda: self._comp.rotor_speed, unit="rad/s")
-        self._output("rotor_angle", "rotor rotation angle about +z since t = 0 [rad]", lambda: self._comp.phi,
-                     unit="rad")
-        for bi, b in enumerate(self._bearings):
-            for qi, (q, u) in enumerate(JOURNAL):
-                self._output(f"{b}.journal.{q}", f"journal {q} [{u}]", lambda bi=bi, qi=qi: self._comp.journal(bi)[qi],
-                             unit=u)
+        """Speed, journal states per bearing, disc centres per disc, linearization sized by the node count. All but
+        the linearization are one array of the state (:meth:`_state_out`)."""
+        k = iter(range(10 ** 6))
+
+        def state(name, desc, unit):
+            i = next(k)
+            self._output(name, desc, lambda: self._state_out()[i], unit=unit, block=(self._state_out, i))
+
+        state("rotor_speed", "rotor spin speed [rad/s]", "rad/s")
+        state("rotor_angle", "rotor rotation angle about +z since t = 0 [rad]", "rad")
+        for b in self._bearings:
+            for q, u in JOURNAL:
+                state(f"{b}.journal.{q}", f"journal {q} [{u}]", u)
         for w in self._discs:
-            for qi, q in enumerate("xy"):
-                self._output(f"{w}.{q}", f"{w} centre {q} [m]",
-                             lambda w=w, qi=qi: self._comp.node_xy(self._node[w])[qi], unit="m")
+            for q in "xy":
+                state(f"{w}.{q}", f"{w} centre {q} [m]", "m")
         n_nodes, nb = self._built_for.rotor.n_nodes, len(self._bearings)
         x_units = ["m", "m", "rad", "rad"] * n_nodes + ["m/s", "m/s", "rad/s", "rad/s"] * n_nodes
         self._linearization_outputs(x_units, ["N", "N"] * nb, [u for _ in range(nb) for _, u in JOURNAL],
@@ -143,18 +147,16 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                                      "outputs: journal x, y, vx, vy per bearing"))
 
     # ------------------------------------------------------------------ helpers
-    def _bearing_inputs(self):
-        v = self._values
-        F, K, C, self._refs, self._fend, self._acc = [], [], [], [], [], []
-        for b in self._bearings:
-            kf, kk, kc, kr, ke, ka = self._keys[b]
-            F.append(np.array([v[k] for k in kf]))
-            K.append(np.array([v[k] for k in kk]).reshape(2, 2))
-            C.append(np.array([v[k] for k in kc]).reshape(2, 2))
-            self._refs.append(np.array([v[k] for k in kr]))
-            self._fend.append(np.array([v[k] for k in ke]))
-            self._acc.append(np.array([v[k] for k in ka]))
-        return F, K, C
+    def _state_out(self):
+        """rotor speed [rad/s], angle [rad], journal x, y, vx, vy per bearing [m, m/s], disc centre x, y per disc
+        [m]; computed once per change of the state."""
+        if self._out_gen != self._gen:
+            c = self._comp
+            out = np.empty(2 + self._y_idx.size)
+            out[0], out[1] = c.rotor_speed, c.phi
+            out[2:] = c.y[self._y_idx]
+            self._out_cache, self._out_gen = out, self._gen
+        return self._out_cache
 
     def _linear(self):
         if not self._values["linearization"]:
@@ -186,30 +188,40 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         speed = ramp_speed(rad_s_to_rpm(float(v["speed_start"])), rad_s_to_rpm(float(v["speed_end"])),
                            float(v["ramp_time"]))
         source = v["speed_source"]
-        w0 = float(v["speed_in"] if source == "input" else v["speed_start"])
+        w0 = float(self._in("speed_in") if source == "input" else v["speed_start"])
         if not math.isfinite(w0):
             raise ValueError(f"speed_in = {w0!r} rad/s is invalid at the end of initialization with speed_source = "
                              "'input' (it is the rotor speed before the first step): it must be finite")
         comp = RotorComponent(tc, speed, unb, float(v["substep"]), speed_source=source, initial_speed=w0)
         journals = [(float(v[f"{b}.journal_x0"]), float(v[f"{b}.journal_y0"])) for b in self._bearings]
         comp.y[:comp.n] = tc.rotor.static_deflection([b.node for b in tc.bearings], journals, tc.gravity)
-        self._node = {d.name: d.node for d in tc.rotor.discs}
+        n = comp.n
+        journals = [[i, k, n + i, n + k] for i, k in comp.jdofs]  # x, y, vx, vy of each journal in the state y
+        node = {d.name: d.node for d in tc.rotor.discs}
+        discs = [[4 * node[w], 4 * node[w] + 1] for w in self._discs]
+        self._y_idx = np.array([i for idx in journals + discs for i in idx], dtype=np.intp)
+        self._out_gen = None
         self._comp = comp
+        self._changed()
 
     def _advance(self, current_time, step_size):
-        F, K, C = self._bearing_inputs()
-        if not np.isfinite(np.concatenate(F + [k.ravel() for k in K] + [c.ravel() for c in C] + self._refs)).all():
-            raise ValueError(f"bearing inputs are not finite: force {F}, stiffness {K}, damping {C}, "
-                             f"journal_ref {self._refs}")
-        path = None
-        if self._values["force_interpolation"]:
-            path = (self._fend, self._acc)
-            if not np.isfinite(np.concatenate(self._fend + self._acc)).all():
-                raise ValueError(f"bearing force_end / journal_accel inputs are not finite: {self._fend!r}, "
-                                 f"{self._acc!r}")
-        v = self._values
-        self._comp.step(step_size, F, K, C, self._refs, path=path, speed_in=v["speed_in"],
-                        drive_torque=v["drive_torque"], journal_torques=[v[f"{b}.torque"] for b in self._bearings])
+        x = self._input_values
+        coupling = x[self._coupling_idx]  # (bearings, COUPLING_COLUMNS): F0, K, C, journal_ref, F1, a
+        interpolate = bool(self._values["force_interpolation"])
+        if not math.isfinite(coupling[:, :14].sum()):
+            raise ValueError(f"bearing inputs are not finite: {self._named(coupling, 0, 14)}")
+        if interpolate and not math.isfinite(coupling[:, 14:].sum()):
+            raise ValueError("bearing force_end / journal_accel inputs are not finite: "
+                             f"{self._named(coupling, 14, 18)}")
+        self._comp.step_coupled(step_size, coupling, interpolate, speed_in=self._in("speed_in"),
+                                drive_torque=self._in("drive_torque"), journal_torques=x[self._torque_idx])
+
+    def _named(self, coupling, lo, hi):
+        """The bearing inputs in columns lo:hi of ``coupling`` by name (for a message)."""
+        from frbmodel.components import COUPLING_COLUMNS
+
+        return ", ".join(f"{b}.{c} = {coupling[i, k]!r}" for i, b in enumerate(self._bearings)
+                         for k, c in enumerate(COUPLING_COLUMNS[lo:hi], lo))
 
     def _step_context(self):
         from frbmodel.units import rad_s_to_rpm

@@ -4,6 +4,7 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Initial, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
@@ -43,6 +44,11 @@ class FrbSlaveMixin:
       (fmi2Discard, nothing of the step is kept) when the inputs are not finite or the component fails, e.g. a
       film reaching its wall; the next doStep with valid inputs continues from the unchanged state.
     - Outputs that cannot be evaluated read NaN with an fmi2Discard message, never a silent NaN.
+    - Per-step traffic without a Python loop per variable: Real inputs live in one array (:attr:`_input_values`, set by
+      index arrays prepared once per list of value references); Real outputs registered with ``block`` are read
+      from arrays the slave computes once per change of inputs or state (``_output(..., block=(fn, index))``),
+      again by prepared index arrays. Any other request, a failing block or a non-finite value takes the guarded
+      per-variable path, which reports.
 
     Statuses: every FMI entry point returns normally and logs each refusal with the status the call must return
     (:meth:`_refuse`: fmi2Error, :meth:`_discard`: fmi2Discard). pythonfmu's own binary returns fmi2Discard for
@@ -53,17 +59,31 @@ class FrbSlaveMixin:
     """
 
     def _init_state(self):
-        """Common slave state: variable values, FMI mode, output cache flag, the component, variable tables."""
-        self._values = {}
+        """Common slave state: parameter values, input array, FMI mode, change counter, the component, variable
+        tables."""
+        self._values = {}  # parameter name -> value
+        self._input_values = np.zeros(0)  # Real input values, in the order of registration
+        self._input_pos = {}  # input name -> position in self._input_values
         self._mode = INSTANTIATED
-        self._dirty = True
+        self._gen = 0  # counts changes of inputs, parameters and state: output caches compare it
         self._comp = None
         self._units = {}  # variable name -> unit of every Real variable (written by to_xml)
         self._checks = {}  # parameter name -> (unit, low, high, low_open, choices)
         self._kind = {}  # value reference -> "parameter" | "input" | "output"
         self._raw_get = {}  # value reference -> raw getter of a Real variable (fast path of get_real)
-        self._input_name = {}  # value reference -> name in self._values of a Real input
+        self._in_vr = {}  # value reference of a Real input -> position in self._input_values
+        self._blocks = {}  # value reference of a block output -> (block function, index in its array)
+        self._set_plans = {}  # tuple of value references -> index array into self._input_values (or None: no fast path)
+        self._get_plans = {}  # tuple of value references -> block plan (or None: no fast path)
         self._status_from_log = bool(self.resources) and (Path(self.resources) / STATUS_FROM_LOG).is_file()
+
+    def _changed(self):
+        """Inputs, parameters or state changed: every cached output is stale."""
+        self._gen += 1
+
+    def _in(self, name):
+        """Value of the Real input ``name`` (a float)."""
+        return float(self._input_values[self._input_pos[name]])
 
     # ------------------------------------------------------------------ registration
     def _register(self, var, kind, unit):
@@ -91,14 +111,18 @@ class FrbSlaveMixin:
             self._checks[name] = (None, None, None, False, tuple(choices))
 
     def _input(self, name, desc, start=0.0, unit=None):
-        self._values[name] = start
+        k = self._input_values.size
+        self._input_values = np.append(self._input_values, float(start))
+        self._input_pos[name] = k
         var = Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous, description=desc,
-                   getter=lambda n=name: self._values[n], setter=lambda v, n=name: self._set_input(n, v))
+                   getter=lambda k=k: float(self._input_values[k]), setter=lambda v, n=name: self._set_input(n, v))
         vr = self._register(var, "input", unit)
         self._raw_get[vr] = var.getter
-        self._input_name[vr] = name
+        self._in_vr[vr] = k
 
-    def _output(self, name, desc, fn, kind="real", unit=None):
+    def _output(self, name, desc, fn, kind="real", unit=None, block=None):
+        """Register an output read by ``fn()``; ``block = (block_fn, index)``: it is also ``block_fn()[index]``,
+        an array the slave computes once for many outputs (the fast path of :meth:`get_real`)."""
         if kind == "int":
             var = Integer(name, causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
                           initial=Fmi2Initial.exact, description=desc,
@@ -110,6 +134,8 @@ class FrbSlaveMixin:
         vr = self._register(var, "output", unit)
         if kind != "int":
             self._raw_get[vr] = fn
+        if block is not None:
+            self._blocks[vr] = block
 
     def _linearization_outputs(self, x_units, u_units, y_units, what):
         """Integer outputs nx, nu, ny and Real outputs A[i,j], B[i,j], C[i,j], D[i,j] (1-based, row-major) read
@@ -151,7 +177,7 @@ class FrbSlaveMixin:
                          f"only be set before fmi2ExitInitializationMode; it keeps its value {self._values[name]!r}")
             return
         self._values[name] = v
-        self._dirty = True
+        self._changed()
         if self._mode == INITIALIZATION:
             self._comp = None  # outputs evaluated in initialization mode are rebuilt from the new parameters
 
@@ -159,19 +185,19 @@ class FrbSlaveMixin:
         if self._mode in (TERMINATED, ERROR):
             self._refuse(f"input {name} = {v!r} refused in {self._mode}")
             return
-        self._values[name] = float(v)
-        self._dirty = True
+        self._input_values[self._input_pos[name]] = float(v)
+        self._changed()
 
     def set_real(self, vrs, values):
-        if self._mode == STEP:  # fast path of the per-step traffic: inputs only
-            try:
-                names = [self._input_name[vr] for vr in vrs]
-            except KeyError:
-                names = None
-            if names is not None:
-                for n, v in zip(names, values):
-                    self._values[n] = float(v)
-                self._dirty = True
+        if self._mode == STEP:  # fast path of the per-step traffic: inputs only, one array assignment
+            key = tuple(vrs)
+            idx = self._set_plans.get(key, False)
+            if idx is False:
+                idx = self._set_plans[key] = (np.array([self._in_vr[vr] for vr in key], dtype=np.intp)
+                                              if all(vr in self._in_vr for vr in key) else None)
+            if idx is not None:
+                self._input_values[idx] = values
+                self._changed()
                 return
         self._set_each(vrs, values, Real)
 
@@ -198,14 +224,45 @@ class FrbSlaveMixin:
     # ------------------------------------------------------------------ get
     def get_real(self, vrs):
         if self._comp is not None and self._mode in (STEP, TERMINATED):
-            try:  # fast path: raw getters while every value is finite (otherwise the guarded path reports)
-                raw = self._raw_get
-                out = [float(raw[vr]()) for vr in vrs]
+            try:  # fast paths while every value is finite (otherwise the guarded path reports)
+                out = self._get_blocks(vrs)
+                if out is None:  # raw getters, one per variable
+                    raw = self._raw_get
+                    out = [float(raw[vr]()) for vr in vrs]
                 if math.isfinite(sum(out)):
                     return out
             except Exception:  # noqa: BLE001  (the guarded path below reports it)
                 pass
         return self._get_each(vrs, Real, math.nan)
+
+    def _get_blocks(self, vrs):
+        """The values of ``vrs`` read from the slave's output blocks by prepared index arrays, or None when one of
+        them is not a block output."""
+        key = tuple(vrs)
+        plan = self._get_plans.get(key, False)
+        if plan is False:
+            plan = self._get_plans[key] = self._block_plan(key)
+        if plan is None:
+            return None
+        if len(plan) == 1:  # all from one block, in the requested order
+            fn, _, src = plan[0]
+            return fn()[src].tolist()
+        out = np.empty(len(key))
+        for fn, dst, src in plan:
+            out[dst] = fn()[src]
+        return out.tolist()
+
+    def _block_plan(self, vrs):
+        """``[(block_fn, positions in the request, indices in the block)]`` for ``vrs``, or None."""
+        if not vrs or not all(vr in self._blocks for vr in vrs):
+            return None
+        groups = {}
+        for pos, vr in enumerate(vrs):
+            fn, index = self._blocks[vr]
+            dst, src = groups.setdefault(fn, ([], []))
+            dst.append(pos)
+            src.append(index)
+        return [(fn, np.array(dst, dtype=np.intp), np.array(src, dtype=np.intp)) for fn, (dst, src) in groups.items()]
 
     def get_integer(self, vrs):
         return self._get_each(vrs, Integer, 0)
@@ -283,7 +340,7 @@ class FrbSlaveMixin:
             msg = f"invalid parameters: {exc}"
         if msg is None:
             self._mode = STEP
-            self._dirty = True
+            self._changed()
             return
         self._mode, self._comp = ERROR, None
         self._refuse(msg)
@@ -326,11 +383,11 @@ class FrbSlaveMixin:
             self._advance(current_time, step_size)
         except Exception as exc:  # noqa: BLE001
             self._set_component_state(saved)
-            self._dirty = True
+            self._changed()
             self._discard(f"doStep from t = {current_time:.6g} s by {step_size:.3g} s discarded, the state stays at "
                           f"t = {current_time:.6g} s: {self._step_context()}{exc}")
             return False
-        self._dirty = True
+        self._changed()
         return True
 
     def _step_refusal(self, t, h):
@@ -350,21 +407,22 @@ class FrbSlaveMixin:
         """Prefix of a discard message (e.g. the rotor speed); empty by default."""
         return ""
 
-    # FMU state (fmi2GetFMUstate / SetFMUstate, used for rollback): the variable values, the mode and the
-    # component's own state — not pythonfmu's default, which calls every getter (all outputs, all linearization
+    # FMU state (fmi2GetFMUstate / SetFMUstate, used for rollback): the parameter and input values, the mode and
+    # the component's own state — not pythonfmu's default, which calls every getter (all outputs, all linearization
     # matrices) and cannot bring a slave back after a failed step.
     def _get_fmu_state(self):
-        state = {"_values": dict(self._values), "_mode": self._mode}
+        state = {"_values": dict(self._values), "_input_values": self._input_values.copy(), "_mode": self._mode}
         if self._comp is not None:
             state["_component"] = self._component_state()
         return state
 
     def _set_fmu_state(self, state):
         self._values = dict(state["_values"])
+        self._input_values[:] = state["_input_values"]
         self._mode = state["_mode"]
         if self._comp is not None and state.get("_component") is not None:
             self._set_component_state(state["_component"])
-        self._dirty = True
+        self._changed()
 
     def _check_version(self):
         """Refuse to start if the imported frbmodel is not the bundled version (pythonfmu slaves share the

@@ -65,6 +65,78 @@ def _interface_jacobian(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, eps
             C[1, k - 2] = -(fyp - fym) / (2 * h)
 
 
+#: the values of :meth:`BearingComponent.exchange`, in its order (named as the bearing FMU's outputs)
+EXCHANGE_OUTPUTS = ("force.x", "force.y", "stiffness[1,1]", "stiffness[1,2]", "stiffness[2,1]", "stiffness[2,2]",
+                    "damping[1,1]", "damping[1,2]", "damping[2,1]", "damping[2,2]", "eps_inner", "eps_outer",
+                    "journal_torque", "power_loss")
+
+
+@njit(cache=True)
+def _bearing_exchange(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, out):
+    """Everything a bearing outputs at a communication point, in one compiled call (layout
+    :data:`EXCHANGE_OUTPUTS`): the film force on the journal [N] and the eccentricity ratios (uncapped, as
+    :func:`_bearing_force` with ``eps_cap = inf``), K and C (:func:`_interface_jacobian`, ε capped at 0.999, row-major)
+    and the journal torque [N m] and friction power of both films [W] (:func:`frbmodel.losses.bearing_loss_kernel`,
+    uncapped)."""
+    fx, fy, ei, eo = _bearing_force(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, math.inf)
+    K = np.empty((2, 2))
+    C = np.empty((2, 2))
+    _interface_jacobian(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, 0.999, K, C)
+    t_j, p_i, p_o = bearing_loss_kernel(geom, polys, j[0], j[1], j[2], j[3], ring, omega_r, math.inf)
+    out[0], out[1] = fx, fy
+    for i in range(2):
+        for k in range(2):
+            out[2 + 2 * i + k] = K[i, k]
+            out[6 + 2 * i + k] = C[i, k]
+    out[10], out[11] = ei, eo
+    out[12], out[13] = t_j, p_i + p_o
+
+
+@njit(cache=True)
+def _lu_factor(a, piv):
+    """LU factorization with partial pivoting of the square matrix ``a``, in place: the unit lower factor below the
+    diagonal, the upper factor on and above it; row ``k`` was interchanged with row ``piv[k]``. Returns False (and a
+    garbage ``a``) for a singular or non-finite matrix."""
+    n = a.shape[0]
+    for k in range(n):
+        p, big = k, abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                p, big = i, abs(a[i, k])
+        if not (0.0 < big < math.inf):  # also False for NaN
+            return False
+        piv[k] = p
+        if p != k:
+            for c in range(n):
+                a[k, c], a[p, c] = a[p, c], a[k, c]
+        for i in range(k + 1, n):
+            m = a[i, k] / a[k, k]
+            a[i, k] = m
+            for c in range(k + 1, n):
+                a[i, c] -= m * a[k, c]
+    return True
+
+
+@njit(cache=True)
+def _lu_solve(lu, piv, b):
+    """Solve A x = b in place (``b`` becomes x) with the factors of :func:`_lu_factor`."""
+    n = lu.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            b[k], b[p] = b[p], b[k]
+    for i in range(1, n):
+        s = b[i]
+        for c in range(i):
+            s -= lu[i, c] * b[c]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for c in range(i + 1, n):
+            s -= lu[i, c] * b[c]
+        b[i] = s / lu[i, i]
+
+
 SDIRK_GAMMA = 1.0 - 1.0 / math.sqrt(2.0)  # Alexander's 2-stage SDIRK: L-stable, second order, stiffly accurate
 
 
@@ -79,20 +151,23 @@ def _journal_on_path(j0, t, jj):
 
 #: largest number of modified-Newton iterations of one SDIRK stage of the ring integrator
 NEWTON_MAX_ITER = 12
+#: status codes of the ring integrator (:func:`_ring_step`)
+RING_OK, RING_NOT_CONVERGED, RING_NOT_FINITE = 0, 1, 2
 
 
 @njit(cache=True)
-def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, J, refresh, eps_cap, free_spin, rsr_fixed,
-                max_iter):
+def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, lu, piv, refresh, eps_cap, free_spin,
+                rsr_fixed, max_iter, work):
     """Solve Y = base + gh·f(Y) for the ring state (in place in ``yn``, start value on entry) by modified Newton;
-    ``J`` holds I − gh ∂f/∂y and is recomputed when ``refresh`` or when convergence stalls. Without ``free_spin``
-    the ring speed is held at ``rsr_fixed``·w (not iterated). Converged when the last correction is below 1e-10 of
-    the outer clearance in position and 1e-9 of the ring speed (at least 1 rad/s) in speed.
+    ``lu``, ``piv`` hold the LU factors (:func:`_lu_factor`) of J = I − gh ∂f/∂y, recomputed when ``refresh`` or
+    when convergence stalls, and reused otherwise (also by the next stages). Without ``free_spin`` the ring speed
+    is held at ``rsr_fixed``·w (not iterated). Converged when the last correction is below 1e-10 of the outer
+    clearance in position and 1e-9 of the ring speed (at least 1 rad/s) in speed. ``work`` (4, 5): scratch.
 
-    Returns ``(eps_inner, eps_outer, fresh, converged, position_correction, speed_correction)``: both ε at the
-    solution, whether J was (re)computed, and the last correction (|Δx| + |Δy| [m], |Δω_FR| [rad/s])."""
-    f = np.empty(5)
-    fp = np.empty(5)
+    Returns ``(eps_inner, eps_outer, fresh, status, position_correction, speed_correction)``: both ε at the
+    solution, whether J was (re)computed, :data:`RING_OK` / :data:`RING_NOT_CONVERGED` / :data:`RING_NOT_FINITE`
+    (a non-finite residual or a singular J), and the last correction (|Δx| + |Δy| [m], |Δω_FR| [rad/s])."""
+    f, fp, yp, dy = work[0], work[1], work[2], work[3]
     ei, eo = 0.0, 0.0
     fresh = False
     dpos, dspeed = math.inf, math.inf
@@ -101,79 +176,97 @@ def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, J, refre
             yn[4] = rsr_fixed * w
         _, _, ei, eo = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yn, w,
                                        eps_cap, f)
-        r = yn - base - gh * f
+        total = 0.0
+        for k in range(5):
+            dy[k] = -((yn[k] - base[k]) - gh * f[k])  # −residual
+            total += dy[k]
         if not free_spin:
-            r[4] = 0.0  # prescribed ring speed: row 4 of J is the identity, so Δω_FR = 0
+            dy[4] = 0.0  # prescribed ring speed: row 4 of J is the identity, so Δω_FR = 0
+        if not math.isfinite(total):
+            return ei, eo, fresh, RING_NOT_FINITE, dpos, dspeed
         if refresh or it >= 4:
             for k in range(5):
                 typ = geom[1, 2] if k < 2 else (geom[1, 2] * 1e3 if k < 4 else 10.0)
                 d = 1e-7 * max(abs(yn[k]), typ)
-                yp = yn.copy()
+                yp[:] = yn
                 yp[k] += d
                 ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], yp, w, eps_cap, fp)
                 if not free_spin:
                     fp[4] = f[4]
                 for i in range(5):
-                    J[i, k] = (1.0 if i == k else 0.0) - gh * (fp[i] - f[i]) / d
+                    lu[i, k] = (1.0 if i == k else 0.0) - gh * (fp[i] - f[i]) / d
+            if not _lu_factor(lu, piv):
+                return ei, eo, fresh, RING_NOT_FINITE, dpos, dspeed
             refresh = False
             fresh = True
-        dy = np.linalg.solve(J, -r)
-        yn += dy
+        _lu_solve(lu, piv, dy)
+        for k in range(5):
+            yn[k] += dy[k]
         dpos, dspeed = abs(dy[0]) + abs(dy[1]), abs(dy[4])
         if dpos < 1e-10 * geom[1, 2] and dspeed < 1e-9 * max(abs(yn[4]), 1.0):
-            return ei, eo, fresh, True, dpos, dspeed
-    return ei, eo, fresh, False, dpos, dspeed
+            return ei, eo, fresh, RING_OK, dpos, dspeed
+    return ei, eo, fresh, RING_NOT_CONVERGED, dpos, dspeed
 
 
 @njit(cache=True)
-def _ring_step(geom, polys, ring_m, ring_i, grav, j0, ring, omega_r, omega_r_dot, H, n_sub, eps_cap, free_spin,
-               rsr_fixed, max_iter):
-    """Integrate the ring over [0, H] with the journal on the path x(t) = j0[:2] + j0[2:4] t + j0[4:6] t²/2
-    (velocity j0[2:4] + j0[4:6] t), ``n_sub`` substeps of the 2-stage SDIRK method (L-stable, second order: the
-    ring-in-film modes reach ~20 kHz at high speed, where backward Euler's numerical damping shifts the whirl
-    limit cycles); modified Newton with one FD Jacobian per macro step, refreshed when convergence stalls.
-    ``free_spin``: ring speed is a state; else ω_FR = rsr_fixed·ω_R.
+def _ring_step(geom, polys, ring_m, ring_i, grav, j, ax, ay, ring, omega_r, omega_r_dot, H, n_sub, eps_cap,
+               free_spin, rsr_fixed, max_iter, ring_out):
+    """Integrate the ring from ``ring`` over [0, H] with the journal on the path x(t) = j[:2] + j[2:4] t +
+    (ax, ay) t²/2 (velocity j[2:4] + (ax, ay) t), ``n_sub`` substeps of the 2-stage SDIRK method (L-stable, second
+    order: the ring-in-film modes reach ~20 kHz at high speed, where backward Euler's numerical damping shifts the
+    whirl limit cycles); modified Newton with one FD Jacobian (LU-factored once) per macro step, refreshed when
+    convergence stalls. ``free_spin``: ring speed is a state; else ω_FR = rsr_fixed·ω_R. One compiled call per
+    macro step: no allocation per Newton iteration.
 
-    Returns ``(eps_max, fx, fy, failed_at, dpos, dspeed)``: the largest ε seen and the force on the journal [N] at
-    the end of the step (end of the path, new ring state, written into ``ring``); ``failed_at`` is −1 or the stage
-    time [s] in the step where the Newton iteration did not converge (then ``ring`` is unchanged and ``dpos`` [m],
-    ``dspeed`` [rad/s] are its last corrections)."""
+    Returns ``(eps_max, fx, fy, status, at, dpos, dspeed)``: the largest ε seen and the force on the journal [N] at
+    the end of the step (end of the path, new ring state, written into ``ring_out``; ``ring`` is not changed);
+    ``status`` :data:`RING_OK`, or :data:`RING_NOT_CONVERGED` / :data:`RING_NOT_FINITE` at the stage time ``at`` [s]
+    in the step (then ``ring_out`` is garbage and ``dpos`` [m], ``dspeed`` [rad/s] are the last corrections)."""
     g = SDIRK_GAMMA
     h = H / n_sub
-    y = ring.copy()
-    J = np.empty((5, 5))
+    j0 = np.empty(6)
+    j0[:4] = j
+    j0[4], j0[5] = ax, ay
+    work = np.empty((4, 5))
+    buf = np.empty((4, 5))
+    y, y1, y2, base = buf[0], buf[1], buf[2], buf[3]
+    lu = np.empty((5, 5))
+    piv = np.empty(5, np.int64)
     jj = np.empty(4)
+    y[:] = ring
     eps_max = 0.0
     have_jac = False
     for s in range(n_sub):
         # stage 1 at t + γh: Y1 = y + γh f(Y1)
         ta = (s + g) * h
         _journal_on_path(j0, ta, jj)
-        y1 = y.copy()
-        ei, eo, fresh, ok, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj,
-                                                      omega_r + omega_r_dot * ta, y, y1, g * h, J, not have_jac,
-                                                      eps_cap, free_spin, rsr_fixed, max_iter)
-        if not ok:
-            return eps_max, math.nan, math.nan, ta, dpos, dspeed
+        y1[:] = y
+        ei, eo, fresh, st, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj,
+                                                      omega_r + omega_r_dot * ta, y, y1, g * h, lu, piv,
+                                                      not have_jac, eps_cap, free_spin, rsr_fixed, max_iter, work)
+        if st != RING_OK:
+            return eps_max, math.nan, math.nan, st, ta, dpos, dspeed
         have_jac = have_jac or fresh
         eps_max = max(eps_max, ei, eo)
         # stage 2 at t + h: Y2 = y + (1 − γ) h k1 + γh f(Y2), k1 = (Y1 − y) / (γh); y_new = Y2
-        base = y + (1.0 - g) / g * (y1 - y)
+        c = (1.0 - g) / g
+        for k in range(5):
+            base[k] = y[k] + c * (y1[k] - y[k])
         tb = (s + 1) * h
         _journal_on_path(j0, tb, jj)
-        y2 = y1.copy()
-        ei, eo, _, ok, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * tb,
-                                                  base, y2, g * h, J, False, eps_cap, free_spin, rsr_fixed, max_iter)
-        if not ok:
-            return eps_max, math.nan, math.nan, tb, dpos, dspeed
-        y = y2
+        y2[:] = y1
+        ei, eo, _, st, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * tb,
+                                                  base, y2, g * h, lu, piv, False, eps_cap, free_spin, rsr_fixed,
+                                                  max_iter, work)
+        if st != RING_OK:
+            return eps_max, math.nan, math.nan, st, tb, dpos, dspeed
+        y[:] = y2
         eps_max = max(eps_max, ei, eo)
-    ring[:] = y
+    ring_out[:] = y
     _journal_on_path(j0, H, jj)
-    f = np.empty(5)
     fx, fy, _, _ = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], y,
-                                   omega_r + omega_r_dot * H, eps_cap, f)
-    return eps_max, fx, fy, -1.0, 0.0, 0.0
+                                   omega_r + omega_r_dot * H, eps_cap, work[0])
+    return eps_max, fx, fy, RING_OK, -1.0, 0.0, 0.0
 
 
 class JournalHistory:
@@ -206,7 +299,12 @@ class JournalHistory:
     def __init__(self, max_gap=4.0):
         self.max_gap = float(max_gap)
         self.t = None
-        self.v = None
+        self._vx, self._vy = 0.0, 0.0
+
+    @property
+    def v(self):
+        """The remembered journal velocity (vx, vy) [m/s] (ndarray (2,)), or None for an empty history."""
+        return None if self.t is None else np.array([self._vx, self._vy])
 
     def acceleration(self, t, journal, H):
         """Journal acceleration [m/s²] (2,) at time ``t`` [s] for the input ``journal`` (x, y, vx, vy).
@@ -225,9 +323,29 @@ class JournalHistory:
         ndarray (2,)
             a_x, a_y [m/s²]; zero without a usable previous point.
         """
+        return np.array(self.acceleration_xy(t, float(journal[2]), float(journal[3]), H))
+
+    def acceleration_xy(self, t, vx, vy, H):
+        """:meth:`acceleration` from the journal velocity as plain floats (the per-step path of the bearing).
+
+        Parameters
+        ----------
+        t : float
+            Time of the communication point [s].
+        vx, vy : float
+            Journal velocity [m/s] at ``t``.
+        H : float
+            Macro step [s].
+
+        Returns
+        -------
+        tuple of float
+            a_x, a_y [m/s²]; zero without a usable previous point.
+        """
         if self.t is None or not (0.0 < t - self.t <= self.max_gap * H):
-            return np.zeros(2)
-        return (np.asarray(journal[2:4], dtype=float) - self.v) / (t - self.t)
+            return 0.0, 0.0
+        dt = t - self.t
+        return (vx - self._vx) / dt, (vy - self._vy) / dt
 
     def update(self, t, journal):
         """Remember the journal velocity at time ``t`` [s] for the next :meth:`acceleration`.
@@ -240,7 +358,7 @@ class JournalHistory:
             Journal x, y [m], vx, vy [m/s] at ``t``.
         """
         self.t = float(t)
-        self.v = np.array(journal[2:4], dtype=float)
+        self._vx, self._vy = float(journal[2]), float(journal[3])
 
     def state(self):
         """The history as plain data (for FMU get/set state).
@@ -250,7 +368,7 @@ class JournalHistory:
         list of float or None
             ``[t [s], vx [m/s], vy [m/s]]``, or None for an empty history.
         """
-        return None if self.t is None else [self.t, float(self.v[0]), float(self.v[1])]
+        return None if self.t is None else [self.t, self._vx, self._vy]
 
     def set_state(self, st):
         """Restore a state from :meth:`state`.
@@ -261,9 +379,9 @@ class JournalHistory:
             ``[t [s], vx [m/s], vy [m/s]]``, or None for an empty history.
         """
         if st is None:
-            self.t, self.v = None, None
+            self.t, self._vx, self._vy = None, 0.0, 0.0
         else:
-            self.t, self.v = st[0], np.array(st[1:3], dtype=float)
+            self.t, self._vx, self._vy = float(st[0]), float(st[1]), float(st[2])
 
 
 class BearingComponent:
@@ -354,14 +472,64 @@ class BearingComponent:
         return j
 
     def _ring_for_force(self, omega_rotor):
+        """The ring state the film forces are evaluated with: the state itself for a free ring (not a copy: the
+        kernels do not write it), else a copy with the ring speed of the ring speed model."""
+        if self.ring_speed_model == "free":
+            return self.ring
         ring = self.ring.copy()
-        if self.ring_speed_model == "rsr_eq6":
-            ring[4] = self.rsr6 * omega_rotor
-        elif self.ring_speed_model == "rsr_eq7":
-            from .bearing import ring_speed_ratio
-
-            ring[4] = ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99)) * omega_rotor
+        ring[4] = self._speed_ratio() * omega_rotor
         return ring
+
+    def _speed_ratio(self):
+        """ω_FR / ω_R of the "rsr_eq6" / "rsr_eq7" ring speed models (eq. (7) at the last ε's)."""
+        if self.ring_speed_model == "rsr_eq6":
+            return self.rsr6
+        from .bearing import ring_speed_ratio
+
+        return ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99))
+
+    def ring_speed(self, omega_rotor):
+        """The ring speed ω_FR [rad/s] the forces are evaluated with: the state's for a free ring, else the ring
+        speed model's at the rotor speed ``omega_rotor`` [rad/s]."""
+        return float(self.ring[4] if self.ring_speed_model == "free" else self._speed_ratio() * omega_rotor)
+
+    def exchange(self, journal, omega_rotor, out=None):
+        """Everything the bearing outputs at a communication point, at the current inputs and ring state, in one
+        compiled call: force, interface Jacobian, eccentricities and losses (layout :data:`EXCHANGE_OUTPUTS`).
+
+        The same kernels as :meth:`outputs` and :meth:`losses` (bit for bit); sets :attr:`eps`.
+
+        Parameters
+        ----------
+        journal : array_like (4,)
+            Journal x, y [m], vx, vy [m/s].
+        omega_rotor : float
+            Rotor speed [rad/s].
+        out : ndarray (14,), optional
+            Written and returned (default: a new array).
+
+        Returns
+        -------
+        ndarray (14,)
+            force x, y [N]; K = −∂F/∂(x, y) [N/m] and C = −∂F/∂(vx, vy) [N s/m] row-major (ring held); ε inner,
+            outer [-]; inner-film torque on the journal about +z [N m]; friction power of both films [W].
+
+        Raises
+        ------
+        ParameterError
+            Non-finite inputs.
+        FilmContactError
+            When an ε reaches 1 (or an output is not finite).
+        """
+        j = self._check(journal, omega_rotor)
+        out = np.empty(len(EXCHANGE_OUTPUTS)) if out is None else out
+        _bearing_exchange(*self._args(), j, self._ring_for_force(omega_rotor), float(omega_rotor), out)
+        ei, eo = float(out[10]), float(out[11])
+        if not (ei < 1.0 and eo < 1.0) or not math.isfinite(out.sum()):
+            raise FilmContactError(f"{self.bearing.name} bearing, {'inner' if not ei < 1 else 'outer'} film: "
+                                   f"eccentricity ratio {max(ei, eo):.4g} >= 1 (the member touches its wall)")
+        self.eps = (ei, eo)
+        return out
 
     def outputs(self, journal, omega_rotor):
         """Force on the journal and interface Jacobians at the current inputs and ring state.
@@ -391,16 +559,8 @@ class BearingComponent:
         FilmContactError
             When an ε reaches 1.
         """
-        j = self._check(journal, omega_rotor)
-        ring = self._ring_for_force(omega_rotor)
-        fx, fy, ei, eo = _bearing_force(*self._args(), j, ring, float(omega_rotor), math.inf)
-        if not (ei < 1.0 and eo < 1.0) or not (math.isfinite(fx) and math.isfinite(fy)):
-            raise FilmContactError(f"{self.bearing.name} bearing, {'inner' if not ei < 1 else 'outer'} film: "
-                                   f"eccentricity ratio {max(ei, eo):.4g} >= 1 (the member touches its wall)")
-        K, C = np.zeros((2, 2)), np.zeros((2, 2))
-        _interface_jacobian(*self._args(), j, ring, float(omega_rotor), 0.999, K, C)
-        self.eps = (ei, eo)
-        return np.array([fx, fy]), K, C, (ei, eo)
+        out = self.exchange(journal, omega_rotor)
+        return out[0:2].copy(), out[2:6].reshape(2, 2).copy(), out[6:10].reshape(2, 2).copy(), self.eps
 
     def losses(self, journal, omega_rotor):
         """Film torque on the journal and friction power of both films at the current inputs and ring state.
@@ -438,7 +598,8 @@ class BearingComponent:
 
         By default the journal acceleration is the :class:`JournalHistory` estimate at time ``t`` (zero, i.e. a
         linear path, when ``t`` is None). Afterwards ``force_end`` [N] is the force on the journal at the end of
-        the step on that path and ``path_accel`` [m/s²] the acceleration used.
+        the step on that path and ``path_accel`` [m/s²] the acceleration used. The ring integration is one
+        compiled call (:func:`_ring_step`); on any error the component's state is left at the start of the step.
 
         Parameters
         ----------
@@ -472,48 +633,49 @@ class BearingComponent:
         FilmContactError
             A film's ε exceeded ``contact_eps``."""
         j = self._check(journal, omega_rotor)
-        if accel is None:
-            accel = self.history.acceleration(t, j, H) if t is not None else (0.0, 0.0)
-        ax, ay = float(accel[0]), float(accel[1])
+        if accel is not None:
+            ax, ay = float(accel[0]), float(accel[1])
+        else:
+            ax, ay = self.history.acceleration_xy(t, float(j[2]), float(j[3]), H) if t is not None else (0.0, 0.0)
         if not (math.isfinite(ax) and math.isfinite(ay)):
             raise ParameterError(f"{self.bearing.name} bearing: journal acceleration must be finite, got {accel!r} "
                                  "m/s2")
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
         free = self.ring_speed_model == "free"
-        rsr = self.rsr6
-        if self.ring_speed_model == "rsr_eq7":
-            from .bearing import ring_speed_ratio
-
-            rsr = ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99))
-        path = np.array([j[0], j[1], j[2], j[3], ax, ay])
-        ring0 = self.ring.copy()
-        try:
-            eps_max, fx, fy, failed_at, dpos, dspeed = _ring_step(
-                *self._args(), path, self.ring, float(omega_rotor), float(omega_rotor_dot), float(H), n_sub, 0.999,
-                free, rsr, int(self.newton_max_iter))
-        except np.linalg.LinAlgError:  # a non-finite Newton iterate: a numerical blow-up of the ring
-            self.ring[:] = ring0
-            raise IntegrationError(f"{self.bearing.name} bearing: the ring state became non-finite in the step at "
-                                   f"{rad_s_to_rpm(float(omega_rotor)):.0f} rpm (macro step {H:.3g} s); the ring "
-                                   "state is left at the start of the step") from None
-        if failed_at >= 0.0:
-            when = f"t = {t + failed_at:.9g} s" if t is not None else f"{failed_at:.3g} s into the step"
-            raise ConvergenceError(
-                f"{self.bearing.name} bearing: the ring integrator's Newton iteration did not converge in "
-                f"{self.newton_max_iter} iterations at {when}, rotor speed {rad_s_to_rpm(float(omega_rotor)):.0f} rpm "
-                f"(macro step {H:.3g} s, substep {H / n_sub:.3g} s): last correction {dpos:.3g} m in position "
-                f"(tolerance {1e-10 * self.bearing.outer.clearance:.3g} m), {dspeed:.3g} rad/s in ring speed; the "
-                "ring state is left at the start of the step")
-        if not (math.isfinite(fx) and math.isfinite(fy) and np.isfinite(self.ring).all()):
+        rsr = self.rsr6 if self.ring_speed_model != "rsr_eq7" else self._speed_ratio()
+        ring = np.empty(5)
+        eps_max, fx, fy, status, at, dpos, dspeed = _ring_step(
+            *self._args(), j, ax, ay, self.ring, float(omega_rotor), float(omega_rotor_dot), float(H), n_sub, 0.999,
+            free, rsr, int(self.newton_max_iter), ring)
+        if status != RING_OK:
+            self._ring_failure(status, at, t, omega_rotor, H, n_sub, dpos, dspeed)
+        if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(ring.sum())):
             raise FilmContactError(f"{self.bearing.name} bearing: ring state became non-finite")
         if eps_max > self.contact_eps:
             raise FilmContactError(f"{self.bearing.name} bearing: eccentricity ratio {eps_max:.4f} exceeds "
                                    f"contact_eps = {self.contact_eps} (a member reaches its wall)")
+        self.ring[:] = ring
         self.force_end = np.array([fx, fy])  # at the end of the extrapolated path (staggered coupling)
         self.path_accel = np.array([ax, ay])
         if t is not None:
             self.history.update(t, j)
         return eps_max
+
+    def _ring_failure(self, status, at, t, omega_rotor, H, n_sub, dpos, dspeed):
+        """Raise the error of a failed ring integration (``status`` of :func:`_ring_step` at ``at`` [s] into the
+        step)."""
+        rpm = rad_s_to_rpm(float(omega_rotor))
+        if status == RING_NOT_FINITE:
+            raise IntegrationError(f"{self.bearing.name} bearing: the ring state became non-finite in the step at "
+                                   f"{rpm:.0f} rpm (macro step {H:.3g} s); the ring state is left at the start of "
+                                   "the step")
+        when = f"t = {t + at:.9g} s" if t is not None else f"{at:.3g} s into the step"
+        raise ConvergenceError(
+            f"{self.bearing.name} bearing: the ring integrator's Newton iteration did not converge in "
+            f"{self.newton_max_iter} iterations at {when}, rotor speed {rpm:.0f} rpm "
+            f"(macro step {H:.3g} s, substep {H / n_sub:.3g} s): last correction {dpos:.3g} m in position "
+            f"(tolerance {1e-10 * self.bearing.outer.clearance:.3g} m), {dspeed:.3g} rad/s in ring speed; the "
+            "ring state is left at the start of the step")
 
     def linearization(self, journal, omega_rotor):
         """Local state space of the bearing at the current state (ring speed held, as the linear methods do).
@@ -613,23 +775,60 @@ def _with_supports(minv, minv_k, jdofs, kb, cb):
     return mk, mc
 
 
-@njit(cache=True)
-def _rotor_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, kb, cb, f0, refs, f1, acc, use_path, w0, wd,
-                unb_node, unb_me, unb_phase):
-    """Trapezoidal rule for M q̈ + (ΩG + C_b) q̇ + (K + Ω̇G + K_b) q = f_g + f_unb + f_b over one macro step H.
+#: the columns of the per-bearing coupling array of :meth:`RotorComponent.step_coupled` (named as the rotor FMU's
+#: inputs after ``<bearing>_bearing.``): F0 [N], K [N/m] and C [N s/m] row-major, the journal state they belong to
+#: [m, m/s], and the staggered coupling's end-of-path force F1 [N] and path acceleration a [m/s²]
+COUPLING_COLUMNS = ("force.x", "force.y", "stiffness[1,1]", "stiffness[1,2]", "stiffness[2,1]", "stiffness[2,2]",
+                    "damping[1,1]", "damping[1,2]", "damping[2,1]", "damping[2,2]", "journal_ref.x", "journal_ref.y",
+                    "journal_ref.vx", "journal_ref.vy", "force_end.x", "force_end.y", "journal_accel.x",
+                    "journal_accel.y")
 
-    ``jdofs`` (nb, 2) journal DoFs; ``kb``, ``cb`` (nb, 2, 2) interface Jacobians; ``f0`` (nb, 2) bearing forces
-    [N] at the journal states ``refs`` (nb, 4). With ``use_path``, ``f1`` (nb, 2) are the forces at the end of the
-    bearings' journal paths x_p = x_ref + v_ref τ + acc τ²/2 (see :meth:`RotorComponent.step`). ``minv``,
-    ``minv_k``, ``minv_g``: :attr:`Rotor.acceleration_matrices`; the accelerations are those of
-    :func:`frbmodel.dynamics.rotor_acceleration` with the bearing terms added to its matrices.
-    Ω(τ) = w0 + wd τ. Returns (y, rotation angle).
+
+@njit(cache=True)
+def _unpack_coupling(coupling):
+    """``(kb, cb, f0, refs, f1, acc)`` of :func:`_rotor_macro_step` from the (nb, 18) array laid out as
+    :data:`COUPLING_COLUMNS`."""
+    nb = coupling.shape[0]
+    kb = np.empty((nb, 2, 2))
+    cb = np.empty((nb, 2, 2))
+    f0 = np.empty((nb, 2))
+    refs = np.empty((nb, 4))
+    f1 = np.empty((nb, 2))
+    acc = np.empty((nb, 2))
+    for b in range(nb):
+        for i in range(2):
+            f0[b, i] = coupling[b, i]
+            f1[b, i] = coupling[b, 14 + i]
+            acc[b, i] = coupling[b, 16 + i]
+            for k in range(2):
+                kb[b, i, k] = coupling[b, 2 + 2 * i + k]
+                cb[b, i, k] = coupling[b, 6 + 2 * i + k]
+        for k in range(4):
+            refs[b, k] = coupling[b, 10 + k]
+    return kb, cb, f0, refs, f1, acc
+
+
+@njit(cache=True)
+def _rotor_macro_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, coupling, use_path, w0, wd, unb_node,
+                      unb_me, unb_phase, y_out):
+    """Trapezoidal rule for M q̈ + (ΩG + C_b) q̇ + (K + Ω̇G + K_b) q = f_g + f_unb + f_b over one macro step H, in one
+    compiled call.
+
+    ``jdofs`` (nb, 2) journal DoFs; ``coupling`` (nb, 18) per bearing (:data:`COUPLING_COLUMNS`): the force F0 [N] at
+    the journal state ``ref`` at which the interface Jacobians K, C were evaluated; with ``use_path``, F1 is the
+    force at the end of the bearing's journal path x_p = x_ref + v_ref τ + a τ²/2 (see
+    :meth:`RotorComponent.step`). ``minv``, ``minv_k``, ``minv_g``: :attr:`Rotor.acceleration_matrices`; the
+    accelerations are those of :func:`frbmodel.dynamics.rotor_acceleration` with the bearing terms added to its
+    matrices. Ω(τ) = w0 + wd τ. Writes the new state into ``y_out``; returns ``(rotation angle, finite)`` (False
+    when a state or the step's matrix became non-finite or singular).
     """
     n = minv_k.shape[0]
+    kb, cb, f0, refs, f1, acc = _unpack_coupling(coupling)
     fb, fbr = _bearing_force_model(kb, cb, f0, refs, f1, acc, use_path, H)
     mk, mc = _with_supports(minv, minv_k, jdofs, kb, cb)
     h = H / n_sub
     eye = np.eye(n)
+    piv = np.empty(n, np.int64)
     q = y[:n].copy()
     v = y[n:].copy()
     ph = phi
@@ -643,15 +842,17 @@ def _rotor_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, kb, cb, f
         fbv = minv @ _rotor_forcing(f_grav, jdofs, fb, fbr, (s + 1) * h, unb_node, unb_me, unb_phase, phb, wb, wd)
         a0 = rotor_acceleration(minv, mk, minv_g, fa, q, v, wa, wd, mc)
         stiff, damp = rotor_operators(mk, minv_g, wb, wd, mc)
-        rhs = v + 0.5 * h * a0 + 0.5 * h * (fbv - stiff @ (q + 0.5 * h * v))
-        v1 = np.linalg.solve(eye + 0.5 * h * damp + 0.25 * h * h * stiff, rhs)
+        v1 = v + 0.5 * h * a0 + 0.5 * h * (fbv - stiff @ (q + 0.5 * h * v))
+        lhs = eye + 0.5 * h * damp + 0.25 * h * h * stiff
+        if not (math.isfinite(v1.sum()) and _lu_factor(lhs, piv)):
+            return math.nan, False
+        _lu_solve(lhs, piv, v1)
         q = q + 0.5 * h * (v + v1)
         v = v1
         ph = phb
-    y = np.empty(2 * n)
-    y[:n] = q
-    y[n:] = v
-    return y, ph
+    y_out[:n] = q
+    y_out[n:] = v
+    return ph, math.isfinite(y_out.sum()) and math.isfinite(ph)
 
 
 #: rotor speed sources of :class:`RotorComponent` (and the rotor FMU's ``speed_source``)
@@ -847,25 +1048,51 @@ class RotorComponent:
         IntegrationError
             The rotor state became non-finite (a numerical blow-up: the macro step is too large for the coupling).
         """
-        w0, wd = self._spin(H, speed_in, drive_torque, journal_torques)
         nb = self.jdofs.shape[0]
-        f0 = np.asarray(forces, dtype=float).reshape(nb, 2)
-        kb = np.asarray(Ks, dtype=float).reshape(nb, 2, 2)
-        cb = np.asarray(Cs, dtype=float).reshape(nb, 2, 2)
-        refs = (np.array([self.journal(b) for b in range(nb)]) if refs is None else
-                np.asarray(refs, dtype=float).reshape(nb, 4))
+        coupling = np.empty((nb, len(COUPLING_COLUMNS)))
+        coupling[:, 0:2] = np.asarray(forces, dtype=float).reshape(nb, 2)
+        coupling[:, 2:6] = np.asarray(Ks, dtype=float).reshape(nb, 4)
+        coupling[:, 6:10] = np.asarray(Cs, dtype=float).reshape(nb, 4)
+        coupling[:, 10:14] = (self.y[np.array(self._jidx)] if refs is None else
+                              np.asarray(refs, dtype=float).reshape(nb, 4))
         if path is None:
-            f1, acc = f0, np.zeros((nb, 2))
+            coupling[:, 14:16] = coupling[:, 0:2]
+            coupling[:, 16:18] = 0.0
         else:
-            f1 = np.asarray(path[0], dtype=float).reshape(nb, 2)
-            acc = np.asarray(path[1], dtype=float).reshape(nb, 2)
+            coupling[:, 14:16] = np.asarray(path[0], dtype=float).reshape(nb, 2)
+            coupling[:, 16:18] = np.asarray(path[1], dtype=float).reshape(nb, 2)
+        self.step_coupled(H, coupling, path is not None, speed_in, drive_torque, journal_torques)
+
+    def step_coupled(self, H, coupling, use_path=True, speed_in=None, drive_torque=0.0, journal_torques=None):
+        """:meth:`step` with the bearing inputs packed in one array: one compiled call per macro step
+        (:func:`_rotor_macro_step`; the rotor FMU's path).
+
+        Parameters
+        ----------
+        H : float
+            Macro step [s].
+        coupling : ndarray (nb, 18)
+            Per bearing (order of ``system.bearings``) the columns :data:`COUPLING_COLUMNS`: F0 [N], K [N/m] and
+            C [N s/m] row-major, the journal state (x, y [m], vx, vy [m/s]) they belong to, F1 [N] and a [m/s²] of
+            the staggered coupling (used only with ``use_path``).
+        use_path : bool
+            Interpolate the force along the bearings' journal paths (``path`` of :meth:`step`).
+        speed_in, drive_torque, journal_torques
+            Speed inputs, as for :meth:`step`.
+
+        Raises
+        ------
+        ParameterError
+            Missing or non-finite speed inputs.
+        IntegrationError
+            The rotor state became non-finite (the state is left at the start of the step).
+        """
+        w0, wd = self._spin(H, speed_in, drive_torque, journal_torques)
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
-        try:
-            y, phi = _rotor_step(self.y, self.phi, H, n_sub, *self.eom, self.f_grav, self.jdofs, kb, cb, f0, refs, f1,
-                                 acc, path is not None, w0, wd, self.unb_node, self.unb_me, self.unb_phase)
-        except np.linalg.LinAlgError:  # the compiled solve refuses a non-finite intermediate state
-            y, phi = np.full_like(self.y, np.nan), math.nan
-        if not (np.all(np.isfinite(y)) and math.isfinite(phi)):
+        y = np.empty_like(self.y)
+        phi, finite = _rotor_macro_step(self.y, self.phi, H, n_sub, *self.eom, self.f_grav, self.jdofs, coupling,
+                                        bool(use_path), w0, wd, self.unb_node, self.unb_me, self.unb_phase, y)
+        if not finite:
             raise IntegrationError(f"rotor state became non-finite in the step t = {self.t:.6g} s + {H:.3g} s at "
                                    f"{rad_s_to_rpm(w0):.0f} rpm: the macro step is too large for the coupling (the "
                                    "state is left at the start of the step)")
@@ -884,7 +1111,7 @@ class RotorComponent:
             ``y`` (q [m, rad], q̇ [m/s, rad/s]), ``phi`` [rad], ``t`` [s], ``omega`` [rad/s], ``omega_dot``
             [rad/s²] and ``last_input`` (time [s], speed [rad/s] of the last "input" step, or None); JSON-safe.
         """
-        return {"y": [float(x) for x in self.y], "phi": float(self.phi), "t": float(self.t),
+        return {"y": self.y.tolist(), "phi": float(self.phi), "t": float(self.t),
                 "omega": float(self.omega), "omega_dot": float(self.omega_dot),
                 "last_input": None if self._last_input is None else list(self._last_input)}
 

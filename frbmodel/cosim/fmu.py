@@ -5,9 +5,15 @@ Discard, Error and Fatal) and, with a ``trace`` callable, logs each call with it
 ``--trace-fmi`` option of ``frb cosim`` costs nothing when it is off. It also counts the calls and the wall time
 spent in them per FMI function (:attr:`FmuInstance.calls`; two clock reads per call, ~0.1 µs against the ~10 µs
 of an FMI call through fmpy and pythonfmu), from which ``benchmarks/cosim.py`` splits a macro step's time.
+
+getReal and setReal, the per-step traffic, call the FMU's fmi2GetReal / fmi2SetReal directly with C arrays of the
+value references (and a value buffer) made once per list of value references: fmpy's ``getReal`` / ``setReal``
+build both arrays at every call (measured in the main job's exchange: 7.3 -> 3.1 us for 15 values read, 11.8 ->
+5.0 us for 30 values set).
 """
 from __future__ import annotations
 
+import ctypes
 import time
 from pathlib import Path
 
@@ -85,6 +91,11 @@ class FmuInstance:
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir, modelIdentifier=self.model_identifier,
                                instanceName=name)
         self.can_state = bool(self.md.coSimulation.canGetAndSetFMUstate)
+        # the C functions as fmpy configured them (argument and return types), and the prepared arrays per list of
+        # value references: {tuple of value references: (C array of them, count, C value buffer)}
+        self._c_get, self._c_set = self.slave.dll.fmi2GetReal, self.slave.dll.fmi2SetReal
+        self._get_plans, self._set_plans = {}, {}
+        self._fast = {"getReal": self._get_real, "setReal": self._set_real}
         self.call("instantiate", True)
 
     def call(self, function, *args):
@@ -109,7 +120,8 @@ class FmuInstance:
         """
         t0 = time.perf_counter()
         try:
-            out = getattr(self.slave, function)(*args)
+            fast = self._fast.get(function)
+            out = fast(*args) if fast is not None else getattr(self.slave, function)(*args)
         except _fmi_call_exception() as exc:
             self._count(function, t0)
             if self.trace is not None:
@@ -123,6 +135,29 @@ class FmuInstance:
         if self.trace is not None:
             self.trace(f"{self.name}.{function}{_brief(args)} -> OK" + ("" if out is None else f" {_brief(out)}"))
         return out
+
+    def _get_real(self, vr):
+        """fmpy's ``getReal(vr)`` (a list of floats; raises its FMICallException above Warning) without making
+        the C arrays again for a list of value references seen before."""
+        plan = self._get_plans.get(tuple(vr))
+        if plan is None:
+            plan = self._get_plans[tuple(vr)] = _plan(vr)
+        refs, n, buf = plan
+        status = self._c_get(self.slave.component, refs, n, buf)
+        if status > 1:
+            raise _fmi_call_exception()(function="fmi2GetReal", status=status)
+        return buf[:]
+
+    def _set_real(self, vr, values):
+        """fmpy's ``setReal(vr, values)`` without making the array of value references again."""
+        plan = self._set_plans.get(tuple(vr))
+        if plan is None:
+            plan = self._set_plans[tuple(vr)] = _plan(vr)
+        refs, n, buf = plan
+        buf[:] = values
+        status = self._c_set(self.slave.component, refs, n, buf)
+        if status > 1:
+            raise _fmi_call_exception()(function="fmi2SetReal", status=status)
 
     def _count(self, function, t0):
         stat = self.calls.get(function)
@@ -197,6 +232,12 @@ class FmuInstance:
                 self.call(function)
             except Exception:  # noqa: BLE001  (a failed FMU may refuse terminate; freeInstance must still run)
                 pass
+
+
+def _plan(vr):
+    """(C array of the value references ``vr``, their count, a C buffer of as many fmi2Real)."""
+    n = len(vr)
+    return (ctypes.c_uint * n)(*vr), n, (ctypes.c_double * n)()
 
 
 def _fmi_call_exception():
