@@ -526,6 +526,9 @@ def _diagram(system, model, branches, hopfs, lo, hi):
             bifs.append({"speed_rpm": hp.speed_rpm, "type": "Hopf", "frequency_hz": hp.frequency_hz,
                          "turbine_radius_um": 0.0, "between": []})
         bifs += _branch_events(b, len(points))
+        for end in ((b[0], b[-1]) if hp is None and len(b) > 1 else ()):
+            if end.turbine_radius_m < COLLAPSE * max(p.turbine_radius_m for p in b):  # the branch ends at a Hopf point
+                bifs.append(_event("Hopf", end, end, 0.0, [len(points) + b.index(end)]))
         points.extend(b)
     meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
             "branches": [len(b) for b in branches]}
@@ -569,10 +572,21 @@ def _follow_loop(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_point
             p = points[-1]
             sys.stderr.write(f"continuation: {p.speed_rpm:9.0f} rpm, {1 / p.period:8.2f} Hz, radius "
                              f"{p.turbine_radius_m * 1e6:6.2f} um, {'stable' if p.stable else 'unstable'}\n")
-        if not lo <= points[-1].speed_rpm <= hi:
+        if not lo <= points[-1].speed_rpm <= hi or _collapsed(points):
             break
         ds = min(ds_max, ds * (1.5 if iters <= GOOD_ITERATIONS else 0.6))
     return points
+
+
+#: a branch has reached the equilibrium (a Hopf point) when its orbit shrinks below this share of its largest orbit
+COLLAPSE = 0.02
+
+
+def _collapsed(points):
+    """True if the branch came back down onto the equilibrium: its last orbit is below COLLAPSE of the largest one
+    and shrinking (continuing would pass through the Hopf point and retrace the branch half a period shifted)."""
+    r = [p.turbine_radius_m for p in points]
+    return len(r) >= 2 and r[-1] < COLLAPSE * max(r) and r[-1] < r[-2]
 
 
 def _start_tangent(br, x0, n, t_ref, w_ref, direction):

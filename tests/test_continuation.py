@@ -73,6 +73,17 @@ def test_fold_where_the_branch_turns_back_in_speed():
     assert [e["type"] for e in events] == ["fold"] and events[0]["speed_rpm"] == 1.25e4
 
 
+def test_branch_stops_where_it_reaches_the_equilibrium():
+    """A branch whose orbit shrinks to the equilibrium has reached a Hopf point: it stops there (continuing would
+    pass through it and retrace the same orbits half a period shifted) and the end is marked as a Hopf point."""
+    from frbmodel.continuation import _collapsed
+
+    radii = [15e-6, 8e-6, 2e-6, 0.5e-6, 0.2e-6, 0.4e-6]
+    stops = [k for k in range(1, len(radii) + 1) if _collapsed(
+        [BranchPoint(1e4, 1e-3, np.ones(2), True, r, np.zeros(4)) for r in radii[:k]])]
+    assert stops[0] == 5  # 0.2 um < 2 % of 15 um and shrinking
+
+
 def test_diagram_writes_readable_files(tc, tmp_path):
     import xarray as xr
 
