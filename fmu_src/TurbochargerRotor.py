@@ -121,6 +121,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         # positions in self._input_values of the rotor component's packed coupling array (bearings x COUPLING_COLUMNS)
         self._coupling_idx = np.array([[pos[f"{b}.{c}"] for c in COUPLING_COLUMNS] for b in self._bearings])
         self._torque_idx = np.array([pos[f"{b}.torque"] for b in self._bearings])
+        self._speed_in, self._drive = pos["speed_in"], pos["drive_torque"]
 
     def _outputs(self):
         """Speed, journal states per bearing, disc centres per disc, linearization sized by the node count. All but
@@ -205,23 +206,13 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._changed()
 
     def _advance(self, current_time, step_size):
+        """One step of the component with the bearing inputs gathered into its packed coupling array (it refuses
+        non-finite ones, naming them: F0, K, C, journal_ref always, force_end and journal_accel with
+        ``force_interpolation``)."""
         x = self._input_values
-        coupling = x[self._coupling_idx]  # (bearings, COUPLING_COLUMNS): F0, K, C, journal_ref, F1, a
-        interpolate = bool(self._values["force_interpolation"])
-        if not math.isfinite(coupling[:, :14].sum()):
-            raise ValueError(f"bearing inputs are not finite: {self._named(coupling, 0, 14)}")
-        if interpolate and not math.isfinite(coupling[:, 14:].sum()):
-            raise ValueError("bearing force_end / journal_accel inputs are not finite: "
-                             f"{self._named(coupling, 14, 18)}")
-        self._comp.step_coupled(step_size, coupling, interpolate, speed_in=self._in("speed_in"),
-                                drive_torque=self._in("drive_torque"), journal_torques=x[self._torque_idx])
-
-    def _named(self, coupling, lo, hi):
-        """The bearing inputs in columns lo:hi of ``coupling`` by name (for a message)."""
-        from frbmodel.components import COUPLING_COLUMNS
-
-        return ", ".join(f"{b}.{c} = {coupling[i, k]!r}" for i, b in enumerate(self._bearings)
-                         for k, c in enumerate(COUPLING_COLUMNS[lo:hi], lo))
+        self._comp.step_coupled(step_size, x[self._coupling_idx], self._values["force_interpolation"],
+                                speed_in=float(x[self._speed_in]), drive_torque=float(x[self._drive]),
+                                journal_torques=x[self._torque_idx])
 
     def _step_context(self):
         from frbmodel.units import rad_s_to_rpm

@@ -22,7 +22,7 @@ from numba import njit
 from .bearing import ring_rhs_kernel
 from .dynamics import add_unbalance_forces, rotor_acceleration, rotor_operators, rotor_polar_inertia, spin_acceleration
 from .errors import ConvergenceError, FilmContactError, IntegrationError, ParameterError, check_finite, check_positive
-from .film import check_model
+from .film import check_model, film_force_kernel
 from .losses import bearing_loss_kernel, film_arrays
 from .rotor import GRAVITY
 from .units import rad_s_to_rpm, rpm_to_rad_s
@@ -47,15 +47,26 @@ def _bearing_force(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, eps_cap)
 
 
 @njit(cache=True)
+def _inner_film_force(geom, polys, j, ring, omega_r, eps_cap):
+    """The film force on the journal [N]: the inner film's force of :func:`frbmodel.bearing.ring_rhs_kernel` (the
+    same call of :func:`frbmodel.film.film_force_kernel` with the same relative state), without the outer film and
+    the ring's equations, which do not act on the journal."""
+    g = geom[0]
+    fx, fy, _ = film_force_kernel(g[0], g[1], g[2], g[3], polys[0, 0], polys[0, 1], j[0] - ring[0], j[1] - ring[1],
+                                  j[2] - ring[2], j[3] - ring[3], omega_r + ring[4], eps_cap)
+    return fx, fy
+
+
+@njit(cache=True)
 def _interface_jacobian(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, eps_cap, K, C):
     """K = −∂F/∂(jx, jy), C = −∂F/∂(jvx, jvy) by central differences of the film force (ring held)."""
     jp = j.copy()
     for k in range(4):
         h = 1e-7 * geom[0, 2] if k < 2 else 1e-7 * geom[0, 2] * max(abs(omega_r), 1.0)
         jp[k] = j[k] + h
-        fxp, fyp, _, _ = _bearing_force(geom, polys, ring_m, ring_i, grav, jp, ring, omega_r, eps_cap)
+        fxp, fyp = _inner_film_force(geom, polys, jp, ring, omega_r, eps_cap)
         jp[k] = j[k] - h
-        fxm, fym, _, _ = _bearing_force(geom, polys, ring_m, ring_i, grav, jp, ring, omega_r, eps_cap)
+        fxm, fym = _inner_film_force(geom, polys, jp, ring, omega_r, eps_cap)
         jp[k] = j[k]
         if k < 2:
             K[0, k] = -(fxp - fxm) / (2 * h)
@@ -71,13 +82,20 @@ EXCHANGE_OUTPUTS = ("force.x", "force.y", "stiffness[1,1]", "stiffness[1,2]", "s
                     "journal_torque", "power_loss")
 
 
+#: statuses of :func:`_bearing_exchange`: done, non-finite inputs, a film at its wall (or a non-finite output)
+EXCHANGE_OK, EXCHANGE_BAD_INPUT, EXCHANGE_CONTACT = 0, 1, 2
+
+
 @njit(cache=True)
 def _bearing_exchange(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, out):
     """Everything a bearing outputs at a communication point, in one compiled call (layout
     :data:`EXCHANGE_OUTPUTS`): the film force on the journal [N] and the eccentricity ratios (uncapped, as
     :func:`_bearing_force` with ``eps_cap = inf``), K and C (:func:`_interface_jacobian`, ε capped at 0.999, row-major)
     and the journal torque [N m] and friction power of both films [W] (:func:`frbmodel.losses.bearing_loss_kernel`,
-    uncapped)."""
+    uncapped). Returns ``(status, eps_inner, eps_outer)``, status :data:`EXCHANGE_OK`, :data:`EXCHANGE_BAD_INPUT`
+    (then ``out`` is not written) or :data:`EXCHANGE_CONTACT`."""
+    if not math.isfinite(j[0] + j[1] + j[2] + j[3] + omega_r):
+        return EXCHANGE_BAD_INPUT, math.nan, math.nan
     fx, fy, ei, eo = _bearing_force(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, math.inf)
     K = np.empty((2, 2))
     C = np.empty((2, 2))
@@ -90,6 +108,10 @@ def _bearing_exchange(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, out):
             out[6 + 2 * i + k] = C[i, k]
     out[10], out[11] = ei, eo
     out[12], out[13] = t_j, p_i + p_o
+    total = 0.0
+    for k in range(out.size):
+        total += out[k]
+    return (EXCHANGE_OK if ei < 1.0 and eo < 1.0 and math.isfinite(total) else EXCHANGE_CONTACT), ei, eo
 
 
 @njit(cache=True)
@@ -151,8 +173,11 @@ def _journal_on_path(j0, t, jj):
 
 #: largest number of modified-Newton iterations of one SDIRK stage of the ring integrator
 NEWTON_MAX_ITER = 12
-#: status codes of the ring integrator (:func:`_ring_step`)
-RING_OK, RING_NOT_CONVERGED, RING_NOT_FINITE = 0, 1, 2
+#: status codes of the ring integrator (:func:`_ring_step`): done; Newton iteration not converged; a non-finite
+#: iterate or a singular Newton matrix; non-finite inputs; a non-finite path acceleration; a non-finite result; a
+#: film's ε above the contact limit
+RING_OK, RING_NOT_CONVERGED, RING_NOT_FINITE, RING_BAD_INPUT, RING_BAD_ACCEL, RING_NON_FINITE_RESULT, RING_CONTACT = \
+    0, 1, 2, 3, 4, 5, 6
 
 
 @njit(cache=True)
@@ -210,18 +235,23 @@ def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, lu, piv,
 
 @njit(cache=True)
 def _ring_step(geom, polys, ring_m, ring_i, grav, j, ax, ay, ring, omega_r, omega_r_dot, H, n_sub, eps_cap,
-               free_spin, rsr_fixed, max_iter, ring_out):
-    """Integrate the ring from ``ring`` over [0, H] with the journal on the path x(t) = j[:2] + j[2:4] t +
-    (ax, ay) t²/2 (velocity j[2:4] + (ax, ay) t), ``n_sub`` substeps of the 2-stage SDIRK method (L-stable, second
-    order: the ring-in-film modes reach ~20 kHz at high speed, where backward Euler's numerical damping shifts the
-    whirl limit cycles); modified Newton with one FD Jacobian (LU-factored once) per macro step, refreshed when
-    convergence stalls. ``free_spin``: ring speed is a state; else ω_FR = rsr_fixed·ω_R. One compiled call per
-    macro step: no allocation per Newton iteration.
+               free_spin, rsr_fixed, max_iter, contact_eps):
+    """Integrate the ring ``ring`` over [0, H] with the journal on the path x(t) = j[:2] + j[2:4] t + (ax, ay) t²/2
+    (velocity j[2:4] + (ax, ay) t), ``n_sub`` substeps of the 2-stage SDIRK method (L-stable, second order: the
+    ring-in-film modes reach ~20 kHz at high speed, where backward Euler's numerical damping shifts the whirl limit
+    cycles); modified Newton with one FD Jacobian (LU-factored once) per macro step, refreshed when convergence
+    stalls. ``free_spin``: ring speed is a state; else ω_FR = rsr_fixed·ω_R. One compiled call per macro step, with
+    the checks of the inputs and of the result: ``ring`` is overwritten with the new state only when the status is
+    :data:`RING_OK` (no ε above ``contact_eps``, everything finite).
 
-    Returns ``(eps_max, fx, fy, status, at, dpos, dspeed)``: the largest ε seen and the force on the journal [N] at
-    the end of the step (end of the path, new ring state, written into ``ring_out``; ``ring`` is not changed);
-    ``status`` :data:`RING_OK`, or :data:`RING_NOT_CONVERGED` / :data:`RING_NOT_FINITE` at the stage time ``at`` [s]
-    in the step (then ``ring_out`` is garbage and ``dpos`` [m], ``dspeed`` [rad/s] are the last corrections)."""
+    Returns ``(status, eps_max, fx, fy, at, dpos, dspeed)``: one of the ``RING_*`` statuses, the largest ε seen and
+    the force on the journal [N] at the end of the step (end of the path, new ring state); for
+    :data:`RING_NOT_CONVERGED` / :data:`RING_NOT_FINITE`, the stage time ``at`` [s] in the step and the last Newton
+    corrections ``dpos`` [m], ``dspeed`` [rad/s]."""
+    if not math.isfinite(j[0] + j[1] + j[2] + j[3] + omega_r + omega_r_dot):
+        return RING_BAD_INPUT, 0.0, math.nan, math.nan, 0.0, 0.0, 0.0
+    if not (math.isfinite(ax) and math.isfinite(ay)):
+        return RING_BAD_ACCEL, 0.0, math.nan, math.nan, 0.0, 0.0, 0.0
     g = SDIRK_GAMMA
     h = H / n_sub
     j0 = np.empty(6)
@@ -245,7 +275,7 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j, ax, ay, ring, omega_r, omeg
                                                       omega_r + omega_r_dot * ta, y, y1, g * h, lu, piv,
                                                       not have_jac, eps_cap, free_spin, rsr_fixed, max_iter, work)
         if st != RING_OK:
-            return eps_max, math.nan, math.nan, st, ta, dpos, dspeed
+            return st, eps_max, math.nan, math.nan, ta, dpos, dspeed
         have_jac = have_jac or fresh
         eps_max = max(eps_max, ei, eo)
         # stage 2 at t + h: Y2 = y + (1 − γ) h k1 + γh f(Y2), k1 = (Y1 − y) / (γh); y_new = Y2
@@ -259,14 +289,18 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j, ax, ay, ring, omega_r, omeg
                                                   base, y2, g * h, lu, piv, False, eps_cap, free_spin, rsr_fixed,
                                                   max_iter, work)
         if st != RING_OK:
-            return eps_max, math.nan, math.nan, st, tb, dpos, dspeed
+            return st, eps_max, math.nan, math.nan, tb, dpos, dspeed
         y[:] = y2
         eps_max = max(eps_max, ei, eo)
-    ring_out[:] = y
     _journal_on_path(j0, H, jj)
     fx, fy, _, _ = ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jj[0], jj[1], jj[2], jj[3], y,
                                    omega_r + omega_r_dot * H, eps_cap, work[0])
-    return eps_max, fx, fy, RING_OK, -1.0, 0.0, 0.0
+    if not math.isfinite(fx + fy + y[0] + y[1] + y[2] + y[3] + y[4]):
+        return RING_NON_FINITE_RESULT, eps_max, fx, fy, H, 0.0, 0.0
+    if eps_max > contact_eps:
+        return RING_CONTACT, eps_max, fx, fy, H, 0.0, 0.0
+    ring[:] = y
+    return RING_OK, eps_max, fx, fy, -1.0, 0.0, 0.0
 
 
 class JournalHistory:
@@ -465,11 +499,21 @@ class BearingComponent:
         return self.geom, self.polys, self.bearing.ring_mass, self.bearing.ring_inertia, self.gravity
 
     def _check(self, journal, omega_rotor):
-        j = np.asarray(journal, dtype=float)
-        if j.shape != (4,) or not math.isfinite(j.sum() + omega_rotor):
-            raise ParameterError(f"{self.bearing.name} bearing inputs must be finite: journal = {journal!r} "
-                                 f"[m, m, m/s, m/s], rotor speed = {omega_rotor!r} rad/s")
+        j = self._vector(journal, omega_rotor)
+        if not math.isfinite(j.sum() + omega_rotor):
+            raise self._bad_inputs(journal, omega_rotor)
         return j
+
+    def _vector(self, journal, omega_rotor):
+        """``journal`` as an ndarray (4,) of float (finiteness is checked by the caller or its kernel)."""
+        j = np.asarray(journal, dtype=float)
+        if j.shape != (4,):
+            raise self._bad_inputs(journal, omega_rotor)
+        return j
+
+    def _bad_inputs(self, journal, omega_rotor):
+        return ParameterError(f"{self.bearing.name} bearing inputs must be finite: journal = {journal!r} "
+                              f"[m, m, m/s, m/s], rotor speed = {omega_rotor!r} rad/s")
 
     def _ring_for_force(self, omega_rotor):
         """The ring state the film forces are evaluated with: the state itself for a free ring (not a copy: the
@@ -521,11 +565,13 @@ class BearingComponent:
         FilmContactError
             When an ε reaches 1 (or an output is not finite).
         """
-        j = self._check(journal, omega_rotor)
+        j = self._vector(journal, omega_rotor)
         out = np.empty(len(EXCHANGE_OUTPUTS)) if out is None else out
-        _bearing_exchange(*self._args(), j, self._ring_for_force(omega_rotor), float(omega_rotor), out)
-        ei, eo = float(out[10]), float(out[11])
-        if not (ei < 1.0 and eo < 1.0) or not math.isfinite(out.sum()):
+        w = float(omega_rotor)
+        status, ei, eo = _bearing_exchange(*self._args(), j, self._ring_for_force(w), w, out)
+        if status == EXCHANGE_BAD_INPUT:
+            raise self._bad_inputs(journal, omega_rotor)
+        if status != EXCHANGE_OK:
             raise FilmContactError(f"{self.bearing.name} bearing, {'inner' if not ei < 1 else 'outer'} film: "
                                    f"eccentricity ratio {max(ei, eo):.4g} >= 1 (the member touches its wall)")
         self.eps = (ei, eo)
@@ -632,38 +678,38 @@ class BearingComponent:
             reports Discard, so that a master can retry with a smaller step).
         FilmContactError
             A film's ε exceeded ``contact_eps``."""
-        j = self._check(journal, omega_rotor)
+        j = self._vector(journal, omega_rotor)
         if accel is not None:
             ax, ay = float(accel[0]), float(accel[1])
         else:
-            ax, ay = self.history.acceleration_xy(t, float(j[2]), float(j[3]), H) if t is not None else (0.0, 0.0)
-        if not (math.isfinite(ax) and math.isfinite(ay)):
-            raise ParameterError(f"{self.bearing.name} bearing: journal acceleration must be finite, got {accel!r} "
-                                 "m/s2")
+            ax, ay = self.history.acceleration_xy(t, j[2], j[3], H) if t is not None else (0.0, 0.0)
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
-        free = self.ring_speed_model == "free"
         rsr = self.rsr6 if self.ring_speed_model != "rsr_eq7" else self._speed_ratio()
-        ring = np.empty(5)
-        eps_max, fx, fy, status, at, dpos, dspeed = _ring_step(
+        status, eps_max, fx, fy, at, dpos, dspeed = _ring_step(
             *self._args(), j, ax, ay, self.ring, float(omega_rotor), float(omega_rotor_dot), float(H), n_sub, 0.999,
-            free, rsr, int(self.newton_max_iter), ring)
+            self.ring_speed_model == "free", rsr, int(self.newton_max_iter), self.contact_eps)
         if status != RING_OK:
-            self._ring_failure(status, at, t, omega_rotor, H, n_sub, dpos, dspeed)
-        if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(ring.sum())):
-            raise FilmContactError(f"{self.bearing.name} bearing: ring state became non-finite")
-        if eps_max > self.contact_eps:
-            raise FilmContactError(f"{self.bearing.name} bearing: eccentricity ratio {eps_max:.4f} exceeds "
-                                   f"contact_eps = {self.contact_eps} (a member reaches its wall)")
-        self.ring[:] = ring
+            self._ring_failure(status, (journal, omega_rotor, accel), eps_max, at, t, H, n_sub, dpos, dspeed)
         self.force_end = np.array([fx, fy])  # at the end of the extrapolated path (staggered coupling)
         self.path_accel = np.array([ax, ay])
         if t is not None:
             self.history.update(t, j)
         return eps_max
 
-    def _ring_failure(self, status, at, t, omega_rotor, H, n_sub, dpos, dspeed):
+    def _ring_failure(self, status, inputs, eps_max, at, t, H, n_sub, dpos, dspeed):
         """Raise the error of a failed ring integration (``status`` of :func:`_ring_step` at ``at`` [s] into the
-        step)."""
+        step; ``inputs`` = journal, rotor speed and acceleration argument of :meth:`step`)."""
+        journal, omega_rotor, accel = inputs
+        if status == RING_BAD_INPUT:
+            raise self._bad_inputs(journal, omega_rotor)
+        if status == RING_BAD_ACCEL:
+            raise ParameterError(f"{self.bearing.name} bearing: journal acceleration must be finite, got {accel!r} "
+                                 "m/s2")
+        if status == RING_NON_FINITE_RESULT:
+            raise FilmContactError(f"{self.bearing.name} bearing: ring state became non-finite")
+        if status == RING_CONTACT:
+            raise FilmContactError(f"{self.bearing.name} bearing: eccentricity ratio {eps_max:.4f} exceeds "
+                                   f"contact_eps = {self.contact_eps} (a member reaches its wall)")
         rpm = rad_s_to_rpm(float(omega_rotor))
         if status == RING_NOT_FINITE:
             raise IntegrationError(f"{self.bearing.name} bearing: the ring state became non-finite in the step at "
@@ -784,6 +830,10 @@ COUPLING_COLUMNS = ("force.x", "force.y", "stiffness[1,1]", "stiffness[1,2]", "s
                     "journal_accel.y")
 
 
+#: statuses of :func:`_rotor_macro_step`: done, non-finite bearing inputs, a non-finite state
+ROTOR_OK, ROTOR_BAD_INPUT, ROTOR_NOT_FINITE = 0, 1, 2
+
+
 @njit(cache=True)
 def _unpack_coupling(coupling):
     """``(kb, cb, f0, refs, f1, acc)`` of :func:`_rotor_macro_step` from the (nb, 18) array laid out as
@@ -819,10 +869,18 @@ def _rotor_macro_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, cou
     force at the end of the bearing's journal path x_p = x_ref + v_ref τ + a τ²/2 (see
     :meth:`RotorComponent.step`). ``minv``, ``minv_k``, ``minv_g``: :attr:`Rotor.acceleration_matrices`; the
     accelerations are those of :func:`frbmodel.dynamics.rotor_acceleration` with the bearing terms added to its
-    matrices. Ω(τ) = w0 + wd τ. Writes the new state into ``y_out``; returns ``(rotation angle, finite)`` (False
-    when a state or the step's matrix became non-finite or singular).
+    matrices. Ω(τ) = w0 + wd τ. Writes the new state into ``y_out``; returns ``(rotation angle, status)``:
+    :data:`ROTOR_OK`, :data:`ROTOR_BAD_INPUT` (a non-finite coupling value among those used: F1 and a only with
+    ``use_path``; nothing computed) or :data:`ROTOR_NOT_FINITE` (a state or the step's matrix became non-finite or
+    singular).
     """
     n = minv_k.shape[0]
+    total = 0.0
+    for b in range(coupling.shape[0]):
+        for k in range(18 if use_path else 14):
+            total += coupling[b, k]
+    if not math.isfinite(total):
+        return math.nan, ROTOR_BAD_INPUT
     kb, cb, f0, refs, f1, acc = _unpack_coupling(coupling)
     fb, fbr = _bearing_force_model(kb, cb, f0, refs, f1, acc, use_path, H)
     mk, mc = _with_supports(minv, minv_k, jdofs, kb, cb)
@@ -845,14 +903,14 @@ def _rotor_macro_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, cou
         v1 = v + 0.5 * h * a0 + 0.5 * h * (fbv - stiff @ (q + 0.5 * h * v))
         lhs = eye + 0.5 * h * damp + 0.25 * h * h * stiff
         if not (math.isfinite(v1.sum()) and _lu_factor(lhs, piv)):
-            return math.nan, False
+            return math.nan, ROTOR_NOT_FINITE
         _lu_solve(lhs, piv, v1)
         q = q + 0.5 * h * (v + v1)
         v = v1
         ph = phb
     y_out[:n] = q
     y_out[n:] = v
-    return ph, math.isfinite(y_out.sum()) and math.isfinite(ph)
+    return ph, (ROTOR_OK if math.isfinite(y_out.sum()) and math.isfinite(ph) else ROTOR_NOT_FINITE)
 
 
 #: rotor speed sources of :class:`RotorComponent` (and the rotor FMU's ``speed_source``)
@@ -1083,16 +1141,22 @@ class RotorComponent:
         Raises
         ------
         ParameterError
-            Missing or non-finite speed inputs.
+            Missing or non-finite speed inputs, non-finite bearing inputs (``coupling``; its last four columns only
+            with ``use_path``).
         IntegrationError
             The rotor state became non-finite (the state is left at the start of the step).
         """
         w0, wd = self._spin(H, speed_in, drive_torque, journal_torques)
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
         y = np.empty_like(self.y)
-        phi, finite = _rotor_macro_step(self.y, self.phi, H, n_sub, *self.eom, self.f_grav, self.jdofs, coupling,
+        phi, status = _rotor_macro_step(self.y, self.phi, H, n_sub, *self.eom, self.f_grav, self.jdofs, coupling,
                                         bool(use_path), w0, wd, self.unb_node, self.unb_me, self.unb_phase, y)
-        if not finite:
+        if status == ROTOR_BAD_INPUT:
+            cols = COUPLING_COLUMNS if use_path else COUPLING_COLUMNS[:14]
+            bad = [f"{b.name}_bearing.{c} = {coupling[i, k]!r}" for i, b in enumerate(self.system.bearings)
+                   for k, c in enumerate(cols) if not math.isfinite(coupling[i, k])]
+            raise ParameterError(f"bearing inputs are not finite: {', '.join(bad)}")
+        if status != ROTOR_OK:
             raise IntegrationError(f"rotor state became non-finite in the step t = {self.t:.6g} s + {H:.3g} s at "
                                    f"{rad_s_to_rpm(w0):.0f} rpm: the macro step is too large for the coupling (the "
                                    "state is left at the start of the step)")
