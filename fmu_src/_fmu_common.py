@@ -14,6 +14,8 @@ INSTANTIATED, INITIALIZATION, STEP, TERMINATED, ERROR = ("the instantiated state
 #: marker file in the FMU's resources: the FMU binary (the frbmodel loader) returns for each FMI call the worst of
 #: pythonfmu's status and the statuses of the messages the slave logged during the call
 STATUS_FROM_LOG = "frb_status_from_log"
+#: most lists of value references whose index arrays a slave keeps (a master uses a handful; more are forgotten)
+MAX_PLANS = 256
 
 
 def _with_initial_unknowns(root):
@@ -193,6 +195,8 @@ class FrbSlaveMixin:
             key = tuple(vrs)
             idx = self._set_plans.get(key, False)
             if idx is False:
+                if len(self._set_plans) >= MAX_PLANS:
+                    self._set_plans.clear()
                 idx = self._set_plans[key] = (np.array([self._in_vr[vr] for vr in key], dtype=np.intp)
                                               if all(vr in self._in_vr for vr in key) else None)
             if idx is not None:
@@ -241,6 +245,8 @@ class FrbSlaveMixin:
         key = tuple(vrs)
         plan = self._get_plans.get(key, False)
         if plan is False:
+            if len(self._get_plans) >= MAX_PLANS:
+                self._get_plans.clear()
             plan = self._get_plans[key] = self._block_plan(key)
         if plan is None:
             return None

@@ -21,6 +21,8 @@ from ..errors import CosimStopped, ParameterError
 
 #: fmi2Status names by value
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
+#: most lists of value references whose C arrays an instance keeps per direction (a master uses a handful)
+MAX_PLANS = 256
 
 
 class FmiCallFailed(CosimStopped):
@@ -141,6 +143,8 @@ class FmuInstance:
         the C arrays again for a list of value references seen before."""
         plan = self._get_plans.get(tuple(vr))
         if plan is None:
+            if len(self._get_plans) >= MAX_PLANS:
+                self._get_plans.clear()
             plan = self._get_plans[tuple(vr)] = _plan(vr)
         refs, n, buf = plan
         status = self._c_get(self.slave.component, refs, n, buf)
@@ -152,6 +156,8 @@ class FmuInstance:
         """fmpy's ``setReal(vr, values)`` without making the array of value references again."""
         plan = self._set_plans.get(tuple(vr))
         if plan is None:
+            if len(self._set_plans) >= MAX_PLANS:
+                self._set_plans.clear()
             plan = self._set_plans[tuple(vr)] = _plan(vr)
         refs, n, buf = plan
         buf[:] = values
