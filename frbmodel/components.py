@@ -533,8 +533,18 @@ class BearingComponent:
         return ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99))
 
     def ring_speed(self, omega_rotor):
-        """The ring speed ω_FR [rad/s] the forces are evaluated with: the state's for a free ring, else the ring
-        speed model's at the rotor speed ``omega_rotor`` [rad/s]."""
+        """The ring speed the forces are evaluated with.
+
+        Parameters
+        ----------
+        omega_rotor : float
+            Rotor speed [rad/s].
+
+        Returns
+        -------
+        float
+            ω_FR [rad/s]: the state's for a free ring, else the ring speed model's at ``omega_rotor``.
+        """
         return float(self.ring[4] if self.ring_speed_model == "free" else self._speed_ratio() * omega_rotor)
 
     def exchange(self, journal, omega_rotor, out=None):
