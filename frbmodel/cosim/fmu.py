@@ -3,8 +3,8 @@
 :meth:`FmuInstance.call` calls an fmpy ``FMU2Slave`` function, checks the returned status (fmpy raises for
 Discard, Error and Fatal) and, with a ``trace`` callable, logs each call with its arguments and status — the
 ``--trace-fmi`` option of ``frb cosim`` costs nothing when it is off. It also counts the calls and the wall time
-spent in them per FMI function (:attr:`FmuInstance.calls`; two clock reads per call, ~0.1 µs against the ~10 µs
-of an FMI call through fmpy and pythonfmu), from which ``benchmarks/cosim.py`` splits a macro step's time.
+spent in them per FMI function (:attr:`FmuInstance.calls`; two clock reads per call, ~0.1 µs against the 3-6 µs
+of an FMI call through ctypes and pythonfmu), from which ``benchmarks/cosim.py`` splits a macro step's time.
 
 getReal and setReal, the per-step traffic, call the FMU's fmi2GetReal / fmi2SetReal directly with C arrays of the
 value references (and a value buffer) made once per list of value references: fmpy's ``getReal`` / ``setReal``
