@@ -75,7 +75,7 @@ def main(argv=None):
         shutil.rmtree(tmp, ignore_errors=True)
     est = {round(estimated_cost_s(c), 6) for c in cases}
     print(f"{len(cases)} run-up cases (20k -> 250k rpm ramp, {args.duration:g} s simulated each; estimated cost "
-          f"{', '.join(f'{e:.1f}' for e in sorted(est))} s each, so longest-first keeps the given order)")
+          f"{' / '.join(f'{e:.1f}' for e in sorted(est))} s without / with unbalance: those go first)")
     print(f"{'serial, one process [s]':<40}{t_ser:10.1f}   (kernels loaded before: {t_prep:.1f} s)")
     print(f"{'  case wall times [s]':<40}{' '.join(f'{t:.1f}' for t in s_ser['case_wall_s'])}")
     print(f"{'Dask, new LocalCluster, 2 workers [s]':<40}{t_dask:10.1f}")

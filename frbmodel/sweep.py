@@ -412,6 +412,10 @@ def run_case(case: Case, out_dir) -> dict:
 #: hundred Hz, not the rotor speed): 5.4 s/s for the 0.5 s 20k -> 250k rpm ramp, 7.0 s/s for the 1 s exponential
 #: main job with the compiled Radau integrator, although the ramp turns 1.5x more revolutions per second
 COST_RUNUP_S_PER_SIMULATED_S = 6.0
+#: factor on a run-up or co-simulation with an unbalance: the integrator then resolves the 1X orbit on every
+#: revolution, not only the whirl after its onset (measured, 0.5 s 20k -> 250k rpm ramps at 38-42 um: 2.5 s with
+#: 1 g mm on the turbine wheel, 1.5-1.7 s without)
+COST_UNBALANCE_FACTOR = 1.5
 #: a co-simulation step is 10 us of simulated time: 0.27 ms wall per step
 COST_COSIM_S_PER_SIMULATED_S = 27.0
 #: one Campbell speed of one method (eigenvalues, equilibria for the film methods)
@@ -419,11 +423,12 @@ COST_CAMPBELL_S_PER_SPEED = 2e-3
 
 
 def estimated_cost_s(case) -> float:
-    """Rough wall time [s] of a case from its analysis and options (not its parameters), to order a study.
+    """Rough wall time [s] of a case from its analysis and options, to order a study.
 
     Run-ups: simulated duration × :data:`COST_RUNUP_S_PER_SIMULATED_S`; co-simulations: duration ×
-    :data:`COST_COSIM_S_PER_SIMULATED_S`; Campbell: speeds × methods × :data:`COST_CAMPBELL_S_PER_SPEED`. Only
-    the order of the estimates matters; the defaults of the options are those :func:`run_case` uses.
+    :data:`COST_COSIM_S_PER_SIMULATED_S`; both × :data:`COST_UNBALANCE_FACTOR` if an ``unbalance_*`` parameter is
+    > 0; Campbell: speeds × methods × :data:`COST_CAMPBELL_S_PER_SPEED`. Only the order of the estimates matters;
+    the defaults of the options are those :func:`run_case` uses.
 
     Parameters
     ----------
@@ -439,6 +444,8 @@ def estimated_cost_s(case) -> float:
     --------
     >>> estimated_cost_s(Case({}, "runup", {"speed_rpm": (20e3, 250e3), "duration": 0.5}))
     3.0
+    >>> estimated_cost_s(Case({"unbalance_turbine": 1e-6}, "runup", {"speed_rpm": (20e3, 250e3), "duration": 0.5}))
+    4.5
     >>> estimated_cost_s(Case({}, "campbell", {"methods": ["A", "J"], "speeds_rpm": (1e3, 250e3, 200)}))
     0.8
     """
@@ -446,9 +453,11 @@ def estimated_cost_s(case) -> float:
     if case.analysis == "campbell":
         n = int(o.get("speeds_rpm", (10e3, 250e3, 100))[2])
         return n * len(o.get("methods", ["J"])) * COST_CAMPBELL_S_PER_SPEED
+    forced = any(k.startswith("unbalance_") and v > 0 for k, v in case.params.items())
+    factor = COST_UNBALANCE_FACTOR if forced else 1.0
     if case.analysis == "cosim":
-        return float(o.get("duration", 1.0)) * COST_COSIM_S_PER_SIMULATED_S
-    return float(o.get("duration", 2.0)) * COST_RUNUP_S_PER_SIMULATED_S
+        return float(o.get("duration", 1.0)) * COST_COSIM_S_PER_SIMULATED_S * factor
+    return float(o.get("duration", 2.0)) * COST_RUNUP_S_PER_SIMULATED_S * factor
 
 
 def longest_first(cases):
@@ -928,4 +937,5 @@ def example_cases(name):
 
 __all__ = ["Case", "grid", "check_options", "run_case", "run_study", "stability_map", "plot_stability_map",
            "example_cases", "write_index", "PARAMETERS", "ANALYSES", "SCHEDULER_TIMEOUT_S", "build_case_system",
-           "estimated_cost_s", "longest_first", "prepare_worker", "worker_state", "run_summary"]
+           "estimated_cost_s", "longest_first", "COST_RUNUP_S_PER_SIMULATED_S", "COST_COSIM_S_PER_SIMULATED_S",
+           "COST_CAMPBELL_S_PER_SPEED", "COST_UNBALANCE_FACTOR", "prepare_worker", "worker_state", "run_summary"]

@@ -5,7 +5,15 @@ import json
 
 import pytest
 
-from frbmodel.sweep import Case, estimated_cost_s, longest_first, run_study, run_summary, worker_state
+from frbmodel.sweep import (
+    COST_UNBALANCE_FACTOR,
+    Case,
+    estimated_cost_s,
+    longest_first,
+    run_study,
+    run_summary,
+    worker_state,
+)
 
 
 def test_longest_first_order_from_the_options():
@@ -17,6 +25,12 @@ def test_longest_first_order_from_the_options():
     a, b, c = runup(0.5), runup(1.0, (250e3, 20e3), "exponential"), runup(0.5, (20e3, 30e3))
     assert estimated_cost_s(b) == pytest.approx(2 * estimated_cost_s(a), rel=1e-12)
     assert estimated_cost_s(c) == pytest.approx(estimated_cost_s(a), rel=1e-12)
+    # an unbalance (any unbalance_* > 0) makes a run-up dearer by the measured factor; a zero unbalance does not
+    forced = Case({"unbalance_compressor": 1e-6}, "runup", dict(a.options))
+    zero = Case({"unbalance_turbine": 0.0}, "runup", dict(a.options))
+    assert estimated_cost_s(forced) == pytest.approx(COST_UNBALANCE_FACTOR * estimated_cost_s(a), rel=1e-12)
+    assert estimated_cost_s(zero) == estimated_cost_s(a)
+    assert longest_first([a, zero, forced]) == [forced, a, zero]
     # a Campbell case costs speeds x methods
     small = Case({}, "campbell", {"methods": ["J"], "speeds_rpm": (1e3, 250e3, 50)})
     big = Case({}, "campbell", {"methods": ["J", "F"], "speeds_rpm": (1e3, 250e3, 100)})
