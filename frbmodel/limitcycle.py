@@ -55,6 +55,8 @@ class LimitCycle(Result):
         All non-trivial multipliers inside the unit circle.
     state : ndarray (n,)
         The full state (without the rotation angle) at the start of the period, SI units.
+    monodromy : ndarray (n, n)
+        Monodromy matrix at the solution (SI units); its eigenvalues are the multipliers.
     autonomous : bool
         True without unbalance (the period was an unknown).
     meta : dict
@@ -69,6 +71,7 @@ class LimitCycle(Result):
     state: np.ndarray
     autonomous: bool = True
     meta: dict = field(default_factory=dict)
+    monodromy: np.ndarray = field(default=None, repr=False)
 
     @property
     def frequency_hz(self):
@@ -318,23 +321,26 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     model = check_model(film_model or system.film_model)
     problem = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), model, unbalance)
     forced = any(u.amount > 0 for u in unbalance)
+    m0 = None
     if guess is None:
         z0, period, info = _guess(problem, settle_s, forced)
     elif isinstance(guess, LimitCycle):
         z0, period, info = guess.state.copy(), guess.period, {"from_orbit_at_rpm": guess.speed_rpm}
+        m0 = guess.monodromy
     else:
         z0, period, info = np.asarray(guess[0], dtype=float), float(guess[1]), {"given": True}
     flow = _Flow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
     scale = atol_vector(problem, SCALE_M)[0][:-1]
     sol = shoot(flow, flow.rhs, z0, period, scale=scale, autonomous=not forced, tol=tol, max_iter=max_iter,
-                fd_step=FD_STEP, workers=WORKERS)
+                fd_step=FD_STEP, workers=WORKERS, monodromy0=m0)
     sol = _minimal_period(flow, sol, scale, forced, tol, max_iter)
     t = np.linspace(0.0, sol.period, samples + 1)
     y = flow.states(sol.z0, t)
     orbit = _orbit_result(problem, RunupSchema.from_system(system), t, y)
     meta = {"film_model": model, "rtol": SHOOT_RTOL, "atol_displacement_m": SHOOT_ATOL_M, "newton_iterations":
             sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
-    return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, sol.stable, sol.z0, not forced, meta)
+    return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, sol.stable, sol.z0, not forced, meta,
+                      sol.monodromy)
 
 
 def _minimal_period(flow, sol, scale, forced, tol, max_iter):

@@ -136,7 +136,7 @@ def _newton_step(m, end, z0, rhs_end, f_ref, scale, autonomous):
 
 
 def shoot(flow, rhs, z0, period, scale=None, autonomous=True, tol=1e-8, max_iter=25, fd_step=1e-6,
-          max_period_change=0.3, workers=1):
+          max_period_change=0.3, workers=1, monodromy0=None):
     """Periodic orbit through Newton's method on the shooting residual (see the module docstring).
 
     The monodromy matrix (n integrations) is computed at the first iterate and reused (chord iterations, one
@@ -167,6 +167,9 @@ def shoot(flow, rhs, z0, period, scale=None, autonomous=True, tol=1e-8, max_iter
         Largest relative period change per iteration (damping; a larger step is scaled down).
     workers : int
         Threads for the monodromy's columns (:func:`monodromy`).
+    monodromy0 : ndarray (n, n), optional
+        A monodromy matrix near the guess (e.g. of the orbit at a neighbouring speed) for the first chord
+        iterations; it is recomputed at the solution for the multipliers.
 
     Returns
     -------
@@ -184,7 +187,8 @@ def shoot(flow, rhs, z0, period, scale=None, autonomous=True, tol=1e-8, max_iter
     f_ref = rhs(z) / scale  # phase condition's normal, in scaled variables (u − u_ref)·f_ref = 0
     f_ref = f_ref / np.linalg.norm(f_ref)
     T = float(period)
-    history, m, z_m = [], None, None
+    history, z_m = [], None
+    m = None if monodromy0 is None else np.asarray(monodromy0, dtype=float)
     for it in range(1, max_iter + 1):
         end = flow(z, T)
         if not np.all(np.isfinite(end)):
@@ -193,7 +197,7 @@ def shoot(flow, rhs, z0, period, scale=None, autonomous=True, tol=1e-8, max_iter
         stalled = len(history) > 0 and res > 0.25 * history[-1]
         history.append(res)
         if res < tol:
-            if m is None or np.max(np.abs(z - z_m) / scale) > 1e-3:
+            if m is None or z_m is None or np.max(np.abs(z - z_m) / scale) > 1e-3:
                 m = monodromy(flow, z, T, scale, end, fd_step, workers)
             mult = np.linalg.eigvals(m)
             return ShootingSolution(z, T, m, mult[np.argsort(-np.abs(mult))], it, res, autonomous)

@@ -93,15 +93,20 @@ def _run_period(run, T_guess, names):
     return (shifts[k] + 0.5 * (a - c) / (a - 2 * b + c)) * dt
 
 
+@pytest.fixture(scope="module")
+def lc60():
+    return limit_cycle(frb.turbocharger(36e-6), 60e3)
+
+
 @pytest.mark.parametrize("speed_rpm", [60e3, pytest.param(100e3, marks=pytest.mark.slow),
                                        pytest.param(150e3, marks=pytest.mark.slow)])
-def test_limit_cycle_equals_long_constant_speed_run(speed_rpm):
+def test_limit_cycle_equals_long_constant_speed_run(speed_rpm, request):
     """Acceptance (issue #14): at a constant speed where the whirl settles on a periodic orbit, the shooting result
     equals a long constant-speed simulation by the other integrator (scipy's LSODA, tight tolerances): frequency
     0.5 %, turbine-wheel orbit radius and the four films' max eps 2 %, and it is stable (the simulation settled on
     it)."""
     tc = frb.turbocharger(36e-6)
-    lc = limit_cycle(tc, speed_rpm)
+    lc = request.getfixturevalue("lc60") if speed_rpm == 60e3 else limit_cycle(tc, speed_rpm)
     assert lc.stable
     run = runup(tc, profile=SpeedProfile.constant(speed_rpm, 0.5), duration=0.5, output_rate_hz=100e3, rtol=1e-8,
                 atol=1e-11, integrator="lsoda")
@@ -112,3 +117,23 @@ def test_limit_cycle_equals_long_constant_speed_run(speed_rpm):
     radius = np.max(np.hypot(*(xy - xy.mean(axis=0)).T))
     assert lc.orbit_radius("turbine_wheel") == pytest.approx(radius, rel=0.02)
     np.testing.assert_allclose(lc.max_eps, run.eccentricity[last].max(axis=0), rtol=0.02)
+
+
+def test_orbit_from_a_neighbouring_orbit_is_periodic(lc60):
+    """Continuing in speed: the orbit at 61 krpm started from the 60 krpm orbit (its state, period and monodromy)
+    is periodic, checked by the other integrator: scipy's LSODA from its state over its period returns to it within
+    1e-6 of the orbit's size (shooting tolerance 1e-6 scaled on micrometre scales, LSODA at rtol 1e-10), and has the
+    trivial multiplier 1 (1e-3: difference monodromy)."""
+    from frbmodel.runup import SpeedProfile, build_problem
+
+    tc = frb.turbocharger(36e-6)
+    b = limit_cycle(tc, 61e3, guess=lc60)
+    assert b.meta["guess"] == {"from_orbit_at_rpm": 60e3} and b.period != lc60.period
+    p = build_problem(tc, SpeedProfile.constant(61e3, 1.0), tc.film_model)
+    y0 = np.append(b.state, 0.0)
+    end = solve_ivp(lambda t, y: p.rhs(t, y, np.empty(y.size)).copy(), (0.0, b.period), y0, method="LSODA",
+                    rtol=1e-10, atol=1e-15).y[:-1, -1]
+    j = 4 * tc.bearings[0].node
+    size = np.ptp(b.orbit.journal["turbine"][:, 0])
+    assert abs(end[j] - b.state[j]) < 1e-6 * size and abs(end[j + 1] - b.state[j + 1]) < 1e-6 * size
+    assert np.min(np.abs(b.multipliers - 1.0)) < 1e-3
