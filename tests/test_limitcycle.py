@@ -102,14 +102,15 @@ def lc60():
                                        pytest.param(150e3, marks=pytest.mark.slow)])
 def test_limit_cycle_equals_long_constant_speed_run(speed_rpm, request):
     """Acceptance (issue #14): at a constant speed where the whirl settles on a periodic orbit, the shooting result
-    equals a long constant-speed simulation by the other integrator (scipy's LSODA, tight tolerances): frequency
+    equals a long constant-speed simulation by another integrator (the run-up's Rosenbrock method; the shooting
+    flows use Radau IIA), at tight tolerances: frequency
     0.5 %, turbine-wheel orbit radius and the four films' max eps 2 %, and it is stable (the simulation settled on
     it)."""
     tc = frb.turbocharger(36e-6)
     lc = request.getfixturevalue("lc60") if speed_rpm == 60e3 else limit_cycle(tc, speed_rpm)
     assert lc.stable
     run = runup(tc, profile=SpeedProfile.constant(speed_rpm, 0.5), duration=0.5, output_rate_hz=100e3, rtol=1e-8,
-                atol=1e-11, integrator="lsoda")
+                atol=1e-11, integrator="rodas")
     T = _run_period(run, lc.period, ("turbine_wheel", "compressor_wheel"))
     assert 1 / lc.period == pytest.approx(1 / T, rel=0.005)
     last = run.time >= run.time[-1] - lc.period
