@@ -45,7 +45,7 @@ PARAMETERS = {
     "unbalance_turbine": ("kg m", "unbalance of the disc named 'turbine_wheel' (or 'turbine')"),
     "unbalance_compressor": ("kg m", "unbalance of the disc named 'compressor_wheel' (or 'compressor')"),
 }
-ANALYSES = ("campbell", "runup", "cosim")
+ANALYSES = ("campbell", "runup", "cosim", "hopf")
 #: seconds to wait for an existing Dask scheduler before giving up
 SCHEDULER_TIMEOUT_S = 5.0
 
@@ -129,7 +129,7 @@ def check_options(analysis, options):
             check_speed("campbell stop speed", b)
             if int(n) != n or n < 2:
                 raise ParameterError(f"campbell speed count = {n!r} is invalid: valid range integer >= 2")
-    else:
+    else:  # run-ups, co-simulations and Hopf points: a speed range
         if "speed_rpm" in options:
             a, b = options["speed_rpm"]
             check_speed("start speed", a)
@@ -309,6 +309,17 @@ def _campbell_rows(tc, o):
     return rows
 
 
+def _hopf_rows(tc, o):
+    """Hopf points of the full model in the speed range (:func:`frbmodel.continuation.hopf_points`), numbered by
+    speed: the linear onsets a two-parameter stability chart is drawn from."""
+    from .continuation import hopf_points
+
+    lo, hi = sorted(o.get("speed_rpm", (1e3, 250e3)))
+    return [{"kind": "linear", "method": "full model", "item": f"Hopf #{k}", "onset [rpm]": hp.speed_rpm,
+             "end [rpm]": float("nan"), "f at onset [Hz]": hp.frequency_hz, "onset at sweep start": False}
+            for k, hp in enumerate(hopf_points(tc, (lo, hi)), start=1)]
+
+
 def _runup_rows(tc, unb, o):
     from .runup import SpeedProfile, runup
 
@@ -389,6 +400,8 @@ def run_case(case: Case, out_dir) -> dict:
             rows = _runup_rows(tc, unb, o)
         elif case.analysis == "cosim":
             rows = _cosim_rows(tc, unb, o)
+        elif case.analysis == "hopf":
+            rows = _hopf_rows(tc, o)
         else:
             raise ParameterError(f"analysis = {case.analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
         rec.update({"status": "finished", "rows": rows})
@@ -422,13 +435,17 @@ COST_COSIM_S_PER_SIMULATED_S = 27.0
 COST_CAMPBELL_S_PER_SPEED = 2e-3
 
 
+#: wall time [s] of one ``hopf`` case (60 equilibrium Jacobians and the Brent refinements; measured 0.5-1 s)
+COST_HOPF_S = 1.0
+
+
 def estimated_cost_s(case) -> float:
     """Rough wall time [s] of a case from its analysis and options, to order a study.
 
     Run-ups: simulated duration × :data:`COST_RUNUP_S_PER_SIMULATED_S`; co-simulations: duration ×
     :data:`COST_COSIM_S_PER_SIMULATED_S`; both × :data:`COST_UNBALANCE_FACTOR` if an ``unbalance_*`` parameter is
-    > 0; Campbell: speeds × methods × :data:`COST_CAMPBELL_S_PER_SPEED`. Only the order of the estimates matters;
-    the defaults of the options are those :func:`run_case` uses.
+    > 0; Campbell: speeds × methods × :data:`COST_CAMPBELL_S_PER_SPEED`; Hopf points: :data:`COST_HOPF_S`. Only the
+    order of the estimates matters; the defaults of the options are those :func:`run_case` uses.
 
     Parameters
     ----------
@@ -453,6 +470,8 @@ def estimated_cost_s(case) -> float:
     if case.analysis == "campbell":
         n = int(o.get("speeds_rpm", (10e3, 250e3, 100))[2])
         return n * len(o.get("methods", ["J"])) * COST_CAMPBELL_S_PER_SPEED
+    if case.analysis == "hopf":
+        return COST_HOPF_S
     forced = any(k.startswith("unbalance_") and v > 0 for k, v in case.params.items())
     factor = COST_UNBALANCE_FACTOR if forced else 1.0
     if case.analysis == "cosim":
@@ -485,15 +504,17 @@ _WORKER = {"prepare_calls": 0, "warmups": 0, "warmup_s": None}
 
 
 def worker_state() -> dict:
-    """This process's preparation for study cases: ``host``, ``pid``, ``prepare_calls`` (calls of
-    :func:`prepare_worker`), ``warmups`` (kernel warm-ups done: 0 or 1) and ``warmup_s`` [s] (None before).
+    """This process's preparation for study cases: ``host``, ``pid``, ``package`` (the folder of the frbmodel this
+    process imported), ``prepare_calls`` (calls of :func:`prepare_worker`), ``warmups`` (kernel warm-ups done: 0 or
+    1) and ``warmup_s`` [s] (None before).
 
     Examples
     --------
     >>> sorted(worker_state())
-    ['host', 'pid', 'prepare_calls', 'warmup_s', 'warmups']
+    ['host', 'package', 'pid', 'prepare_calls', 'warmup_s', 'warmups']
     """
-    return {"host": os.uname().nodename, "pid": os.getpid(), **_WORKER}
+    return {"host": os.uname().nodename, "pid": os.getpid(), "package": str(Path(__file__).resolve().parent),
+            **_WORKER}
 
 
 def prepare_worker() -> dict:
@@ -579,13 +600,34 @@ def write_index(cases, out):
     return df
 
 
+class _this_package_first_on_path:
+    """While a LocalCluster starts its worker processes (spawned with this process's ``sys.path``), put the folder
+    holding this frbmodel first on it, so the workers import the same package as the client: other copies may be on
+    the path before it (building FMUs in-process leaves pythonfmu's staging folder, with a copy of frbmodel, at its
+    head), and a copy whose numba cache is empty compiles every kernel anew in each worker (measured: 40 s)."""
+
+    def __enter__(self):
+        import sys
+
+        self.root = str(Path(__file__).resolve().parents[1])
+        self.saved = list(sys.path)
+        sys.path[:] = [self.root] + [p for p in sys.path if p != self.root]
+        return self
+
+    def __exit__(self, *exc):
+        import sys
+
+        sys.path[:] = self.saved
+
+
 def _client(scheduler, n_workers):
     """(client, cluster or None): a new LocalCluster with ``n_workers`` processes, or a client of the scheduler
     at address ``scheduler`` — which must answer within :data:`SCHEDULER_TIMEOUT_S`."""
     dist = _distributed()
     if scheduler is None:
-        cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
-                                    processes=True, dashboard_address=":0")
+        with _this_package_first_on_path():
+            cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
+                                        processes=True, dashboard_address=":0")
         return dist.Client(cluster, set_as_default=False), cluster  # never the user's default client
     try:
         return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S, set_as_default=False), None
@@ -860,6 +902,8 @@ def plot_stability_map(out_dir, parameter=None):
     import matplotlib.pyplot as plt
     import plotly.graph_objects as go
 
+    from .plots import write_html
+
     out = Path(out_dir)
     df = stability_map(out)
     paths = [out / "stability_map.csv"]
@@ -895,8 +939,59 @@ def plot_stability_map(out_dir, parameter=None):
     paths.append(p)
     pfig.update_layout(xaxis_title=xlabel, yaxis_title="onset speed [krpm]", title="Stability map")
     p = out / "stability_map.html"
-    pfig.write_html(str(p))
+    write_html(pfig, p)
     paths.append(p)
+    if len(pcols) >= 2:
+        paths += plot_stability_chart(out_dir, pcols[0].split(" [")[0], pcols[1].split(" [")[0])
+    return paths
+
+
+def plot_stability_chart(out_dir, x, y, item=None):
+    """Two-parameter stability chart of a study over two swept parameters: the onset speed of one linear mode (default
+    the first: ``Hopf #1`` of a ``hopf`` study, else the lowest-speed item) as a filled contour over (x, y); writes
+    ``stability_chart.png`` and ``stability_chart.csv`` (the grid) into ``out_dir``.
+
+    Parameters
+    ----------
+    out_dir : path
+        Folder of a study over (at least) the parameters ``x`` and ``y``.
+    x, y : str
+        Swept parameters (keys of :data:`PARAMETERS`) on the axes.
+    item : str, optional
+        The onset drawn (a value of the stability map's ``item`` column).
+
+    Returns
+    -------
+    list of Path
+        CSV and PNG; nothing if fewer than 2 x 2 finished cases carry the item.
+    """
+    import matplotlib.pyplot as plt
+
+    out = Path(out_dir)
+    df = stability_map(out)
+    if df.empty:
+        return []
+    df = df[df["kind"] == "linear"]
+    item = item or ("Hopf #1" if (df["item"] == "Hopf #1").any() else
+                    df.sort_values("onset [rpm]")["item"].iloc[0])
+    xc, yc = f"{x} [{PARAMETERS[x][0]}]", f"{y} [{PARAMETERS[y][0]}]"
+    grid_ = df[df["item"] == item].pivot_table(index=yc, columns=xc, values="onset [rpm]", aggfunc="min")
+    if grid_.shape[0] < 2 or grid_.shape[1] < 2:
+        return []
+    paths = [out / "stability_chart.csv", out / "stability_chart.png"]
+    grid_.to_csv(paths[0])
+    sx = 1e6 if xc.endswith("[m]") else 1.0
+    sy = 1e6 if yc.endswith("[m]") else 1.0
+    fig, ax = plt.subplots(figsize=(7, 5))
+    cs = ax.contourf(grid_.columns.to_numpy() * sx, grid_.index.to_numpy() * sy, grid_.to_numpy() / 1e3, levels=12,
+                     cmap="viridis")
+    ax.contour(cs, colors="k", linewidths=0.4)
+    fig.colorbar(cs, ax=ax, label=f"onset of {item} [krpm]")
+    ax.set_xlabel(xc.replace("[m]", "[um]") if sx != 1 else xc)
+    ax.set_ylabel(yc.replace("[m]", "[um]") if sy != 1 else yc)
+    ax.set_title(f"Stability chart: rotor speed at which {item} sets in", fontsize=10)
+    fig.savefig(paths[1], dpi=120, bbox_inches="tight")
+    plt.close(fig)
     return paths
 
 
@@ -936,6 +1031,7 @@ def example_cases(name):
 
 
 __all__ = ["Case", "grid", "check_options", "run_case", "run_study", "stability_map", "plot_stability_map",
-           "example_cases", "write_index", "PARAMETERS", "ANALYSES", "SCHEDULER_TIMEOUT_S", "build_case_system",
+           "example_cases", "write_index", "PARAMETERS", "ANALYSES",
+           "plot_stability_chart", "SCHEDULER_TIMEOUT_S", "build_case_system",
            "estimated_cost_s", "longest_first", "COST_RUNUP_S_PER_SIMULATED_S", "COST_COSIM_S_PER_SIMULATED_S",
-           "COST_CAMPBELL_S_PER_SPEED", "COST_UNBALANCE_FACTOR", "prepare_worker", "worker_state", "run_summary"]
+           "COST_CAMPBELL_S_PER_SPEED", "COST_HOPF_S", "COST_UNBALANCE_FACTOR", "prepare_worker", "worker_state", "run_summary"]

@@ -113,3 +113,23 @@ def test_branch_from_a_hopf_point_grows_as_a_square_root(tc):
                                  p0=(0.1, hopf, 0.5), bounds=([0, hopf - 50 * sign - 50, 0.1], [10, hopf + 50, 2]))
     assert beta == pytest.approx(0.5, abs=0.05)
     assert s0 == pytest.approx(hopf, rel=0.005)
+
+
+def test_two_parameter_stability_chart(tmp_path):
+    """A Hopf-point study over outer clearance x viscosity (frbmodel.sweep, resumable like the other studies) gives the
+    chart's grid: each cell is the first Hopf speed of that system, which equals method J's linear onset (0.5 %,
+    as for the default system); the CLI's --analysis hopf writes the chart."""
+    import pandas as pd
+
+    from frbmodel.sweep import build_case_system, grid, plot_stability_chart, run_study
+
+    cases = grid({"outer_clearance": [36e-6, 46e-6], "viscosity_scale": [0.7, 1.0]}, "hopf", speed_rpm=(1e3, 30e3))
+    run_study(cases, tmp_path, scheduler="serial")
+    paths = plot_stability_chart(tmp_path, "outer_clearance", "viscosity_scale")
+    chart = pd.read_csv(paths[0], index_col=0)
+    assert chart.shape == (2, 2) and paths[1].exists()
+    tc, _ = build_case_system({"outer_clearance": 46e-6, "viscosity_scale": 0.7})
+    first = float(chart.loc[0.7].iloc[-1])  # 46 um, viscosity x0.7
+    hp = hopf_points(tc, (1e3, 30e3))[0]
+    assert first == hp.speed_rpm
+    assert first == pytest.approx(_method_j_crossing(tc, first, hp.frequency_hz)[0], rel=0.005)

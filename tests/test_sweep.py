@@ -91,3 +91,25 @@ def test_bad_study_input(tmp_path):
         grid({"clearance": [1e-6]})
     with pytest.raises(ParameterError, match="analysis"):
         grid({"outer_clearance": [36e-6]}, "fem")
+
+
+def test_workers_import_the_clients_frbmodel(tmp_path, monkeypatch):
+    """Another frbmodel copy at the head of sys.path (as building FMUs in-process leaves pythonfmu's staging folder)
+    must not become the workers' package: they would recompile every kernel (no numba cache) and could run other
+    code than the client."""
+    from pathlib import Path
+
+    import frbmodel
+    from frbmodel.sweep import _client
+
+    decoy = tmp_path / "decoy" / "frbmodel"
+    decoy.mkdir(parents=True)
+    (decoy / "__init__.py").write_text("raise ImportError('the decoy copy was imported')\n")
+    monkeypatch.syspath_prepend(str(decoy.parent))
+    client, cluster = _client(None, 1)
+    try:
+        packages = client.run(lambda: __import__("frbmodel.sweep").sweep.worker_state()["package"])
+    finally:
+        client.close()
+        cluster.close()
+    assert set(packages.values()) == {str(Path(frbmodel.__file__).resolve().parent)}
