@@ -1034,4 +1034,5 @@ __all__ = ["Case", "grid", "check_options", "run_case", "run_study", "stability_
            "example_cases", "write_index", "PARAMETERS", "ANALYSES",
            "plot_stability_chart", "SCHEDULER_TIMEOUT_S", "build_case_system",
            "estimated_cost_s", "longest_first", "COST_RUNUP_S_PER_SIMULATED_S", "COST_COSIM_S_PER_SIMULATED_S",
-           "COST_CAMPBELL_S_PER_SPEED", "COST_HOPF_S", "COST_UNBALANCE_FACTOR", "prepare_worker", "worker_state", "run_summary"]
+           "COST_CAMPBELL_S_PER_SPEED", "COST_HOPF_S", "COST_UNBALANCE_FACTOR", "prepare_worker", "worker_state",
+           "run_summary"]
