@@ -202,6 +202,24 @@ def _crossing_real(system, speed_rpm, model, near_hz):
     return float(lam[np.argmin(np.abs(lam.imag / (2 * math.pi) - near_hz))].real)
 
 
+def _refine_crossing(system, model, a, b, f_hz, count_a):
+    """Speed [rpm] in (a, b) where the pair near ``f_hz`` crosses: Brent's method on its real part when it changes
+    sign over the interval; otherwise (another mode comes nearer in frequency at one end) bisection on the number of
+    unstable pairs, to the same 1e-6 relative."""
+    from scipy.optimize import brentq
+
+    ra, rb = (_crossing_real(system, s, model, f_hz) for s in (a, b))
+    if ra <= 0.0 < rb:
+        return brentq(lambda s: _crossing_real(system, s, model, f_hz), a, b, xtol=1e-6 * a)
+    while b - a > 1e-6 * a:
+        mid = 0.5 * (a + b)
+        if _unstable_pairs(system, mid, model) > count_a:
+            b = mid
+        else:
+            a = mid
+    return 0.5 * (a + b)
+
+
 def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60):
     """Hopf points of the full model's equilibrium in a speed range: where the number of unstable complex pairs of
     its Jacobian rises, refined by Brent's method on the real part of the crossing pair.
@@ -222,8 +240,6 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60):
     list of HopfPoint
         In increasing speed (only crossings to instability; a pair regaining stability is not listed).
     """
-    from scipy.optimize import brentq
-
     model = film_model or system.film_model
     grid = np.geomspace(*sorted(speeds_rpm), n_grid)
     counts = [_unstable_pairs(system, s, model) for s in grid]
@@ -237,10 +253,10 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60):
         # the pair that crossed: unstable at b, with the closest stable partner at a
         cand = min(new, key=lambda x: np.min(np.abs(lam_a[(lam_a.real <= 0) & (lam_a.imag > 0)] - x)))
         f_hz = cand.imag / (2 * math.pi)
-        s_h = brentq(lambda s, f=f_hz: _crossing_real(system, s, model, f), a, b, xtol=1e-6 * a)
+        s_h = _refine_crossing(system, model, a, b, f_hz, ca)
         z_eq, jac = equilibrium_jacobian(system, s_h, model)
         lam, vec = np.linalg.eig(jac)
-        k = int(np.argmin(np.abs(lam.imag / (2 * math.pi) - f_hz) + 1e9 * (lam.imag <= 0)))
+        k = int(np.argmin(np.where(lam.imag > 0, np.abs(lam.real), np.inf)))  # the pair on the imaginary axis there
         out.append(HopfPoint(float(s_h), float(lam[k].imag / (2 * math.pi)), vec[:, k], z_eq))
     return out
 
