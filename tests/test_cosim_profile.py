@@ -134,3 +134,17 @@ def test_cli_bad_profile_exits_2_with_the_message(built, tmp_path, capsys, text,
                  "--out", str(tmp_path / "out"), *extra])
     err = capsys.readouterr().err
     assert code == 2 and message in err, err
+
+
+def test_building_and_cosimulating_leave_sys_path_as_it_was(built):
+    """pythonfmu puts the build script's folder and each extracted FMU's resources folder (which holds a copy of
+    frbmodel) on sys.path; left there, processes spawned later (Dask workers) import that copy — without a numba
+    cache, every kernel recompiles (~40 s per worker, measured in the suite). The session's in-process build must
+    have left no fmu_src folder on sys.path, and a co-simulation must give sys.path back unchanged."""
+    import sys
+    from pathlib import Path
+
+    assert not [p for p in sys.path if Path(p).name == "fmu_src"]
+    before = list(sys.path)
+    cosimulate(built / "turbocharger.ssp", stop_time=2e-5)
+    assert sys.path == before

@@ -7,6 +7,7 @@ wheel ships copies of both as ``frbmodel/_data/fmu_src`` and ``frbmodel/_data/ss
 from __future__ import annotations
 
 import shutil
+import sys
 import tempfile
 import zipfile
 from pathlib import Path
@@ -127,11 +128,15 @@ def build_fmus(out_dir="build", src=None, progress=print, rotor_file=None):
         shutil.copytree(PACKAGE, bundle, ignore=_bundle_ignore)
         extra = {"TurbochargerRotor": [write_rotor_system(rotor_file, tmp)]} if rotor_file is not None else {}
         for name in FMUS:
-            fmu = FmuBuilder.build_FMU(src / "fmu_src" / f"{name}.py", dest=out / "fmus",
-                                       project_files=[bundle, src / "fmu_src" / "_fmu_common.py",
-                                                      *extra.get(name, [])],
-                                       canGetAndSetFMUstate=True, canSerializeFMUstate=False,
-                                       needsExecutionTool=True)
+            saved = list(sys.path)  # pythonfmu's builder puts the script's folder on sys.path and leaves it there
+            try:
+                fmu = FmuBuilder.build_FMU(src / "fmu_src" / f"{name}.py", dest=out / "fmus",
+                                           project_files=[bundle, src / "fmu_src" / "_fmu_common.py",
+                                                          *extra.get(name, [])],
+                                           canGetAndSetFMUstate=True, canSerializeFMUstate=False,
+                                           needsExecutionTool=True)
+            finally:
+                sys.path[:] = saved
             install_loader(fmu, src=src, progress=progress)
             paths.append(Path(fmu))
             progress(f"built {fmu} (bundles frbmodel {frbmodel.__version__})")

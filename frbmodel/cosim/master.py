@@ -253,6 +253,7 @@ class Master:
     def setup(self):
         """Extract and instantiate every FMU, identify rotor and bearings, plan the exchange."""
         self._tmp = tempfile.TemporaryDirectory(prefix="frb_cosim_")
+        self._sys_path = list(sys.path)
         self.fmus = {name: FmuInstance(name, path, self._tmp.name, self.trace)
                      for name, path in self.ssp.components.items()}
         rotors = [f for f in self.fmus.values() if f.model_identifier == ROTOR_FMU]
@@ -661,6 +662,10 @@ class Master:
                 stat[1] += wall
         self.fmus = {}
         if self._tmp is not None:
+            # pythonfmu puts each extracted FMU's resources folder on sys.path (they hold a copy of frbmodel): take
+            # them off again, or processes spawned later from this one (Dask workers) import that copy, which has no
+            # numba cache (every kernel recompiled: ~40 s per worker) — and the folders are deleted here anyway
+            sys.path[:] = [p for p in sys.path if p in self._sys_path or not p.startswith(self._tmp.name)]
             self._tmp.cleanup()
             self._tmp = None
         self.ssp.close()
