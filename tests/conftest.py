@@ -33,3 +33,13 @@ def _dask_scratch_in_tmp(tmp_path_factory):
     except ImportError:
         pass
     yield
+
+
+@pytest.fixture(autouse=True)
+def _restore_sys_path():
+    """Tests that run pythonfmu FMUs in-process with fmpy or libcosim (not through frbmodel's FmuInstance, which
+    cleans up) leave each FMU's resources folder on sys.path; restore it after every test so that later tests'
+    Dask workers import the checkout's frbmodel (with its numba cache), not an FMU's copy."""
+    saved = list(sys.path)
+    yield
+    sys.path[:] = saved

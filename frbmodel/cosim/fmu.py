@@ -232,12 +232,17 @@ class FmuInstance:
             self.call(setter[typ], self.vr([name]), [val])
 
     def free(self):
-        """Terminate and free the instance (ignoring the refusal of an instance that already failed)."""
+        """Terminate and free the instance (ignoring the refusal of an instance that already failed) and take the
+        FMU's resources folder off ``sys.path``, where pythonfmu's slave put it: it holds a copy of frbmodel, which
+        processes spawned later from this one (Dask workers) would import, without a numba cache."""
+        import sys
+
         for function in ("terminate", "freeInstance"):
             try:
                 self.call(function)
             except Exception:  # noqa: BLE001  (a failed FMU may refuse terminate; freeInstance must still run)
                 pass
+        sys.path[:] = [p for p in sys.path if not p.startswith(str(self.dir))]
 
 
 def _plan(vr):

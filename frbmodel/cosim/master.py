@@ -662,9 +662,8 @@ class Master:
                 stat[1] += wall
         self.fmus = {}
         if self._tmp is not None:
-            # pythonfmu puts each extracted FMU's resources folder on sys.path (they hold a copy of frbmodel): take
-            # them off again, or processes spawned later from this one (Dask workers) import that copy, which has no
-            # numba cache (every kernel recompiled: ~40 s per worker) — and the folders are deleted here anyway
+            # the instances took their resources folders off sys.path (FmuInstance.free); anything else under the
+            # extraction folder goes too: it is deleted here
             sys.path[:] = [p for p in sys.path if p in self._sys_path or not p.startswith(self._tmp.name)]
             self._tmp.cleanup()
             self._tmp = None
