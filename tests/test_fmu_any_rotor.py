@@ -81,6 +81,7 @@ def test_structure_differences_name_what_differs():
         "bearing names (in order) ['compressor', 'turbine'] (the FMU was built for ['turbine', 'compressor'])"]
 
 
+@pytest.mark.slow  # long (4-6 s); run with -m slow (README: the suite's slow checks)
 def test_fine_rotor_fmu_has_the_variables_of_its_system(fine):
     """3 PARTS + 1 nodes (7: 56 states, A 56 x 56; 13: 104 states), 4 force inputs, 8 journal outputs; outputs
     per disc and inputs per bearing by name, every Real with a unit; the FMU passes fmpy's validation and carries
@@ -134,6 +135,7 @@ def test_fine_rotor_cosimulates_like_its_monolithic_run_up(fine):
         assert last < 0.8 * first, (b, first, last)
 
 
+@pytest.mark.slow  # long (4-6 s); run with -m slow (README: the suite's slow checks)
 def test_fine_rotor_linearization_equals_campbell(fine):
     """FMU linearization (rotor FMU with 56 (7 nodes) or 104 (13 nodes) states + both bearing FMUs, interconnected
     along the SSP) at three speeds: eigenvalues = those of frb.linear_system of the fine system (what

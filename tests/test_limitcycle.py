@@ -109,7 +109,7 @@ def test_limit_cycle_equals_long_constant_speed_run(clearance, speed_rpm, reques
     tc = frb.turbocharger(clearance)
     lc = request.getfixturevalue("lc60") if (clearance, speed_rpm) == (36e-6, 60e3) else limit_cycle(tc, speed_rpm)
     assert lc.stable
-    run = runup(tc, profile=SpeedProfile.constant(speed_rpm, 0.5), duration=0.5, output_rate_hz=100e3, rtol=1e-8,
+    run = runup(tc, profile=SpeedProfile.constant(speed_rpm, 0.4), duration=0.4, output_rate_hz=50e3, rtol=1e-8,
                 atol=1e-11, integrator="rodas")
     T = _run_period(run, lc.period, ("turbine_wheel", "compressor_wheel"))
     assert 1 / lc.period == pytest.approx(1 / T, rel=0.005)

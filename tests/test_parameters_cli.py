@@ -108,6 +108,7 @@ def test_cli_bad_input_exits_with_message(tmp_path, capsys):
         main(["campbell", "--method", "H"])
 
 
+@pytest.mark.slow  # long (4-6 s); run with -m slow (README: the suite's slow checks)
 def test_cli_paper_figures(tmp_path, capsys):
     assert main(["paper-figures", "--out", str(tmp_path), "--n-speeds", "8"]) == 0
     for n in (4, 5, 6, 7, 8, 9):

@@ -19,6 +19,7 @@ def tc():
     return frb.turbocharger(36e-6)
 
 
+@pytest.mark.slow  # long (4-6 s); run with -m slow (README: the suite's slow checks)
 def test_linear_springs_free_vibration_shows_campbell_frequencies(tc):
     """Journals on method-A springs (no films): the free vibration after the initial offset must contain the
     Campbell natural frequencies, each in its own whirl direction."""

@@ -39,6 +39,7 @@ def test_local_cluster_equals_serial(tmp_path):
     assert c["onset [rpm]"].iloc[0] > c["onset [rpm]"].iloc[-1]
 
 
+@pytest.mark.slow  # long (4-6 s); run with -m slow (README: the suite's slow checks)
 def test_killed_study_resumes_without_recomputing(tmp_path):
     out = tmp_path / "study"
     cmd = [sys.executable, "-m", "frbmodel.cli", "sweep", "--param",
