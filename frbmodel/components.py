@@ -23,6 +23,7 @@ from .bearing import ring_rhs_kernel
 from .dynamics import add_unbalance_forces, rotor_acceleration, rotor_operators, rotor_polar_inertia, spin_acceleration
 from .errors import ConvergenceError, FilmContactError, IntegrationError, ParameterError, check_finite, check_positive
 from .film import check_model, film_force_kernel
+from .linalg import lu_factor, lu_solve
 from .losses import bearing_loss_kernel, film_arrays
 from .rotor import GRAVITY
 from .units import rad_s_to_rpm, rpm_to_rad_s
@@ -114,51 +115,6 @@ def _bearing_exchange(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, out):
     return (EXCHANGE_OK if ei < 1.0 and eo < 1.0 and math.isfinite(total) else EXCHANGE_CONTACT), ei, eo
 
 
-@njit(cache=True)
-def _lu_factor(a, piv):
-    """LU factorization with partial pivoting of the square matrix ``a``, in place: the unit lower factor below the
-    diagonal, the upper factor on and above it; row ``k`` was interchanged with row ``piv[k]``. Returns False (and a
-    garbage ``a``) for a singular or non-finite matrix."""
-    n = a.shape[0]
-    for k in range(n):
-        p, big = k, abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                p, big = i, abs(a[i, k])
-        if not (0.0 < big < math.inf):  # also False for NaN
-            return False
-        piv[k] = p
-        if p != k:
-            for c in range(n):
-                a[k, c], a[p, c] = a[p, c], a[k, c]
-        for i in range(k + 1, n):
-            m = a[i, k] / a[k, k]
-            a[i, k] = m
-            for c in range(k + 1, n):
-                a[i, c] -= m * a[k, c]
-    return True
-
-
-@njit(cache=True)
-def _lu_solve(lu, piv, b):
-    """Solve A x = b in place (``b`` becomes x) with the factors of :func:`_lu_factor`."""
-    n = lu.shape[0]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            b[k], b[p] = b[p], b[k]
-    for i in range(1, n):
-        s = b[i]
-        for c in range(i):
-            s -= lu[i, c] * b[c]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for c in range(i + 1, n):
-            s -= lu[i, c] * b[c]
-        b[i] = s / lu[i, i]
-
-
 SDIRK_GAMMA = 1.0 - 1.0 / math.sqrt(2.0)  # Alexander's 2-stage SDIRK: L-stable, second order, stiffly accurate
 
 
@@ -184,7 +140,7 @@ RING_OK, RING_NOT_CONVERGED, RING_NOT_FINITE, RING_BAD_INPUT, RING_BAD_ACCEL, RI
 def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, lu, piv, refresh, eps_cap, free_spin,
                 rsr_fixed, max_iter, work):
     """Solve Y = base + gh·f(Y) for the ring state (in place in ``yn``, start value on entry) by modified Newton;
-    ``lu``, ``piv`` hold the LU factors (:func:`_lu_factor`) of J = I − gh ∂f/∂y, recomputed when ``refresh`` or
+    ``lu``, ``piv`` hold the LU factors (:func:`lu_factor`) of J = I − gh ∂f/∂y, recomputed when ``refresh`` or
     when convergence stalls, and reused otherwise (also by the next stages). Without ``free_spin`` the ring speed
     is held at ``rsr_fixed``·w (not iterated). Converged when the last correction is below 1e-10 of the outer
     clearance in position and 1e-9 of the ring speed (at least 1 rad/s) in speed. ``work`` (4, 5): scratch.
@@ -220,11 +176,11 @@ def _ring_stage(geom, polys, ring_m, ring_i, grav, jj, w, base, yn, gh, lu, piv,
                     fp[4] = f[4]
                 for i in range(5):
                     lu[i, k] = (1.0 if i == k else 0.0) - gh * (fp[i] - f[i]) / d
-            if not _lu_factor(lu, piv):
+            if not lu_factor(lu, piv):
                 return ei, eo, fresh, RING_NOT_FINITE, dpos, dspeed
             refresh = False
             fresh = True
-        _lu_solve(lu, piv, dy)
+        lu_solve(lu, piv, dy)
         for k in range(5):
             yn[k] += dy[k]
         dpos, dspeed = abs(dy[0]) + abs(dy[1]), abs(dy[4])
@@ -912,9 +868,9 @@ def _rotor_macro_step(y, phi, H, n_sub, minv, minv_k, minv_g, f_grav, jdofs, cou
         stiff, damp = rotor_operators(mk, minv_g, wb, wd, mc)
         v1 = v + 0.5 * h * a0 + 0.5 * h * (fbv - stiff @ (q + 0.5 * h * v))
         lhs = eye + 0.5 * h * damp + 0.25 * h * h * stiff
-        if not (math.isfinite(v1.sum()) and _lu_factor(lhs, piv)):
+        if not (math.isfinite(v1.sum()) and lu_factor(lhs, piv)):
             return math.nan, ROTOR_NOT_FINITE
-        _lu_solve(lhs, piv, v1)
+        lu_solve(lhs, piv, v1)
         q = q + 0.5 * h * (v + v1)
         v = v1
         ph = phb

@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 from .dynamics import interp_uniform, monolithic_rhs
+from .linalg import lu_factor, lu_solve
 
 #: typical displacement [m] (about a film clearance) that sets the difference steps of the film columns: step
 #: 1.5e-8 x max(|y_k|, typical_k), the other states' typical sizes scaled from it as their tolerances are
@@ -44,52 +45,6 @@ H21, H22, H23, H24, H25 = 10.12623508344586, -7.487995877610167, -34.80091861555
     1.025137723295662
 H31, H32, H33, H34, H35 = -0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386, \
     -6.594389125716872
-
-
-@njit(cache=True)
-def lu_factor(a, piv):
-    """In-place LU factorization with partial pivoting (row swaps in ``piv``); returns False if singular."""
-    n = a.shape[0]
-    for k in range(n):
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                big, p = abs(a[i, k]), i
-        piv[k] = p
-        if big == 0.0:
-            return False
-        if p != k:
-            for j in range(n):
-                a[k, j], a[p, j] = a[p, j], a[k, j]
-        inv = 1.0 / a[k, k]
-        for i in range(k + 1, n):
-            f = a[i, k] * inv
-            a[i, k] = f
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    a[i, j] -= f * a[k, j]
-    return True
-
-
-@njit(cache=True)
-def lu_solve(lu, piv, b):
-    """Solve with the factors of :func:`lu_factor`, in place of ``b``."""
-    n = lu.shape[0]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            b[k], b[p] = b[p], b[k]
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= lu[i, j] * b[j]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, n):
-            s -= lu[i, j] * b[j]
-        b[i] = s / lu[i, i]
 
 
 @njit(cache=True)

@@ -5,7 +5,8 @@ import pytest
 from scipy.linalg import expm
 
 import frbmodel as frb
-from frbmodel.rosenbrock import FD_TYPICAL_M, film_columns, jacobian, lu_factor, lu_solve, rodas_chunk
+from frbmodel.linalg import lu_factor, lu_solve
+from frbmodel.rosenbrock import FD_TYPICAL_M, film_columns, jacobian, rodas_chunk
 from frbmodel.runup import RPM, SpeedProfile, Unbalance, atol_vector, build_problem, initial_state, runup, typical_sizes
 
 
