@@ -423,8 +423,16 @@ def cmd_bifurcation(args):
               file=sys.stderr)
         bd = BifurcationDiagram(points, [], {"status": "interrupted", "branches": [len(points)]})
     bd.meta.setdefault("status", "finished")
-    envelopes = [_run_envelope(d) for d in (args.runs or "").split(",") if d]
-    bd.save(out, envelopes=envelopes)
+    folders = [d for d in (args.runs or "").split(",") if d]
+    envelopes = [_run_envelope(d) for d in folders]
+    sp = None
+    if folders:  # the first run's spectrogram behind the branch frequencies
+        from .recorder import RunupResult
+        from .spectral import spectrogram
+
+        run = RunupResult.load(folders[0])
+        sp = spectrogram(run, run.schema.discs[0])
+    bd.save(out, envelopes=envelopes, spectrogram=sp)
     partial.unlink()
     tab = bd.bifurcation_table()
     print("bifurcation points:" if len(tab) else "no bifurcation points on the branches")
@@ -1054,7 +1062,8 @@ def _add_bifurcation(sub):
                         "the orbit the whirl settles on there (both directions)")
     b.add_argument("--max-points", type=int, default=40, help="points per branch and direction at most")
     b.add_argument("--runs", default=None, metavar="DIR[,DIR]",
-                   help="run-up / run-down folders whose turbine-wheel orbit envelopes are drawn behind the branches")
+                   help="run-up / run-down folders whose turbine-wheel orbit envelopes are drawn behind the branches "
+                        "(and the first one's spectrogram behind the branch frequencies)")
     b.add_argument("--hopf-only", action="store_true", help="only list the Hopf points")
     b.add_argument("--out", default="results/bifurcation", help="output folder")
     _system_args(b)

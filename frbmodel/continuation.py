@@ -383,9 +383,9 @@ class BifurcationDiagram:
             meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
         return cls(pts, meta.pop("bifurcations", []), meta)
 
-    def save(self, out_dir, envelopes=()):
+    def save(self, out_dir, envelopes=(), spectrogram=None):
         """Write ``branch.csv``, ``bifurcations.csv``, ``branch.nc`` and the figure ``bifurcation.png`` (with the
-        run envelopes of :meth:`plot`) into ``out_dir``; returns the paths."""
+        run envelopes and spectrogram of :meth:`plot`) into ``out_dir``; returns the paths."""
         from pathlib import Path
 
         import matplotlib.pyplot as plt
@@ -398,18 +398,26 @@ class BifurcationDiagram:
         self.to_dataframe().to_csv(paths[0], index=False)
         self.bifurcation_table().to_csv(paths[1], index=False)
         self.to_xarray().to_netcdf(paths[2], engine=NETCDF_ENGINE)
-        fig = self.plot(envelopes=envelopes)
+        fig = self.plot(envelopes=envelopes, spectrogram=spectrogram)
         fig.savefig(paths[3], dpi=130)
         plt.close(fig)
         return paths
 
-    def plot(self, title=None, envelopes=()):
+    def plot(self, title=None, envelopes=(), spectrogram=None):
         """Bifurcation diagram: turbine-wheel orbit radius [µm] and orbit frequency [Hz] vs speed; stable solid,
         unstable dashed, bifurcation points marked. ``envelopes``: (label, speeds [rpm], radius [µm]) curves of
-        run-ups / run-downs drawn behind."""
+        run-ups / run-downs drawn behind; ``spectrogram``: a :class:`frbmodel.spectral.SpectrogramResult` of a run
+        drawn behind the frequency panel (forward + backward amplitude in dB re its maximum over 40 dB, so that the
+        ~10 µm whirls on the branches show beside ~100 µm ones)."""
         import matplotlib.pyplot as plt
 
         fig, (ax, axf) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+        if spectrogram is not None:
+            amp = spectrogram.forward + spectrogram.backward
+            db = 20 * np.log10(np.maximum(amp, 1e-300) / amp.max())
+            order = np.argsort(spectrogram.speeds_rpm)
+            axf.pcolormesh(spectrogram.speeds_rpm[order], spectrogram.freqs_hz, db[:, order], cmap="Greys",
+                           vmin=-40.0, vmax=0, shading="nearest", alpha=0.6, rasterized=True)
         for label, s, r in envelopes:
             ax.plot(s, r, lw=0.8, alpha=0.6, label=label)
         start = 0
@@ -437,6 +445,9 @@ class BifurcationDiagram:
             ax.set_yscale("log")  # branches of a few µm next to whirls of 100 µm
         ax.set_ylabel("turbine wheel orbit radius [µm]")
         axf.set_ylabel("orbit frequency [Hz]")
+        if spectrogram is not None:
+            top = max([1 / p.period for p in self.points] + [1.0])
+            axf.set_ylim(0, 1.3 * top)
         axf.set_xlabel("rotor speed [rpm]")
         ax.set_title(title or "limit-cycle branches (black solid: stable, grey dashed: unstable)")
         ax.grid(alpha=0.3)

@@ -90,7 +90,11 @@ def test_diagram_writes_readable_files(tc, tmp_path):
     pts = [_bp(1e4 + 1e3 * i, [0.5 + 0.2 * i]) for i in range(4)]
     bd = BifurcationDiagram(pts, [{"speed_rpm": 1.25e4, "type": "fold", "frequency_hz": 1e3, "turbine_radius_um": 1.0,
                                    "between": [2, 3]}], {"branches": [4]})
-    paths = bd.save(tmp_path)
+    from types import SimpleNamespace
+
+    sp = SimpleNamespace(speeds_rpm=np.linspace(1e4, 1.3e4, 5), freqs_hz=np.linspace(0, 2e3, 9), db_range=25.0,
+                         forward=np.ones((9, 5)) * 1e-6, backward=np.zeros((9, 5)))  # a run's spectrogram behind
+    paths = bd.save(tmp_path, spectrogram=sp)
     assert all(p.exists() for p in paths)
     with xr.open_dataset(tmp_path / "branch.nc") as ds:
         assert ds["speed"].attrs["units"] == "rpm" and ds["turbine_radius"].attrs["units"] == "m"
