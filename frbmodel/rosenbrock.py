@@ -129,6 +129,62 @@ def _stage(y, coef, ks, nk, out):
 
 
 @njit(cache=True)
+def _stages(t, h, y, f0, fx, w, piv, ks, coef, ynew, rhs, args):
+    """The six stages of one RODAS step from (t, y) with the factored W = I/(hγ) − J (``w``, ``piv``): the stage
+    vectors into ``ks``, the new solution into ``ynew`` (``ks[5]`` is the embedded error estimate)."""
+    n = y.size
+    # stage 1
+    for i in range(n):
+        ks[0, i] = f0[i] + h * D1 * fx[i]
+    lu_solve(w, piv, ks[0])
+    # stages 2-5: y + Σ a_ij k_j, f there, + Σ (C_ij / h) k_j (+ h d_i f_t)
+    for s in range(1, 6):
+        if s == 1:
+            coef[0] = A21
+            cs, ci, di = CC2, (C21, 0.0, 0.0, 0.0, 0.0), D2
+        elif s == 2:
+            coef[0], coef[1] = A31, A32
+            cs, ci, di = CC3, (C31, C32, 0.0, 0.0, 0.0), D3
+        elif s == 3:
+            coef[0], coef[1], coef[2] = A41, A42, A43
+            cs, ci, di = CC4, (C41, C42, C43, 0.0, 0.0), D4
+        elif s == 4:
+            coef[0], coef[1], coef[2], coef[3] = A51, A52, A53, A54
+            cs, ci, di = 1.0, (C51, C52, C53, C54, 0.0), 0.0
+        else:  # s == 5: the embedded stage on y_new = stage-5 point + k5
+            cs, ci, di = 1.0, (C61, C62, C63, C64, C65), 0.0
+        if s < 5:
+            _stage(y, coef, ks, s, ynew)
+        else:
+            for i in range(n):
+                ynew[i] += ks[4, i]
+        monolithic_rhs(t + cs * h, ynew, rhs, *args)
+        for i in range(n):
+            acc = rhs[i] + h * di * fx[i]
+            for j in range(s):
+                acc += ci[j] / h * ks[j, i]
+            ks[s, i] = acc
+        lu_solve(w, piv, ks[s])
+    for i in range(n):
+        ynew[i] += ks[5, i]
+
+
+@njit(cache=True)
+def _dense_output(t, h, y, ynew, ks, t_eval, k_out, out):
+    """Continuous output (order 3) of the step (t, y) -> (t + h, ynew) at the output times inside (t, t + h], from
+    ``t_eval[k_out]`` on, into ``out``; returns the next output index."""
+    n = y.size
+    while k_out < t_eval.size and t_eval[k_out] <= t + h * (1 + 1e-12):
+        th = (t_eval[k_out] - t) / h
+        for i in range(n):
+            k2 = H21 * ks[0, i] + H22 * ks[1, i] + H23 * ks[2, i] + H24 * ks[3, i] + H25 * ks[4, i]
+            k3 = H31 * ks[0, i] + H32 * ks[1, i] + H33 * ks[2, i] + H34 * ks[3, i] + H35 * ks[4, i]
+            out[k_out, i] = y[i] + th * ((ynew[i] - y[i]) + (1 - th) * (k2 + th * k3))
+        k_out += 1
+    return k_out
+
+
+@njit(cache=True)
 def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args):
     """Integrate from t_eval[0] through the times t_eval with RODAS (see the module docstring).
 
@@ -174,54 +230,14 @@ def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, arg
         if not lu_factor(w, piv):
             status = 3
             break
-        # stage 1
-        for i in range(n):
-            ks[0, i] = f0[i] + h * D1 * fx[i]
-        lu_solve(w, piv, ks[0])
-        # stages 2-5: y + Σ a_ij k_j, f there, + Σ (C_ij / h) k_j (+ h d_i f_t)
-        for s in range(1, 6):
-            if s == 1:
-                coef[0] = A21
-                cs, ci, di = CC2, (C21, 0.0, 0.0, 0.0, 0.0), D2
-            elif s == 2:
-                coef[0], coef[1] = A31, A32
-                cs, ci, di = CC3, (C31, C32, 0.0, 0.0, 0.0), D3
-            elif s == 3:
-                coef[0], coef[1], coef[2] = A41, A42, A43
-                cs, ci, di = CC4, (C41, C42, C43, 0.0, 0.0), D4
-            elif s == 4:
-                coef[0], coef[1], coef[2], coef[3] = A51, A52, A53, A54
-                cs, ci, di = 1.0, (C51, C52, C53, C54, 0.0), 0.0
-            else:  # s == 5: the embedded stage on y_new = stage-5 point + k5
-                cs, ci, di = 1.0, (C61, C62, C63, C64, C65), 0.0
-            if s < 5:
-                _stage(y, coef, ks, s, ynew)
-            else:
-                for i in range(n):
-                    ynew[i] += ks[4, i]
-            monolithic_rhs(t + cs * h, ynew, rhs, *args)
-            for i in range(n):
-                acc = rhs[i] + h * di * fx[i]
-                for j in range(s):
-                    acc += ci[j] / h * ks[j, i]
-                ks[s, i] = acc
-            lu_solve(w, piv, ks[s])
-        for i in range(n):
-            ynew[i] += ks[5, i]
+        _stages(t, h, y, f0, fx, w, piv, ks, coef, ynew, rhs, args)
         err = _error_norm(ks[5], y, ynew, rtol, atol)
         steps += 1
         if not (err <= 1.0):  # rejected (also NaN)
             rejected += 1
             h *= max(0.2, 0.9 * err ** -0.25) if err == err else 0.25
             continue
-        # continuous output (order 3) at the output times inside (t, t + h]
-        while k_out < t_eval.size and t_eval[k_out] <= t + h * (1 + 1e-12):
-            th = (t_eval[k_out] - t) / h
-            for i in range(n):
-                k2 = H21 * ks[0, i] + H22 * ks[1, i] + H23 * ks[2, i] + H24 * ks[3, i] + H25 * ks[4, i]
-                k3 = H31 * ks[0, i] + H32 * ks[1, i] + H33 * ks[2, i] + H34 * ks[3, i] + H35 * ks[4, i]
-                out[k_out, i] = y[i] + th * ((ynew[i] - y[i]) + (1 - th) * (k2 + th * k3))
-            k_out += 1
+        k_out = _dense_output(t, h, y, ynew, ks, t_eval, k_out, out)
         t += h
         for i in range(n):
             y[i] = ynew[i]
