@@ -423,6 +423,25 @@ def cmd_bifurcation(args):
               file=sys.stderr)
         bd = BifurcationDiagram(points, [], {"status": "interrupted", "branches": [len(points)]})
     bd.meta.setdefault("status", "finished")
+    _save_diagram(args, tc, bd, out, lo, hi)
+    partial.unlink()
+    tab = bd.bifurcation_table()
+    print("bifurcation points:" if len(tab) else "no bifurcation points on the branches")
+    if len(tab):
+        print(tab.to_string(index=False, float_format=lambda x: f"{x:.6g}"))
+    print(f"results in {out.resolve()} (branch.csv, bifurcations.csv, branch.nc, bifurcation.png/.html)")
+    return code
+
+
+#: speeds of the method-J Campbell diagram drawn in the bifurcation diagram's frequency panel (~1.5 s for 120)
+BIFURCATION_CAMPBELL_SPEEDS = 120
+
+
+def _save_diagram(args, tc, bd, out, lo, hi):
+    """Write the diagram with the run envelopes (--runs), the first run's spectrogram and the method-J Campbell
+    diagram's unstable modes and film whirl lines over the speed range."""
+    from .campbell import campbell
+
     folders = [d for d in (args.runs or "").split(",") if d]
     envelopes = [_run_envelope(d) for d in folders]
     sp = None
@@ -432,14 +451,9 @@ def cmd_bifurcation(args):
 
         run = RunupResult.load(folders[0])
         sp = spectrogram(run, run.schema.discs[0])
-    bd.save(out, envelopes=envelopes, spectrogram=sp)
-    partial.unlink()
-    tab = bd.bifurcation_table()
-    print("bifurcation points:" if len(tab) else "no bifurcation points on the branches")
-    if len(tab):
-        print(tab.to_string(index=False, float_format=lambda x: f"{x:.6g}"))
-    print(f"results in {out.resolve()} (branch.csv, bifurcations.csv, branch.nc, bifurcation.png)")
-    return code
+        lo, hi = min(lo, sp.speeds_rpm.min()), max(hi, sp.speeds_rpm.max())
+    cd = campbell(tc, "J", np.linspace(lo, hi, BIFURCATION_CAMPBELL_SPEEDS))
+    bd.save(out, envelopes=envelopes, spectrogram=sp, campbell=cd)
 
 
 def _run_envelope(folder, segment_s=0.005):
@@ -632,6 +646,8 @@ def cmd_plot(args):
 
     out = Path(args.dir)
     orders = parse_orders(args.orders)
+    if (out / "branch.nc").exists():
+        return replot_bifurcation(args, out)
     if out.is_dir() and not (out / "runup.csv").exists() and any(out.glob("unbalance_*.json")):
         if args.orbits or args.orbit_times or args.waterfall:
             raise ParameterError(f"{out}: an unbalance response; --orbits, --orbit-times and --waterfall need a "
@@ -659,6 +675,21 @@ def cmd_plot(args):
     if args.waterfall:
         write_waterfalls(run, out, orders=orders)
     print(f"results in {out.resolve()}")
+
+
+def replot_bifurcation(args, out):
+    """``frb plot DIR`` of a folder written by ``frb bifurcation``: the diagram drawn again from ``branch.nc`` (with
+    the Campbell lines of the system it holds and the runs of ``--runs``)."""
+    from .continuation import BifurcationDiagram
+    from .parameters import Turbocharger
+
+    bd = BifurcationDiagram.load(out)
+    if "system" not in bd.meta:
+        raise ParameterError(f"{out / 'branch.nc'}: no system recorded, cannot draw the Campbell lines")
+    lo, hi = bd.meta.get("speed_range_rpm", [min(p.speed_rpm for p in bd.points), max(p.speed_rpm for p in bd.points)])
+    _save_diagram(args, Turbocharger.from_dict(bd.meta["system"]), bd, out, lo, hi)
+    print(f"results in {out.resolve()} (bifurcation.png/.html)")
+    return 0
 
 
 def replot_unbalance(out, names=None):
@@ -1254,7 +1285,8 @@ def _add_plot(sub):
     pl = sub.add_parser("plot", formatter_class=_Formatter,
                         help="re-render the figures of a run-up / co-simulation or unbalance-response results folder")
     pl.add_argument("dir", help="folder with runup.csv and runup.json, or with the unbalance_<M>.json/_dofs.csv files "
-                                "of frb unbalance (then the Bode, polar and film-orbit figures are redrawn)")
+                                "of frb unbalance (then the Bode, polar and film-orbit figures are redrawn), or with "
+                                "the branch.nc of frb bifurcation (then the diagram)")
     pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
     pl.add_argument("--orbits", metavar="SPEEDS", default=None,
                     help="also write orbits_<rpm>.png/.html/.csv/.nc at these speeds [rpm] (comma list or "
@@ -1272,6 +1304,9 @@ def _add_plot(sub):
                          "e.g. 0.5,1,2; 'none' for none)")
     pl.add_argument("--locations", default=None,
                     help="unbalance folders: locations drawn, comma list (default: the discs)")
+    pl.add_argument("--runs", default=None, metavar="DIR[,DIR]",
+                    help="bifurcation folders: run-up / run-down folders whose envelopes (and the first's "
+                         "spectrogram) are drawn behind the branches")
     pl.set_defaults(func=cmd_plot)
 
 

@@ -23,6 +23,10 @@ from .errors import ConvergenceError, ParameterError
 TOL, MAX_CORRECTOR, GOOD_ITERATIONS = 1e-6, 8, 3
 #: difference step of the speed derivative, relative
 SPEED_FD = 1e-6
+#: a turn of the branch in speed is a fold only if the speed moves back by more than this (relative) within three
+#: points on both sides: on a vertical branch (the orbit grows at one speed, e.g. at the 2.0 krpm Hopf point of the
+#: 36 µm system) the computed speeds jitter by ~4e-6 relative, the speed being ill-conditioned there
+FOLD_MIN_REL = 2e-5
 #: samples of each branch point's orbit over one period (radius and max eps; the sampled peak of a whirl is low by
 #: at most (pi / 100)^2 / 2 = 0.05 %; the compiled solver's cost grows with the number of output times)
 POINT_SAMPLES = 100
@@ -55,7 +59,8 @@ class _Branch:
         #: one scaling of the states for the whole branch (that of the start speed): u = z / scale
         self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
 
-    def flow(self, speed_rpm):
+    def flow(self, speed_rpm, like=None):
+        """The flow at a speed [rpm]; ``like``: a flow whose integrator it must use (differences between them)."""
         from .runup import SpeedProfile, build_problem
 
         key = float(speed_rpm)
@@ -63,7 +68,7 @@ class _Branch:
             if len(self._flows) > 8:
                 self._flows.clear()
             problem = build_problem(self.system, SpeedProfile.constant(key, 1.0), self.model)
-            self._flows[key] = self._flow_cls(problem, self.rtol, self.atol_m)
+            self._flows[key] = self._flow_cls(problem, self.rtol, self.atol_m, None if like is None else like.method)
         return self._flows[key]
 
     def scale(self, speed_rpm=None):
@@ -79,7 +84,7 @@ def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref):
     n = z.size
     m = monodromy(fl, z, T, scale, end, 1e-4, br.workers)
     ds = SPEED_FD * speed
-    d_speed = (br.flow(speed + ds)(z, T) - end) / ds
+    d_speed = (br.flow(speed + ds, like=fl)(z, T) - end) / ds
     jac = np.zeros((n + 1, n + 2))
     jac[:n, :n] = m * scale[None, :] / scale[:, None] - np.eye(n)
     jac[:n, n] = fl.rhs(end) / scale * t_ref
@@ -113,7 +118,7 @@ def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref):
         z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
         if not (T > 0 and speed > 0):
             break
-        end = br.flow(speed)(z, T)
+        end = br.flow(speed, like=br.flow(x_pred[n + 1] * w_ref))(z, T)  # the Jacobian's integrator
         res = np.append((end - z) / scale, 0.0)
         if float(np.max(np.abs(res))) < TOL:
             return x, jac, m, it
@@ -122,8 +127,9 @@ def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref):
 
 def _point(br, x, n, t_ref, w_ref, m):
     """A BranchPoint (orbit measures sampled from the flow) for the solution x with monodromy m."""
-    from .limitcycle import _orbit_result
+    from .limitcycle import MULTIPLIER_TOL, _orbit_result
     from .recorder import RunupSchema
+    from .shooting import stable_multipliers
 
     scale = br.scale(x[n + 1] * w_ref)
     z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
@@ -135,7 +141,7 @@ def _point(br, x, n, t_ref, w_ref, m):
     mult = np.linalg.eigvals(m)
     mult = mult[np.argsort(-np.abs(mult))]
     nontrivial = np.delete(mult, int(np.argmin(np.abs(mult - 1.0))))
-    return BranchPoint(speed, T, mult, bool(np.all(np.abs(nontrivial) < 1.0)), radius,
+    return BranchPoint(speed, T, mult, stable_multipliers(nontrivial, MULTIPLIER_TOL), radius,
                        orbit.eccentricity.max(axis=0), z)
 
 
@@ -270,16 +276,19 @@ def _nontrivial(p):
 
 
 def _outside(p):
-    """Non-trivial multipliers of a branch point outside the unit circle."""
+    """Non-trivial multipliers of a branch point outside the unit circle (by more than their accuracy)."""
+    from .limitcycle import MULTIPLIER_TOL
+
     mu = _nontrivial(p)
-    return mu[np.abs(mu) > 1.0]
+    return mu[np.abs(mu) > 1.0 + MULTIPLIER_TOL]
 
 
 def _classify(a, b):
     """Bifurcations between consecutive branch points a, b: [(type, fraction along a -> b)]. The number of
     multipliers outside the unit circle changes; the crossing one (outside on the unstable side, closest to the
     circle) decides the type by its angle: ~0 fold, ~π period doubling, otherwise Neimark-Sacker (a complex pair
-    counts twice). Located where its modulus, interpolated linearly, is 1."""
+    counts twice). Located where its modulus, interpolated (or extrapolated by up to one interval: the count uses
+    :data:`frbmodel.limitcycle.MULTIPLIER_TOL`) linearly, is 1."""
     out_a, out_b = _outside(a), _outside(b)
     if out_a.size == out_b.size:
         return []
@@ -293,7 +302,8 @@ def _classify(a, b):
     r_in = float(np.abs(rest[0])) if rest.size else 1.0
     r_out = float(abs(mu))
     frac = (1.0 - r_in) / (r_out - r_in) if r_out != r_in else 0.5
-    frac = float(np.clip(frac if side is out_b else 1.0 - frac, 0.0, 1.0))
+    # detected beyond MULTIPLIER_TOL, located where the modulus is 1: possibly up to one interval before (after)
+    frac = float(np.clip(frac if side is out_b else 1.0 - frac, -1.0, 2.0))
     return [(kind, frac)]
 
 
@@ -306,8 +316,10 @@ class BifurcationDiagram:
     points : list of BranchPoint
         The computed orbits, in branch order (arclength).
     bifurcations : list of dict
-        Each: ``speed_rpm``, ``type`` (fold, period doubling, Neimark-Sacker), ``frequency_hz``,
-        ``turbine_radius_um``, ``between`` (indices of the two points it lies between).
+        Each: ``speed_rpm``, ``type`` (Hopf, fold, period doubling, Neimark-Sacker), ``criticality`` (of a Hopf
+        point: super- or subcritical), ``frequency_hz``, ``turbine_radius_um``, ``mode`` (the Campbell mode of the
+        branch's Hopf point), ``film`` (Hopf: the film moving most in the eigenvector; others: the film with the
+        largest eccentricity ratio, :func:`hopf_record`), ``between`` (indices of the two points it lies between).
     meta : dict
         System, film model, tolerances, steps taken.
     """
@@ -333,7 +345,8 @@ class BifurcationDiagram:
         import pandas as pd
 
         return pd.DataFrame([{k: v for k, v in b.items() if k != "between"} for b in self.bifurcations],
-                            columns=["speed_rpm", "type", "frequency_hz", "turbine_radius_um"])
+                            columns=["speed_rpm", "type", "criticality", "frequency_hz", "turbine_radius_um", "mode",
+                                     "film"])
 
     def to_xarray(self):
         """Branch points as an :class:`xarray.Dataset` along ``point`` (units in the attributes)."""
@@ -386,9 +399,10 @@ class BifurcationDiagram:
             meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
         return cls(pts, meta.pop("bifurcations", []), meta)
 
-    def save(self, out_dir, envelopes=(), spectrogram=None):
-        """Write ``branch.csv``, ``bifurcations.csv``, ``branch.nc`` and the figure ``bifurcation.png`` (with the
-        run envelopes and spectrogram of :meth:`plot`) into ``out_dir``; returns the paths."""
+    def save(self, out_dir, envelopes=(), spectrogram=None, campbell=None):
+        """Write ``branch.csv``, ``bifurcations.csv``, ``branch.nc`` and the figures ``bifurcation.png`` and
+        ``bifurcation.html`` (with the run envelopes, spectrogram and Campbell lines of :meth:`plot`) into
+        ``out_dir``; returns the paths."""
         from pathlib import Path
 
         import matplotlib.pyplot as plt
@@ -397,66 +411,32 @@ class BifurcationDiagram:
 
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        paths = [out / "branch.csv", out / "bifurcations.csv", out / "branch.nc", out / "bifurcation.png"]
+        paths = [out / "branch.csv", out / "bifurcations.csv", out / "branch.nc", out / "bifurcation.png",
+                 out / "bifurcation.html"]
         self.to_dataframe().to_csv(paths[0], index=False)
         self.bifurcation_table().to_csv(paths[1], index=False)
         self.to_xarray().to_netcdf(paths[2], engine=NETCDF_ENGINE)
-        fig = self.plot(envelopes=envelopes, spectrogram=spectrogram)
+        fig = self.plot(envelopes=envelopes, spectrogram=spectrogram, campbell=campbell)
         fig.savefig(paths[3], dpi=130)
         plt.close(fig)
+        self.plot_html(paths[4], envelopes=envelopes, campbell=campbell)
         return paths
 
-    def plot(self, title=None, envelopes=(), spectrogram=None):
-        """Bifurcation diagram: turbine-wheel orbit radius [µm] and orbit frequency [Hz] vs speed; stable solid,
-        unstable dashed, bifurcation points marked. ``envelopes``: (label, speeds [rpm], radius [µm]) curves of
-        run-ups / run-downs drawn behind; ``spectrogram``: a :class:`frbmodel.spectral.SpectrogramResult` of a run
-        drawn behind the frequency panel (forward + backward amplitude in dB re its maximum over 40 dB, so that the
-        ~10 µm whirls on the branches show beside ~100 µm ones)."""
-        import matplotlib.pyplot as plt
+    def plot(self, title=None, envelopes=(), spectrogram=None, campbell=None):
+        """Bifurcation diagram (matplotlib): turbine-wheel orbit radius [µm] and orbit frequency [Hz] vs speed;
+        stable solid, unstable dashed, bifurcation points marked; behind them run envelopes (label, speeds [rpm],
+        radius [µm]), a run's spectrogram and a Campbell diagram's unstable modes and film whirl lines
+        (:func:`frbmodel.bifurcation_figure.diagram_figure`)."""
+        from .bifurcation_figure import diagram_figure
 
-        fig, (ax, axf) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
-        if spectrogram is not None:
-            amp = spectrogram.forward + spectrogram.backward
-            db = 20 * np.log10(np.maximum(amp, 1e-300) / amp.max())
-            order = np.argsort(spectrogram.speeds_rpm)
-            axf.pcolormesh(spectrogram.speeds_rpm[order], spectrogram.freqs_hz, db[:, order], cmap="Greys",
-                           vmin=-40.0, vmax=0, shading="nearest", alpha=0.6, rasterized=True)
-        for label, s, r in envelopes:
-            ax.plot(s, r, lw=0.8, alpha=0.6, label=label)
-        start = 0
-        for count in self.meta.get("branches", [len(self.points)]):
-            pts = self.points[start:start + count]
-            start += count
-            sp = np.array([p.speed_rpm for p in pts])
-            rad = np.array([p.turbine_radius_m for p in pts]) * 1e6
-            freq = np.array([1 / p.period for p in pts])
-            stab = np.array([p.stable for p in pts])
-            for i in range(len(sp) - 1):
-                stable = stab[i] and stab[i + 1]
-                kw = dict(color="k", lw=2.2, ls="-") if stable else dict(color="0.45", lw=1.4, ls="--")
-                ax.plot(sp[i:i + 2], rad[i:i + 2], **kw)
-                axf.plot(sp[i:i + 2], freq[i:i + 2], **kw)
-        marks = {"Hopf": "*", "fold": "o", "period doubling": "s", "Neimark-Sacker": "D"}
-        for b in self.bifurcations:
-            ax.plot(b["speed_rpm"], b["turbine_radius_um"], marks[b["type"]], color="C3", ms=7, label=b["type"])
-            axf.plot(b["speed_rpm"], b["frequency_hz"], marks[b["type"]], color="C3", ms=7)
-        handles, labels = ax.get_legend_handles_labels()
-        uniq = dict(zip(labels, handles))
-        if uniq:
-            ax.legend(uniq.values(), uniq.keys(), fontsize=8)
-        if envelopes:
-            ax.set_yscale("log")  # branches of a few µm next to whirls of 100 µm
-        ax.set_ylabel("turbine wheel orbit radius [µm]")
-        axf.set_ylabel("orbit frequency [Hz]")
-        if spectrogram is not None:
-            top = max([1 / p.period for p in self.points] + [1.0])
-            axf.set_ylim(0, 1.3 * top)
-        axf.set_xlabel("rotor speed [rpm]")
-        ax.set_title(title or "limit-cycle branches (black solid: stable, grey dashed: unstable)")
-        ax.grid(alpha=0.3)
-        axf.grid(alpha=0.3)
-        fig.tight_layout()
-        return fig
+        return diagram_figure(self, title, envelopes, spectrogram, campbell)
+
+    def plot_html(self, path, title=None, envelopes=(), campbell=None, include_plotlyjs="directory"):
+        """The diagram as an interactive HTML file (:func:`frbmodel.bifurcation_figure.diagram_html`); returns
+        its path."""
+        from .bifurcation_figure import diagram_html
+
+        return diagram_html(self, path, title, envelopes, campbell, include_plotlyjs)
 
 
 def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_max=8.0, max_points=100,
@@ -523,25 +503,72 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     return _diagram(system, model, branches, hopfs, lo, hi)
 
 
-def _event(kind, a, c, frac, between):
-    """A bifurcation record between branch points a and c at fraction ``frac`` (linear interpolation)."""
-    return {"speed_rpm": a.speed_rpm + frac * (c.speed_rpm - a.speed_rpm), "type": kind,
+def _event(kind, a, c, frac, between, films=(), mode=""):
+    """A bifurcation record between branch points a and c at fraction ``frac`` (linear interpolation); ``film`` is
+    the film with the largest eccentricity ratio there (of ``films``, the names), ``mode`` the branch's Hopf mode."""
+    eps = a.max_eps + frac * (np.asarray(c.max_eps) - a.max_eps)
+    return {"speed_rpm": a.speed_rpm + frac * (c.speed_rpm - a.speed_rpm), "type": kind, "criticality": "",
             "frequency_hz": 1 / a.period + frac * (1 / c.period - 1 / a.period),
             "turbine_radius_um": 1e6 * (a.turbine_radius_m + frac * (c.turbine_radius_m - a.turbine_radius_m)),
+            "mode": mode, "film": f"{films[int(np.argmax(eps))]} (eps {np.max(eps):.2f})" if len(films) else "",
             "between": between}
 
 
-def _branch_events(b, off):
+def hopf_record(system, hp, branch=(), film_model=None):
+    """The bifurcation-table record of a Hopf point.
+
+    ``criticality``: "supercritical" if its branch grows towards higher speeds, where the crossing pair is unstable
+    (:func:`hopf_points` lists crossings to instability only), "subcritical" if it grows backwards, "" without a
+    branch. ``mode``: precession and kind of the method-J Campbell mode nearest in frequency at that speed (the
+    linear onsets agree to 0.03 %). ``film``: the film whose relative motion in the crossing eigenvector, over its
+    clearance, is largest (inner: journal minus ring, outer: ring), with that share of the four.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    hp : HopfPoint
+    branch : sequence of BranchPoint
+        The branch started there (may be empty).
+    film_model : str, optional
+
+    Returns
+    -------
+    dict
+    """
+    from .campbell import campbell
+    from .runup import SpeedProfile, build_problem
+    from .whirl import film_names
+
+    cd = campbell(system, "J", [hp.speed_rpm], whirl=False)
+    j = int(np.nanargmin(np.abs(cd.frequencies_hz[0] - hp.frequency_hz)))
+    p = build_problem(system, SpeedProfile.constant(hp.speed_rpm, 1.0), film_model or system.film_model)
+    v, rel = hp.eigenvector, []
+    for i, b in enumerate(system.bearings):
+        ring = v[p.ring_index(i):p.ring_index(i) + 2]
+        rel += [np.linalg.norm(v[4 * b.node:4 * b.node + 2] - ring) / b.inner.clearance,
+                np.linalg.norm(ring) / b.outer.clearance]
+    rel = np.array(rel) / np.sum(rel)
+    k = int(np.argmax(rel))
+    ahead = [q.speed_rpm - hp.speed_rpm for q in branch[:3]]
+    crit = "" if not ahead else "supercritical" if np.mean(ahead) > 0 else "subcritical"
+    return {"speed_rpm": hp.speed_rpm, "type": "Hopf", "criticality": crit, "frequency_hz": hp.frequency_hz,
+            "turbine_radius_um": 0.0, "mode": f"{cd.precession[0, j]} {cd.mode_kind[0, j]}",
+            "film": f"{film_names(system)[k]} ({100 * rel[k]:.0f} %)", "between": []}
+
+
+def _branch_events(b, off, films=(), mode=""):
     """Bifurcations along one branch: folds where the speed turns (the branch point of extreme speed; a multiplier
     passes +1 there, which the multipliers near the turn, with the trivial one beside it, cannot tell reliably), and
     the multiplier crossings of :func:`_classify` away from the folds (2 points or more)."""
     s = np.array([p.speed_rpm for p in b])
-    turns = [i for i in range(1, len(b) - 1) if (s[i] - s[i - 1]) * (s[i + 1] - s[i]) < 0]
-    events = [_event("fold", b[i], b[i], 0.0, [off + i]) for i in turns]
+    turns = [i for i in range(1, len(b) - 1) if (s[i] - s[i - 1]) * (s[i + 1] - s[i]) < 0
+             and min(np.max(np.abs(s[max(i - 3, 0):i] - s[i])), np.max(np.abs(s[i + 1:i + 4] - s[i])))
+             > FOLD_MIN_REL * s[i]]
+    events = [_event("fold", b[i], b[i], 0.0, [off + i], films, mode) for i in turns]
     for i in range(len(b) - 1):
         if any(abs(i - j) <= 2 or abs(i + 1 - j) <= 2 for j in turns):
             continue
-        events += [_event(kind, b[i], b[i + 1], frac, [off + i, off + i + 1])
+        events += [_event(kind, b[i], b[i + 1], frac, [off + i, off + i + 1], films, mode)
                    for kind, frac in _classify(b[i], b[i + 1])]
     return events
 
@@ -549,16 +576,19 @@ def _branch_events(b, off):
 def _diagram(system, model, branches, hopfs, lo, hi):
     """The BifurcationDiagram of computed branches: Hopf points, folds and multiplier crossings."""
     from .limitcycle import SHOOT_RTOL
+    from .whirl import film_names
 
+    films = film_names(system)
     points, bifs = [], []
     for b, hp in zip(branches, hopfs or [None] * len(branches)):
+        mode = ""
         if hp is not None:
-            bifs.append({"speed_rpm": hp.speed_rpm, "type": "Hopf", "frequency_hz": hp.frequency_hz,
-                         "turbine_radius_um": 0.0, "between": []})
-        bifs += _branch_events(b, len(points))
+            bifs.append(hopf_record(system, hp, b, model))
+            mode = bifs[-1]["mode"]
+        bifs += _branch_events(b, len(points), films, mode)
         for end in ((b[0], b[-1]) if hp is None and len(b) > 1 else ()):
             if end.turbine_radius_m < COLLAPSE * max(p.turbine_radius_m for p in b):  # the branch ends at a Hopf point
-                bifs.append(_event("Hopf", end, end, 0.0, [len(points) + b.index(end)]))
+                bifs.append(_event("Hopf", end, end, 0.0, [len(points) + b.index(end)], films))
         points.extend(b)
     meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
             "branches": [len(b) for b in branches]}
@@ -645,4 +675,5 @@ def _phase_normal(br, z, speed):
     return f / np.linalg.norm(f)
 
 
-__all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_points"]
+__all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_points",
+           "hopf_record"]

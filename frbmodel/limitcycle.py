@@ -30,6 +30,14 @@ from .units import RPM
 #: point: 1.38 vs 1.08 s, quiet machine)
 SHOOT_RTOL, SHOOT_ATOL_M = 3e-9, 3e-13
 FD_STEP = 1e-4
+#: integrator of the shooting flows ("auto", "radau" or "rodas", see :class:`_Flow`)
+FLOW_METHOD = "auto"
+#: accuracy of the multipliers' moduli [-]: a double multiplier at 1 (the trivial one and, near a Hopf point or a
+#: fold, the critical one) splits by about the square root of the monodromy's error; measured: up to 8e-4 on an
+#: orbit 0.5 rpm from the 14.1 krpm Hopf point of the 36 µm system (1.0003 ± 0.0008j, 8 ms period) and 0.9966 ...
+#: 1.0037 along the vertical branch at its 2.0 krpm Hopf point (50 ms period; the radial multiplier is 1 there).
+#: Multipliers within this of the unit circle count as on it for stability and bifurcation detection
+MULTIPLIER_TOL = 5e-3
 #: typical displacement [m] that scales the shooting variables (other states scaled alike, :func:`atol_vector`)
 SCALE_M = 1e-6
 #: threads integrating the monodromy's columns (the compiled solver runs without the GIL)
@@ -53,7 +61,7 @@ class LimitCycle(Result):
     multipliers : ndarray (n,)
         Floquet multipliers, largest modulus first (complex).
     stable : bool
-        All non-trivial multipliers inside the unit circle.
+        No non-trivial multiplier outside the unit circle by more than their accuracy :data:`MULTIPLIER_TOL`.
     state : ndarray (n,)
         The full state (without the rotation angle) at the start of the period, SI units.
     monodromy : ndarray (n, n)
@@ -171,23 +179,69 @@ class LimitCycle(Result):
 
 
 class _Flow:
-    """The flow z(0) -> z(T) of the constant-speed model (compiled Radau IIA), z = the state without φ."""
+    """The flow z(0) -> z(T) of the constant-speed model, z = the state without φ; compiled, without the GIL.
 
-    def __init__(self, problem, rtol, atol_m):
+    Two integrators: CyRK's Radau IIA (:mod:`frbmodel.compiled`; 2-3.5x faster on whirl orbits) and the Rosenbrock
+    method of the run-up (:mod:`frbmodel.rosenbrock`). Radau's internal Jacobian differences scale with the states
+    themselves, and near an equilibrium (velocities ~0) it degrades: at the 2 krpm Hopf point of the 36 µm system a
+    5 ms flow of a 0.1 µm orbit took it 23k steps and 5 s with an error of 4e-4 of the motion, Rodas (difference
+    steps from the states' typical sizes) 55 steps and 3e-13 (LSODA at 1e-11 as reference). ``method="auto"``: the
+    first flow is integrated by Rodas, then by Radau with twice Rodas' steps as budget; Radau is kept for this speed
+    if it finishes, else Rodas. All flows of one instance use one integrator (the monodromy's differences need it).
+    """
+
+    def __init__(self, problem, rtol, atol_m, method=None):
+        import threading
+
         from .compiled import pack_problem
-        from .runup import atol_vector
+        from .rosenbrock import FD_TYPICAL_M, film_columns
+        from .runup import atol_vector, typical_sizes
 
-        self.problem, self.rtol = problem, rtol
-        self.packed = pack_problem(problem)
+        self.problem, self.rtol, self.method = problem, rtol, method or FLOW_METHOD
         self.atol = atol_vector(problem, atol_m)[0]
         self.evaluations = 0
+        self.packed = pack_problem(problem)
+        self.fd_scale = typical_sizes(problem, FD_TYPICAL_M)
+        self.cols = film_columns(problem.n_rotor, problem.args[3], problem.torque_driven, problem.args[10].size > 0)
+        self._probe = threading.Lock()
+
+    def _radau(self, y0, t, max_steps=10**8):
+        from .compiled import solve_chunk
+
+        y, _, message = solve_chunk(self.packed, y0, t, self.rtol, self.atol, max_steps=max_steps)
+        return y, message
+
+    def _rodas(self, y0, t):
+        from .rosenbrock import STATUS, rodas_chunk
+
+        y, good, _, steps, _, status = rodas_chunk(y0, np.asarray(t, dtype=float), 1e-7, self.rtol, self.atol,
+                                                   self.fd_scale, self.cols, 10**7, float(t[-1]), self.problem.args)
+        return y[:good], (STATUS[status] if status else ""), steps
+
+    def _choose(self, y0, t):
+        """The first flow: Rodas, then Radau within twice its steps; keep the one that worked best."""
+        y, message, steps = self._rodas(y0, t)
+        if message:
+            self.method = "radau"
+            return self._radau(y0, t)
+        y_a, message_a = self._radau(y0, t, max_steps=2 * steps + 100)
+        self.method = "rodas" if message_a else "radau"
+        return (y, message) if message_a else (y_a, message_a)
 
     def states(self, z0, t):
         """Full states (with φ from 0) at the times ``t`` (from 0)."""
-        from .compiled import solve_chunk
-
-        y, _, message = solve_chunk(self.packed, np.append(z0, 0.0), t, self.rtol, self.atol)
+        y0 = np.append(z0, 0.0)
         self.evaluations += 1
+        if self.method == "auto":
+            with self._probe:  # the monodromy's columns run in threads: one probe
+                if self.method == "auto":
+                    y, message = self._choose(y0, t)
+                    return self._checked(y, message, t)
+        y, message = self._radau(y0, t) if self.method == "radau" else self._rodas(y0, t)[:2]
+        return self._checked(y, message, t)
+
+    @staticmethod
+    def _checked(y, message, t):
         if message:
             raise ConvergenceError(f"limit cycle: the flow failed over {t[-1]:.6g} s ({message})")
         return y
@@ -316,7 +370,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     """
     from .film import check_model
     from .runup import RunupSchema, SpeedProfile, atol_vector, build_problem, check_speed
-    from .shooting import shoot
+    from .shooting import shoot, stable_multipliers
 
     speed_rpm = check_speed("speed", speed_rpm)
     model = check_model(film_model or system.film_model)
@@ -340,8 +394,8 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     orbit = _orbit_result(problem, RunupSchema.from_system(system), t, y)
     meta = {"film_model": model, "rtol": SHOOT_RTOL, "atol_displacement_m": SHOOT_ATOL_M, "newton_iterations":
             sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
-    return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, sol.stable, sol.z0, not forced, meta,
-                      sol.monodromy)
+    stable = stable_multipliers(sol.nontrivial_multipliers, MULTIPLIER_TOL)
+    return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, stable, sol.z0, not forced, meta, sol.monodromy)
 
 
 def _minimal_period(flow, sol, scale, forced, tol, max_iter):

@@ -72,8 +72,30 @@ class ShootingSolution:
 
     @property
     def stable(self):
-        """True if every non-trivial Floquet multiplier has modulus < 1."""
-        return bool(np.all(np.abs(self.nontrivial_multipliers) < 1.0))
+        """True if every non-trivial Floquet multiplier has modulus < 1 (:func:`stable_multipliers`, tol = 0)."""
+        return stable_multipliers(self.nontrivial_multipliers)
+
+
+def stable_multipliers(nontrivial, tol=0.0):
+    """True if no multiplier lies outside the unit circle by more than ``tol``.
+
+    Parameters
+    ----------
+    nontrivial : array_like of complex
+        Floquet multipliers without the trivial one.
+    tol : float
+        Accuracy of the multipliers' moduli [-] (a multiplier within it of the circle is taken as on it).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> stable_multipliers([0.5, 1.0005], tol=2e-3), stable_multipliers([0.5, 1.0005])
+    (True, False)
+    """
+    return bool(np.all(np.abs(np.asarray(nontrivial)) <= 1.0 + tol))
 
 
 def monodromy(flow, z0, period, scale, end=None, fd_step=1e-6, workers=1):

@@ -73,6 +73,18 @@ def test_fold_where_the_branch_turns_back_in_speed():
     assert [e["type"] for e in events] == ["fold"] and events[0]["speed_rpm"] == 1.25e4
 
 
+def test_no_fold_from_speed_jitter_on_a_vertical_branch():
+    """Where the orbit grows at one speed (a vertical branch, as at the 2.0 krpm Hopf point of the 36 um system)
+    the computed speeds jitter by ~4e-6 relative and the radial multiplier sits at 1 within the monodromy's
+    accuracy: neither makes a fold or any other bifurcation (measured jitter and multipliers of that branch)."""
+    from frbmodel.continuation import _branch_events
+
+    jitter = [0.0, 3.7e-6, 1.5e-6, 3.1e-6, -0.6e-6, -3.0e-6, -0.7e-6, -4.3e-6, -1.1e-6, -0.8e-6]
+    radial = [0.999, 1.0014, 0.9975, 0.9985, 1.0037, 0.9981, 1.0011, 0.9985, 0.9979, 1.0016]
+    pts = [_bp(2011.76 * (1 + j), [r, 0.786 * np.exp(1j), 0.786 * np.exp(-1j)]) for j, r in zip(jitter, radial)]
+    assert _branch_events(pts, 0) == []
+
+
 def test_branch_stops_where_it_reaches_the_equilibrium():
     """A branch whose orbit shrinks to the equilibrium has reached a Hopf point: it stops there (continuing would
     pass through it and retrace the same orbits half a period shifted) and the end is marked as a Hopf point."""
@@ -94,11 +106,55 @@ def test_diagram_writes_readable_files(tc, tmp_path):
 
     sp = SimpleNamespace(speeds_rpm=np.linspace(1e4, 1.3e4, 5), freqs_hz=np.linspace(0, 2e3, 9), db_range=25.0,
                          forward=np.ones((9, 5)) * 1e-6, backward=np.zeros((9, 5)))  # a run's spectrogram behind
-    paths = bd.save(tmp_path, spectrogram=sp)
-    assert all(p.exists() for p in paths)
+    cd = frb.campbell(tc, "J", np.linspace(1e4, 1.3e4, 7))
+    paths = bd.save(tmp_path, spectrogram=sp, campbell=cd)
+    assert all(p.exists() for p in paths) and (tmp_path / "bifurcation.html").exists()
     with xr.open_dataset(tmp_path / "branch.nc") as ds:
         assert ds["speed"].attrs["units"] == "rpm" and ds["turbine_radius"].attrs["units"] == "m"
         np.testing.assert_allclose(ds["speed"].values, [1e4, 1.1e4, 1.2e4, 1.3e4])
+
+
+def test_frequency_panel_shows_the_unstable_campbell_modes_and_whirl_lines(tc):
+    """The frequency panel draws each Campbell mode where it is unstable (its frequency there, nothing where it is
+    stable) and each film's whirl frequency past the film's onset: the drawn data equal the Campbell result's."""
+    pts = [_bp(1e4 + 2e4 * i, [0.5]) for i in range(4)]
+    bd = BifurcationDiagram(pts, [], {"branches": [4]})
+    cd = frb.campbell(tc, "J", np.linspace(1e4, 7e4, 13))
+    fig = bd.plot(campbell=cd)
+    lines = {ln.get_label(): ln for ln in fig.axes[1].get_lines() if not ln.get_label().startswith("_")}
+    modes = [ln for ln in fig.axes[1].get_lines() if ln.get_label().startswith("unstable ")]
+    fmax = 1.3 * 1e3  # 1.3 x the branch frequency: modes entirely above are left out
+    shown = [j for j in range(cd.n_modes) if cd.unstable[:, j].any() and
+             np.nanmin(np.where(cd.unstable[:, j], cd.frequencies_hz[:, j], np.nan)) < fmax]
+    assert len(modes) == len(shown) > 0
+    for ln in modes:
+        y = np.asarray(ln.get_ydata(), float)
+        j = int(np.nanargmin([np.nansum(np.abs(np.where(cd.unstable[:, k], cd.frequencies_hz[:, k], np.nan) - y))
+                              if np.array_equal(np.isfinite(y), cd.unstable[:, k]) else np.inf
+                              for k in range(cd.n_modes)]))
+        np.testing.assert_array_equal(y[cd.unstable[:, j]], cd.frequencies_hz[cd.unstable[:, j], j])
+    for k, name in enumerate(frb.whirl.FILM_NAMES):
+        past = cd.whirl_margin[:, k] > 0
+        if past.any():
+            y = np.asarray(lines[f"whirl {name}"].get_ydata(), float)
+            np.testing.assert_array_equal(y[past], cd.whirl_hz[past, k])
+            assert np.isnan(y[~past]).all()
+
+
+def test_hopf_record_criticality_mode_and_film(tc):
+    """A Hopf point is supercritical when its branch grows towards the speeds where the crossing mode is unstable
+    (above it: hopf_points lists crossings to instability), subcritical when it grows backwards. Its mode is the
+    Campbell mode at that speed and frequency (the 2.0 krpm one: forward conical, README table), its film the one
+    moving most relative to its clearance in the eigenvector, with the four shares summing to 100 %."""
+    from frbmodel.continuation import hopf_record
+
+    hp = hopf_points(tc, (1.5e3, 2.5e3), n_grid=4)[0]
+    up, down = ([_bp(hp.speed_rpm + d * k, [0.5]) for k in (1, 2, 3)] for d in (+1.0, -1.0))
+    assert hopf_record(tc, hp, up)["criticality"] == "supercritical"
+    assert hopf_record(tc, hp, down)["criticality"] == "subcritical"
+    rec = hopf_record(tc, hp)
+    assert rec["criticality"] == "" and rec["mode"] == "forward conical"
+    assert rec["film"].split(" (")[0] in frb.whirl.FILM_NAMES
 
 
 @pytest.mark.slow

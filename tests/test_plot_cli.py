@@ -151,3 +151,27 @@ def test_run_figures_and_replot_are_one_path(tmp_path):
                 if key in a:
                     np.testing.assert_array_equal(np.asarray(a[key], float), np.asarray(b[key], float))
         assert (first / f"components_{d}.csv").read_text() == (again / f"components_{d}.csv").read_text()
+
+
+def test_plot_redraws_a_bifurcation_folder(tmp_path):
+    """``frb plot DIR`` on a folder of ``frb bifurcation``: the diagram is drawn again from branch.nc (PNG and HTML);
+    the HTML holds the branch points and the bifurcation points with their type, mode and film (read back from
+    the file's plotly JSON)."""
+    from frbmodel.continuation import BifurcationDiagram, BranchPoint
+
+    tc = frb.turbocharger(36e-6)
+    pts = [BranchPoint(2e4 + 1e4 * i, 1 / (200.0 + 50 * i), np.array([1.0, 0.5 + 0.2 * i], dtype=complex), i < 2,
+                       (5 + i) * 1e-6, np.full(4, 0.3)) for i in range(4)]
+    fold = {"speed_rpm": 3.5e4, "type": "fold", "criticality": "", "frequency_hz": 275.0, "turbine_radius_um": 6.5,
+            "mode": "forward conical", "film": "turbine outer (eps 0.30)", "between": [1, 2]}
+    BifurcationDiagram(pts, [fold], {"system": tc.to_dict(), "speed_range_rpm": [2e4, 5e4], "branches": [4]}).save(
+        tmp_path)
+    (tmp_path / "bifurcation.png").unlink()
+    assert main(["plot", str(tmp_path)]) == 0
+    assert (tmp_path / "bifurcation.png").exists()
+    traces = figure_data(tmp_path / "bifurcation.html")
+    branch_x = np.concatenate([t["x"] for t in traces if t.get("name") in ("stable branch", "unstable branch")
+                               and t.get("yaxis", "y") == "y"])
+    assert set(branch_x) == {2e4, 3e4, 4e4, 5e4}
+    marks = [t for t in traces if t.get("name") == "fold"]
+    assert marks and "forward conical" in marks[0]["text"][0] and "turbine outer" in marks[0]["text"][0]
