@@ -559,7 +559,7 @@ def hopf_record(system, hp, branch=(), film_model=None):
 def _branch_events(b, off, films=(), mode=""):
     """Bifurcations along one branch: folds where the speed turns (the branch point of extreme speed; a multiplier
     passes +1 there, which the multipliers near the turn, with the trivial one beside it, cannot tell reliably), and
-    the multiplier crossings of :func:`_classify` away from the folds (2 points or more)."""
+    the period doublings and Neimark-Sacker points of :func:`_classify` away from the folds (2 points or more)."""
     s = np.array([p.speed_rpm for p in b])
     turns = [i for i in range(1, len(b) - 1) if (s[i] - s[i - 1]) * (s[i + 1] - s[i]) < 0
              and min(np.max(np.abs(s[max(i - 3, 0):i] - s[i])), np.max(np.abs(s[i + 1:i + 4] - s[i])))
@@ -568,8 +568,10 @@ def _branch_events(b, off, films=(), mode=""):
     for i in range(len(b) - 1):
         if any(abs(i - j) <= 2 or abs(i + 1 - j) <= 2 for j in turns):
             continue
+        # a real multiplier through +1 without a turn in speed is not generic without a symmetry (none here, with
+        # gravity): it is the radial multiplier of a nearly vertical branch drifting about 1 + MULTIPLIER_TOL
         events += [_event(kind, b[i], b[i + 1], frac, [off + i, off + i + 1], films, mode)
-                   for kind, frac in _classify(b[i], b[i + 1])]
+                   for kind, frac in _classify(b[i], b[i + 1]) if kind != "fold"]
     return events
 
 
