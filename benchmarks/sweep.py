@@ -13,7 +13,10 @@ Cases: the outer clearances 36, 38, 40, 42 um x unbalance 0 and 1e-6 kg m, each 
 * Dask, new cluster: ``run_study(..., n_workers=2)`` as ``frb sweep`` does it, starting the cluster, loading the
   kernels on each worker once and closing the cluster all included;
 * Dask, running cluster (unless ``--no-running-cluster``): the same study on a 2-worker cluster that is already up
-  and prepared (``--scheduler tcp://...``): the cases, their scheduling and the two cores' contention only.
+  and prepared (``--scheduler tcp://...``): the cases, their scheduling and the two cores' contention only;
+* two plain processes (no Dask): the cases split in two by their serial times, run side by side after loading the
+  kernels — what two cores give for this work whatever the scheduler (the cases take more CPU time each when both
+  cores work).
 
 Printed: wall times, speed-ups, the new cluster's fixed costs, each worker's busy time (its case wall times / the
 study's elapsed time) and the cases' CPU times (wall above CPU = waiting for a core).
@@ -50,6 +53,41 @@ def _running_cluster_study(cases, out):
         return _timed_study(cases, out, scheduler=cl.scheduler_address)
 
 
+def _plain_worker(cases, out, barrier, results):
+    """One of two plain processes: load the kernels, wait for the other, run its cases; report (start, end) [s]."""
+    from frbmodel.sweep import run_case
+
+    prepare_worker()
+    barrier.wait()
+    t0 = time.time()
+    for case in cases:
+        run_case(case, out)
+    results.put((t0, time.time()))
+
+
+def _plain_processes(cases, case_times, out):
+    """The machine's bound for any scheduler: the cases split over two plain processes by the serial run's case
+    times (longest first onto the less loaded one), both started at once after loading the kernels; returns the
+    wall time [s] from the first start to the last end."""
+    import multiprocessing as mp
+
+    halves, load = ([], []), [0.0, 0.0]
+    for t, case in sorted(zip(case_times, cases), key=lambda x: -x[0]):
+        k = int(load[1] < load[0])
+        halves[k].append(case)
+        load[k] += t
+    ctx = mp.get_context("spawn")
+    barrier, results = ctx.Barrier(2), ctx.Queue()
+    out.mkdir(parents=True, exist_ok=True)
+    procs = [ctx.Process(target=_plain_worker, args=(h, out, barrier, results)) for h in halves]
+    for p in procs:
+        p.start()
+    spans = [results.get() for _ in procs]
+    for p in procs:
+        p.join()
+    return max(e for _, e in spans) - min(s for s, _ in spans)
+
+
 def _worker_lines(summary):
     lines = []
     for name, w in summary["workers"].items():
@@ -71,6 +109,7 @@ def main(argv=None):
         t_ser, s_ser = _timed_study(cases, tmp / "serial", scheduler="serial")
         t_dask, s_dask = _timed_study(cases, tmp / "dask", n_workers=2)
         warm = None if args.no_running_cluster else _running_cluster_study(cases, tmp / "warm")
+        t_plain = _plain_processes(cases, s_ser["case_wall_s"], tmp / "plain")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     est = {round(estimated_cost_s(c), 6) for c in cases}
@@ -94,6 +133,11 @@ def main(argv=None):
         print(f"{'speed-up, running cluster':<40}{t_ser / t_warm:10.2f}   (2 cores; ideal 2.0)")
         print(f"{'  case wall times per worker [s]':<40}")
         print("\n".join(_worker_lines(s_warm)))
+    print(f"{'two plain processes, no Dask [s]':<40}{t_plain:10.1f}   (the cases split by their serial times, "
+          "kernels loaded before: the machine's bound for any scheduler)")
+    print(f"{'speed-up, plain processes':<40}{t_ser / t_plain:10.2f}")
+    if warm is not None:
+        print(f"{'Dask running cluster / plain processes':<40}{t_plain / warm[0]:10.2f}   (scheduling efficiency)")
     print(f"{'sum of case wall times, serial [s]':<40}{s_ser['case_wall_sum_s']:10.1f}   (CPU "
           f"{s_ser['case_cpu_sum_s']:.1f} s; Dask, new cluster: wall {s_dask['case_wall_sum_s']:.1f} s, CPU "
           f"{s_dask['case_cpu_sum_s']:.1f} s)")
