@@ -27,6 +27,15 @@ def stability_runs(bd):
     list of tuple
         ``(stable, speeds [rpm], turbine-wheel orbit radius [µm], frequency [Hz])``; consecutive runs share their
         end point, so that the drawn branch has no gaps.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from frbmodel.continuation import BifurcationDiagram, BranchPoint
+    >>> pts = [BranchPoint(s, 1e-3, np.ones(2), st, 1e-6, np.zeros(4))
+    ...        for s, st in [(1e4, False), (2e4, True), (3e4, True), (4e4, False)]]
+    >>> [(st, s.tolist()) for st, s, _, _ in stability_runs(BifurcationDiagram(pts, [], {"branches": [4]}))]
+    [(False, [10000.0, 20000.0]), (True, [20000.0, 30000.0, 40000.0]), (False, [40000.0])]
     """
     runs, start = [], 0
     for count in bd.meta.get("branches", [len(bd.points)]):
