@@ -415,7 +415,8 @@ def cmd_bifurcation(args):
             fh.write(f"{p.speed_rpm:.6f},{1 / p.period:.6f},{p.turbine_radius_m * 1e6:.6f},{p.stable}\n")
 
     try:
-        bd = continuation(tc, (lo, hi), start, max_points=args.max_points, progress=True, on_point=stream)
+        bd = continuation(tc, (lo, hi), start, max_points=args.max_points, progress=True, on_point=stream,
+                          segments=args.segments)
         code = 0
     except KeyboardInterrupt as exc:
         code = 143 if isinstance(exc, Terminated) else 130
@@ -1092,6 +1093,8 @@ def _add_bifurcation(sub):
                    help="'hopf': a branch from each Hopf point in the range; or a speed [rpm]: the branch through "
                         "the orbit the whirl settles on there (both directions)")
     b.add_argument("--max-points", type=int, default=40, help="points per branch and direction at most")
+    b.add_argument("--segments", type=int, default=1,
+                   help="shooting segments per orbit (multiple shooting, e.g. 4, for strongly unstable branches)")
     b.add_argument("--runs", default=None, metavar="DIR[,DIR]",
                    help="run-up / run-down folders whose turbine-wheel orbit envelopes are drawn behind the branches "
                         "(and the first one's spectrogram behind the branch frequencies)")

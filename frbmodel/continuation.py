@@ -19,8 +19,10 @@ import numpy as np
 
 from .errors import ConvergenceError, ParameterError
 
-#: corrector: scaled residual tolerance, iterations at most; step control: wanted iterations
-TOL, MAX_CORRECTOR, GOOD_ITERATIONS = 1e-6, 8, 3
+#: corrector: scaled residual tolerance, iterations at most; step control: the step grows after at most
+#: GOOD_ITERATIONS corrector iterations, stays after at most SLOW_ITERATIONS (the chord iterations on strongly
+#: unstable orbits, |mu| ~ 300, take 4 at any step: shrinking there stalled the 58.5 krpm branch), else shrinks
+TOL, MAX_CORRECTOR, GOOD_ITERATIONS, SLOW_ITERATIONS = 1e-6, 8, 3, 5
 #: difference step of the speed derivative, relative
 SPEED_FD = 1e-6
 #: a turn of the branch in speed is a fold only if the speed moves back by more than this (relative) within three
@@ -48,7 +50,7 @@ class BranchPoint:
 class _Branch:
     """Flows and residuals of the continuation problem at any speed (problems built per speed and cached)."""
 
-    def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm):
+    def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm, segments=1):
         from .limitcycle import _Flow
         from .runup import atol_vector
 
@@ -58,6 +60,25 @@ class _Branch:
         self._flow_cls = _Flow
         #: one scaling of the states for the whole branch (that of the start speed): u = z / scale
         self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
+        #: shooting segments m (multiple shooting for m > 1) and the state size n of one segment
+        self.segments, self.n = int(segments), self.scale_vec.size
+        self._scale_all = np.tile(self.scale_vec, self.segments)
+
+    def ends(self, z, T, speed_rpm, like=None):
+        """The ends Φ_{T/m}(z_k) of all m segments (z: the m segment starts, concatenated) and the flow used."""
+        fl = self.flow(speed_rpm, like)
+        zs = z.reshape(self.segments, self.n)
+        if self.segments == 1:
+            return fl(zs[0], T), fl
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(self.workers) as pool:
+            return np.concatenate(list(pool.map(lambda zk: fl(zk, T / self.segments), zs))), fl
+
+    def residual(self, z, end):
+        """Segment defects Φ(z_k) − z_{k+1} (z_m = z_0), scaled."""
+        nxt = np.roll(z.reshape(self.segments, self.n), -1, axis=0).ravel()
+        return (end - nxt) / self._scale_all
 
     def flow(self, speed_rpm, like=None):
         """The flow at a speed [rpm]; ``like``: a flow whose integrator it must use (differences between them)."""
@@ -72,26 +93,34 @@ class _Branch:
         return self._flows[key]
 
     def scale(self, speed_rpm=None):
-        return self.scale_vec
+        """The scaling of all m segment starts [SI units per scaled unit]."""
+        return self._scale_all
 
 
 def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref):
-    """Residual (n+1) and its Jacobian (n+1, n+2) in the scaled unknowns (u, τ, p) at (z, T, speed)."""
+    """Residual (N+1) and its Jacobian (N+1, N+2) in the scaled unknowns (u_0 … u_{m−1}, τ, p) at (z, T, speed),
+    N = m n, and the monodromy M = M_{m−1} ⋯ M_0 (each segment's by differences of its flow)."""
     from .shooting import monodromy
 
-    fl = br.flow(speed)
-    end = fl(z, T)
-    n = z.size
-    m = monodromy(fl, z, T, scale, end, 1e-4, br.workers)
+    m, n = br.segments, br.n
+    N = m * n
+    end, fl = br.ends(z, T, speed)
+    zs, es, s1 = z.reshape(m, n), end.reshape(m, n), br.scale_vec
+    blocks = [monodromy(fl, zs[k], T / m, s1, es[k], 1e-4, br.workers) for k in range(m)]
     ds = SPEED_FD * speed
-    d_speed = (br.flow(speed + ds, like=fl)(z, T) - end) / ds
-    jac = np.zeros((n + 1, n + 2))
-    jac[:n, :n] = m * scale[None, :] / scale[:, None] - np.eye(n)
-    jac[:n, n] = fl.rhs(end) / scale * t_ref
-    jac[:n, n + 1] = d_speed / scale * w_ref
-    jac[n, :n] = f_ref
-    res = np.append((end - z) / scale, 0.0)
-    return res, jac, m
+    d_speed = (br.ends(z, T, speed + ds, like=fl)[0] - end) / ds
+    jac = np.zeros((N + 1, N + 2))
+    for k in range(m):
+        rows, nxt = slice(k * n, (k + 1) * n), ((k + 1) % m) * n
+        jac[rows, rows] = blocks[k] * s1[None, :] / s1[:, None]
+        jac[rows, nxt:nxt + n] -= np.eye(n)
+        jac[rows, N] = fl.rhs(es[k]) / s1 * t_ref / m
+    jac[:N, N + 1] = d_speed / scale * w_ref
+    jac[N, :N] = f_ref
+    mono = blocks[0]
+    for b in blocks[1:]:
+        mono = b @ mono
+    return np.append(br.residual(z, end), 0.0), jac, mono
 
 
 def _tangent(jac, previous):
@@ -118,8 +147,8 @@ def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref):
         z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
         if not (T > 0 and speed > 0):
             break
-        end = br.flow(speed, like=br.flow(x_pred[n + 1] * w_ref))(z, T)  # the Jacobian's integrator
-        res = np.append((end - z) / scale, 0.0)
+        end, _ = br.ends(z, T, speed, like=br.flow(x_pred[n + 1] * w_ref))  # the Jacobian's integrator
+        res = np.append(br.residual(z, end), 0.0)
         if float(np.max(np.abs(res))) < TOL:
             return x, jac, m, it
     raise ConvergenceError("continuation: the corrector did not converge")
@@ -131,8 +160,7 @@ def _point(br, x, n, t_ref, w_ref, m):
     from .recorder import RunupSchema
     from .shooting import stable_multipliers
 
-    scale = br.scale(x[n + 1] * w_ref)
-    z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
+    z, T, speed = x[:br.n] * br.scale_vec, x[n] * t_ref, x[n + 1] * w_ref  # the orbit from segment 0's start
     fl = br.flow(speed)
     t = np.linspace(0.0, T, POINT_SAMPLES + 1)
     orbit = _orbit_result(fl.problem, RunupSchema.from_system(br.system), t, fl.states(z, t))
@@ -440,7 +468,7 @@ class BifurcationDiagram:
 
 
 def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_max=8.0, max_points=100,
-                 progress=False, on_point=None):
+                 progress=False, on_point=None, segments=1):
     """Branches of limit cycles in rotor speed (pseudo-arclength), from the Hopf points or from a given orbit.
 
     Parameters
@@ -463,6 +491,10 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
         Print a line per point on stderr.
     on_point : callable, optional
         Called with each new :class:`BranchPoint` as soon as it is computed (e.g. to stream it to a file).
+    segments : int
+        Shooting segments per orbit: 1 single shooting; m > 1 multiple shooting (m flows of T/m, the defects between
+        them as equations; same cost per Newton step), for strongly unstable orbits: a flow over the whole period
+        amplifies errors by the largest multiplier |mu|, a segment by about |mu|^(1/m).
 
     Returns
     -------
@@ -473,14 +505,16 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
 
     lo, hi = sorted(float(s) for s in speeds_rpm)
     model = check_model(film_model or system.film_model)
+    if int(segments) != segments or segments < 1:
+        raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
     branches, hopfs = [], []
     if isinstance(start, str):
         if start != "hopf":
             raise ParameterError(f"start = {start!r} is invalid: 'hopf', a LimitCycle or a speed [rpm]")
         hopfs = hopf_points(system, (lo, hi), model)
         for hp in hopfs:
-            br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm)
-            n = hp.equilibrium.size
+            br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments)
+            n = br.segments * br.n
             t_ref, w_ref = 0.01 / hp.frequency_hz, 0.01 * hp.speed_rpm
             x0, tangent, f0 = _hopf_start(br, hp, n, t_ref, w_ref)
             branches.append(_follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, 0.2, ds_max, max_points, progress, f0,
@@ -490,10 +524,11 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
         if not lo <= lc.speed_rpm <= hi:
             raise ParameterError(f"start speed {lc.speed_rpm:.0f} rpm is outside the speed range {lo:.0f} ... "
                                  f"{hi:.0f} rpm")
-        br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm)
-        n = lc.state.size
+        br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments)
+        n = br.segments * br.n
         t_ref, w_ref = 0.01 * lc.period, 0.01 * lc.speed_rpm
-        x0 = np.concatenate([lc.state / br.scale(), [lc.period / t_ref, lc.speed_rpm / w_ref]])
+        starts = br.flow(lc.speed_rpm).states(lc.state, lc.period * np.arange(br.segments + 1) / br.segments)
+        x0 = np.concatenate([starts[:-1, :-1].ravel() / br.scale(), [lc.period / t_ref, lc.speed_rpm / w_ref]])
         halves = []
         for direction in (+1, -1):
             tangent, first = _start_tangent(br, x0, n, t_ref, w_ref, direction)
@@ -636,7 +671,7 @@ def _follow_loop(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_point
                              f"{p.turbine_radius_m * 1e6:6.2f} um, {'stable' if p.stable else 'unstable'}\n")
         if not lo <= points[-1].speed_rpm <= hi or _collapsed(points):
             break
-        ds = min(ds_max, ds * (1.5 if iters <= GOOD_ITERATIONS else 0.6))
+        ds = min(ds_max, ds * (1.5 if iters <= GOOD_ITERATIONS else 1.0 if iters <= SLOW_ITERATIONS else 0.6))
     return points
 
 
@@ -662,19 +697,30 @@ def _start_tangent(br, x0, n, t_ref, w_ref, direction):
 
 
 def _hopf_start(br, hp, n, t_ref, w_ref):
-    """Start point (the equilibrium at the Hopf point, period 2π/ω), tangent (the eigenvector's real part) and
-    phase normal (its imaginary part) of the periodic branch born at a Hopf point, in scaled unknowns."""
-    v = hp.eigenvector / br.scale()
+    """Start point (the equilibrium at the Hopf point, period 2π/ω), tangent (the linear orbit Re(v e^{iωt}) at the
+    segment starts t_k = kT/m) and phase normal (its derivative at t = 0) of the periodic branch born at a Hopf
+    point, in scaled unknowns."""
+    m = br.segments
+    v = hp.eigenvector / br.scale_vec
     v = v * np.exp(-1j * np.angle(v[np.argmax(np.abs(v))]))
-    x0 = np.concatenate([hp.equilibrium / br.scale(), [1.0 / hp.frequency_hz / t_ref, hp.speed_rpm / w_ref]])
-    tangent = np.concatenate([v.real / np.linalg.norm(v.real), [0.0, 0.0]])
-    return x0, tangent, v.imag / np.linalg.norm(v.imag)
+    x0 = np.concatenate([np.tile(hp.equilibrium / br.scale_vec, m), [1.0 / hp.frequency_hz / t_ref,
+                                                                     hp.speed_rpm / w_ref]])
+    orbit = np.concatenate([(v * np.exp(2j * math.pi * k / m)).real for k in range(m)])
+    tangent = np.concatenate([orbit / np.linalg.norm(orbit), [0.0, 0.0]])
+    return x0, tangent, _padded(br, v.imag / np.linalg.norm(v.imag))
+
+
+def _padded(br, f):
+    """A phase normal on segment 0 as a vector over all segment starts."""
+    out = np.zeros(br.segments * br.n)
+    out[:br.n] = f
+    return out
 
 
 def _phase_normal(br, z, speed):
-    """Unit normal of the phase condition: the flow at z, scaled."""
-    f = br.flow(speed).rhs(z) * br.scale() / br.scale() ** 2  # d(u)/dt = f / scale
-    return f / np.linalg.norm(f)
+    """Unit normal of the phase condition: the flow at segment 0's start, scaled (zero on the other segments)."""
+    f = br.flow(speed).rhs(z[:br.n]) / br.scale_vec  # d(u)/dt = f / scale
+    return _padded(br, f / np.linalg.norm(f))
 
 
 __all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_points",

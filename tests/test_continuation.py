@@ -193,3 +193,27 @@ def test_two_parameter_stability_chart(tmp_path):
     hp = hopf_points(tc, (1e3, 30e3))[0]
     assert first == hp.speed_rpm
     assert first == pytest.approx(_method_j_crossing(tc, first, hp.frequency_hz)[0], rel=0.005)
+
+
+@pytest.mark.slow
+def test_multiple_shooting_follows_a_branch_single_shooting_cannot(tc):
+    """The branch of the 58.5 krpm Hopf point (36 um) runs through orbits whose largest multiplier is ~335: single
+    shooting stops after its first point (a flow over the period amplifies errors by |mu|); with 4 segments the
+    branch is followed. Each point is checked by another integrator: scipy's LSODA from the point's state over its
+    period returns to it within 1e-4 of the orbit's size (errors grow by |mu| = 335 over the period from LSODA's
+    1e-10 and the segments' 3e-9 tolerances), and the orbits grow away from the equilibrium."""
+    from scipy.integrate import solve_ivp
+
+    from frbmodel.runup import SpeedProfile, build_problem
+
+    assert len(continuation(tc, (57e3, 62e3), "hopf", max_points=3).points) == 1
+    bd = continuation(tc, (57e3, 62e3), "hopf", max_points=8, segments=4)
+    assert len(bd.points) == 8
+    r = [p.turbine_radius_m for p in bd.points]
+    assert all(b > a for a, b in zip(r, r[1:]))
+    j = 4 * tc.bearings[0].node
+    for p in bd.points[::3]:
+        prob = build_problem(tc, SpeedProfile.constant(p.speed_rpm, 1.0), tc.film_model)
+        end = solve_ivp(lambda t, y, prob=prob: prob.rhs(t, y, np.empty(y.size)).copy(), (0.0, p.period),
+                        np.append(p.state, 0.0), method="LSODA", rtol=1e-10, atol=1e-16).y[:-1, -1]
+        assert np.hypot(*(end[j:j + 2] - p.state[j:j + 2])) < 1e-4 * p.turbine_radius_m
