@@ -62,7 +62,11 @@ class _Branch:
         self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
         #: shooting segments m (multiple shooting for m > 1) and the state size n of one segment
         self.segments, self.n = int(segments), self.scale_vec.size
-        self._scale_all = np.tile(self.scale_vec, self.segments)
+        #: the unknowns of a segment start are scaled by scale_vec √m, so that a step of the m starts together
+        #: (arclength) means what one start's step means in single shooting; the defects by scale_vec
+        self.start_scale = self.scale_vec * math.sqrt(self.segments)
+        self._scale_all = np.tile(self.start_scale, self.segments)
+        self._defect_scale = np.tile(self.scale_vec, self.segments)
 
     def ends(self, z, T, speed_rpm, like=None):
         """The ends Φ_{T/m}(z_k) of all m segments (z: the m segment starts, concatenated) and the flow used."""
@@ -78,7 +82,7 @@ class _Branch:
     def residual(self, z, end):
         """Segment defects Φ(z_k) − z_{k+1} (z_m = z_0), scaled."""
         nxt = np.roll(z.reshape(self.segments, self.n), -1, axis=0).ravel()
-        return (end - nxt) / self._scale_all
+        return (end - nxt) / self._defect_scale
 
     def flow(self, speed_rpm, like=None):
         """The flow at a speed [rpm]; ``like``: a flow whose integrator it must use (differences between them)."""
@@ -105,17 +109,17 @@ def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref):
     m, n = br.segments, br.n
     N = m * n
     end, fl = br.ends(z, T, speed)
-    zs, es, s1 = z.reshape(m, n), end.reshape(m, n), br.scale_vec
+    zs, es, s1, su = z.reshape(m, n), end.reshape(m, n), br.scale_vec, br.start_scale
     blocks = [monodromy(fl, zs[k], T / m, s1, es[k], 1e-4, br.workers) for k in range(m)]
     ds = SPEED_FD * speed
     d_speed = (br.ends(z, T, speed + ds, like=fl)[0] - end) / ds
     jac = np.zeros((N + 1, N + 2))
     for k in range(m):
         rows, nxt = slice(k * n, (k + 1) * n), ((k + 1) % m) * n
-        jac[rows, rows] = blocks[k] * s1[None, :] / s1[:, None]
-        jac[rows, nxt:nxt + n] -= np.eye(n)
+        jac[rows, rows] = blocks[k] * su[None, :] / s1[:, None]
+        jac[rows, nxt:nxt + n] -= np.diag(su / s1)
         jac[rows, N] = fl.rhs(es[k]) / s1 * t_ref / m
-    jac[:N, N + 1] = d_speed / scale * w_ref
+        jac[rows, N + 1] = d_speed[rows] / s1 * w_ref
     jac[N, :N] = f_ref
     mono = blocks[0]
     for b in blocks[1:]:
@@ -160,7 +164,7 @@ def _point(br, x, n, t_ref, w_ref, m):
     from .recorder import RunupSchema
     from .shooting import stable_multipliers
 
-    z, T, speed = x[:br.n] * br.scale_vec, x[n] * t_ref, x[n + 1] * w_ref  # the orbit from segment 0's start
+    z, T, speed = x[:br.n] * br.start_scale, x[n] * t_ref, x[n + 1] * w_ref  # the orbit from segment 0's start
     fl = br.flow(speed)
     t = np.linspace(0.0, T, POINT_SAMPLES + 1)
     orbit = _orbit_result(fl.problem, RunupSchema.from_system(br.system), t, fl.states(z, t))
@@ -701,10 +705,10 @@ def _hopf_start(br, hp, n, t_ref, w_ref):
     segment starts t_k = kT/m) and phase normal (its derivative at t = 0) of the periodic branch born at a Hopf
     point, in scaled unknowns."""
     m = br.segments
-    v = hp.eigenvector / br.scale_vec
+    v = hp.eigenvector / br.start_scale
     v = v * np.exp(-1j * np.angle(v[np.argmax(np.abs(v))]))
-    x0 = np.concatenate([np.tile(hp.equilibrium / br.scale_vec, m), [1.0 / hp.frequency_hz / t_ref,
-                                                                     hp.speed_rpm / w_ref]])
+    x0 = np.concatenate([np.tile(hp.equilibrium / br.start_scale, m), [1.0 / hp.frequency_hz / t_ref,
+                                                                       hp.speed_rpm / w_ref]])
     orbit = np.concatenate([(v * np.exp(2j * math.pi * k / m)).real for k in range(m)])
     tangent = np.concatenate([orbit / np.linalg.norm(orbit), [0.0, 0.0]])
     return x0, tangent, _padded(br, v.imag / np.linalg.norm(v.imag))
@@ -719,7 +723,7 @@ def _padded(br, f):
 
 def _phase_normal(br, z, speed):
     """Unit normal of the phase condition: the flow at segment 0's start, scaled (zero on the other segments)."""
-    f = br.flow(speed).rhs(z[:br.n]) / br.scale_vec  # d(u)/dt = f / scale
+    f = br.flow(speed).rhs(z[:br.n]) / br.start_scale  # d(u)/dt = f / scale
     return _padded(br, f / np.linalg.norm(f))
 
 
