@@ -149,7 +149,7 @@ def test_campbell_from_fmu_matches(built):
     assert sorted(a.unstable_ranges()["precession"]) == sorted(b.unstable_ranges()["precession"])
 
 
-T_LIBCOSIM = 0.02  # [s] (libcosim calls the FMUs from its own thread: ~3 ms per macro step here)
+T_LIBCOSIM = 0.02  # [s] (libcosim calls the FMUs from its own threads: ~0.2 ms per macro step)
 
 
 def test_libcosim_runs_the_ssp_unchanged_and_agrees(built, tmp_path):

@@ -292,6 +292,32 @@ static int load_real(void) {
     return 0;
 }
 
+/* ---- host threads without a Python thread state ----
+ * pythonfmu's binary takes the GIL with PyGILState_Ensure in every call. From a host thread Python never saw
+ * (libcosim's workers, a C tool's thread pool) that creates a thread state and destroys it again at the end of
+ * every call (~1 ms). The loader gives such a thread a thread state of its own once, at its first call, and keeps
+ * it (PyGILState_Ensure, then PyEval_SaveThread: the GIL is released, the state stays with the thread), so that
+ * pythonfmu's calls from it only take and release the GIL. Threads that have a state (Python hosts, the thread
+ * that started Python) are left alone. */
+static void *(*this_thread_state)(void);
+static int (*gil_ensure)(void);
+static void *(*gil_save)(void);
+static __thread int thread_adopted;
+
+static void resolve_thread_api(void) {
+    *(void **)(&this_thread_state) = dlsym(RTLD_DEFAULT, "PyGILState_GetThisThreadState");
+    *(void **)(&gil_ensure) = dlsym(RTLD_DEFAULT, "PyGILState_Ensure");
+    *(void **)(&gil_save) = dlsym(RTLD_DEFAULT, "PyEval_SaveThread");
+}
+
+static void adopt_thread(void) {
+    if (thread_adopted) return;
+    thread_adopted = 1;
+    if (!this_thread_state || !gil_ensure || !gil_save || this_thread_state()) return;
+    gil_ensure();
+    gil_save();
+}
+
 static int ensure_loaded(const char *resource_uri) {
     char resources[PATH_MAX + 32];
     int rc = 0;
@@ -300,9 +326,11 @@ static int ensure_loaded(const char *resource_uri) {
         resources_folder(resource_uri, resources, sizeof resources);
         if (!python_is_running()) rc = load_python(resources);
         if (rc == 0) rc = load_real();
+        if (rc == 0) resolve_thread_api();
         loaded = rc == 0;
     }
     pthread_mutex_unlock(&load_lock);
+    if (rc == 0) adopt_thread();
     return rc;
 }
 
@@ -392,6 +420,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
 EXPORT void fmi2FreeInstance(fmi2Component c) {
     Instance *in = (Instance *)c;
     if (!loaded || !in) return;
+    adopt_thread();
     real.FreeInstance(in->real);
     clear_categories(in);
     free(in);
@@ -417,6 +446,7 @@ EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
         Instance *in = (Instance *)c;                              \
         fmi2Status returned;                                       \
         if (!loaded || !in || !real.name) return fmi2Error;        \
+        adopt_thread();                                            \
         in->worst = fmi2OK;                                        \
         returned = real.name args;                                 \
         return worse(returned, in->worst);                         \
