@@ -135,7 +135,11 @@ def diagram_figure(bd, title=None, envelopes=(), spectrogram=None, campbell=None
         ax.plot(s, r, **kw)
         axf.plot(s, f, **kw)
     for b in bd.bifurcations:
-        ax.plot(b["speed_rpm"], b["turbine_radius_um"], MARKS[b["type"]][0], color="C3", ms=7, label=b["type"])
+        if envelopes and b["turbine_radius_um"] <= 0:  # a Hopf point (radius 0) on the log axis: at its foot
+            ax.plot(b["speed_rpm"], 0.03, MARKS[b["type"]][0], color="C3", ms=7, label=b["type"],
+                    transform=ax.get_xaxis_transform(), clip_on=False)
+        else:
+            ax.plot(b["speed_rpm"], b["turbine_radius_um"], MARKS[b["type"]][0], color="C3", ms=7, label=b["type"])
         axf.plot(b["speed_rpm"], b["frequency_hz"], MARKS[b["type"]][0], color="C3", ms=7)
     for a in (ax, axf):
         handles, labels = a.get_legend_handles_labels()
