@@ -60,10 +60,13 @@ class _Branch:
         self._flow_cls = _Flow
         #: one scaling of the states for the whole branch (that of the start speed): u = z / scale
         self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
-        #: shooting segments m (multiple shooting for m > 1) and the state size n of one segment
+        self.set_segments(segments)
+
+    def set_segments(self, segments):
+        """Shooting segments m (multiple shooting for m > 1); n is the state size of one segment start. The
+        unknowns of a start are scaled by scale_vec √m, so that a step of the m starts together (arclength) means
+        what one start's step means in single shooting; the defects are scaled by scale_vec."""
         self.segments, self.n = int(segments), self.scale_vec.size
-        #: the unknowns of a segment start are scaled by scale_vec √m, so that a step of the m starts together
-        #: (arclength) means what one start's step means in single shooting; the defects by scale_vec
         self.start_scale = self.scale_vec * math.sqrt(self.segments)
         self._scale_all = np.tile(self.start_scale, self.segments)
         self._defect_scale = np.tile(self.scale_vec, self.segments)
@@ -72,12 +75,14 @@ class _Branch:
         """The ends Φ_{T/m}(z_k) of all m segments (z: the m segment starts, concatenated) and the flow used."""
         fl = self.flow(speed_rpm, like)
         zs = z.reshape(self.segments, self.n)
+        h = T / self.segments
         if self.segments == 1:
             return fl(zs[0], T), fl
         from concurrent.futures import ThreadPoolExecutor
 
+        first = fl(zs[0], h)  # before the threads: a new flow chooses its integrator on segment 0, reproducibly
         with ThreadPoolExecutor(self.workers) as pool:
-            return np.concatenate(list(pool.map(lambda zk: fl(zk, T / self.segments), zs))), fl
+            return np.concatenate([first] + list(pool.map(lambda zk: fl(zk, h), zs[1:]))), fl
 
     def residual(self, z, end):
         """Segment defects Φ(z_k) − z_{k+1} (z_m = z_0), scaled."""
@@ -124,7 +129,7 @@ def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref):
     mono = blocks[0]
     for b in blocks[1:]:
         mono = b @ mono
-    return np.append(br.residual(z, end), 0.0), jac, mono
+    return np.append(br.residual(z, end), 0.0), jac, mono, fl
 
 
 def _tangent(jac, previous):
@@ -141,7 +146,7 @@ def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref):
     scale = br.scale(x_pred[n + 1] * w_ref)
     x = x_pred.copy()
     z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
-    res, jac, m = _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref)
+    res, jac, m, fl = _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref)
     a = np.vstack([jac, tangent])
     for it in range(1, MAX_CORRECTOR + 1):
         phase = float(f_ref @ (x[:n] - u_ref))
@@ -151,7 +156,7 @@ def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref):
         z, T, speed = x[:n] * scale, x[n] * t_ref, x[n + 1] * w_ref
         if not (T > 0 and speed > 0):
             break
-        end, _ = br.ends(z, T, speed, like=br.flow(x_pred[n + 1] * w_ref))  # the Jacobian's integrator
+        end, _ = br.ends(z, T, speed, like=fl)  # the Jacobian's integrator
         res = np.append(br.residual(z, end), 0.0)
         if float(np.max(np.abs(res))) < TOL:
             return x, jac, m, it
@@ -548,7 +553,8 @@ def _event(kind, a, c, frac, between, films=(), mode=""):
     eps = a.max_eps + frac * (np.asarray(c.max_eps) - a.max_eps)
     return {"speed_rpm": a.speed_rpm + frac * (c.speed_rpm - a.speed_rpm), "type": kind, "criticality": "",
             "frequency_hz": 1 / a.period + frac * (1 / c.period - 1 / a.period),
-            "turbine_radius_um": 1e6 * (a.turbine_radius_m + frac * (c.turbine_radius_m - a.turbine_radius_m)),
+            "turbine_radius_um": max(0.0, 1e6 * (a.turbine_radius_m
+                                                 + frac * (c.turbine_radius_m - a.turbine_radius_m))),
             "mode": mode, "film": f"{films[int(np.argmax(eps))]} (eps {np.max(eps):.2f})" if len(films) else "",
             "between": between}
 
@@ -558,8 +564,9 @@ def hopf_record(system, hp, branch=(), film_model=None):
 
     ``criticality``: "supercritical" if its branch grows towards higher speeds, where the crossing pair is unstable
     (:func:`hopf_points` lists crossings to instability only), "subcritical" if it grows backwards, "" without a
-    branch. ``mode``: precession and kind of the method-J Campbell mode nearest in frequency at that speed (the
-    linear onsets agree to 0.03 %). ``film``: the film whose relative motion in the crossing eigenvector, over its
+    branch or when its first points stay within :data:`FOLD_MIN_REL` of the Hopf speed (a vertical branch).
+    ``mode``: precession and kind of the method-J Campbell mode nearest in frequency at that speed (the linear
+    onsets agree to 0.03 %). ``film``: the film whose relative motion in the crossing eigenvector, over its
     clearance, is largest (inner: journal minus ring, outer: ring), with that share of the four.
 
     Parameters
@@ -588,8 +595,9 @@ def hopf_record(system, hp, branch=(), film_model=None):
                 np.linalg.norm(ring) / b.outer.clearance]
     rel = np.array(rel) / np.sum(rel)
     k = int(np.argmax(rel))
-    ahead = [q.speed_rpm - hp.speed_rpm for q in branch[:3]]
-    crit = "" if not ahead else "supercritical" if np.mean(ahead) > 0 else "subcritical"
+    ahead = np.mean([q.speed_rpm - hp.speed_rpm for q in branch[:3]]) if len(branch) else 0.0
+    crit = ("" if abs(ahead) <= FOLD_MIN_REL * hp.speed_rpm  # no branch, or a vertical one: undetermined
+            else "supercritical" if ahead > 0 else "subcritical")
     return {"speed_rpm": hp.speed_rpm, "type": "Hopf", "criticality": crit, "frequency_hz": hp.frequency_hz,
             "turbine_radius_um": 0.0, "mode": f"{cd.precession[0, j]} {cd.mode_kind[0, j]}",
             "film": f"{film_names(system)[k]} ({100 * rel[k]:.0f} %)", "between": []}
@@ -694,7 +702,7 @@ def _start_tangent(br, x0, n, t_ref, w_ref, direction):
     """Unit tangent at a computed orbit x0, its speed component of sign ``direction``, and the orbit as a point."""
     z0 = x0[:n] * br.scale()
     speed = x0[n + 1] * w_ref
-    _, jac, m = _jacobian(br, z0, x0[n] * t_ref, speed, br.scale(), t_ref, w_ref, _phase_normal(br, z0, speed))
+    _, jac, m, _ = _jacobian(br, z0, x0[n] * t_ref, speed, br.scale(), t_ref, w_ref, _phase_normal(br, z0, speed))
     guide = np.zeros(n + 2)
     guide[n + 1] = direction
     return _tangent(jac, guide), _point(br, x0, n, t_ref, w_ref, m)

@@ -184,7 +184,7 @@ def _dense_output(t, h, y, ynew, ks, t_eval, k_out, out):
     return k_out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # the shooting flows integrate monodromy columns in threads
 def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args):
     """Integrate from t_eval[0] through the times t_eval with RODAS (see the module docstring).
 

@@ -145,13 +145,16 @@ def test_hopf_record_criticality_mode_and_film(tc):
     """A Hopf point is supercritical when its branch grows towards the speeds where the crossing mode is unstable
     (above it: hopf_points lists crossings to instability), subcritical when it grows backwards. Its mode is the
     Campbell mode at that speed and frequency (the 2.0 krpm one: forward conical, README table), its film the one
-    moving most relative to its clearance in the eigenvector, with the four shares summing to 100 %."""
+    moving most relative to its clearance in the eigenvector, with the four shares summing to 100 %. A branch that
+    stays at the Hopf speed within the jitter of a vertical branch (FOLD_MIN_REL) leaves the criticality open."""
     from frbmodel.continuation import hopf_record
 
     hp = hopf_points(tc, (1.5e3, 2.5e3), n_grid=4)[0]
     up, down = ([_bp(hp.speed_rpm + d * k, [0.5]) for k in (1, 2, 3)] for d in (+1.0, -1.0))
     assert hopf_record(tc, hp, up)["criticality"] == "supercritical"
     assert hopf_record(tc, hp, down)["criticality"] == "subcritical"
+    vertical = [_bp(hp.speed_rpm + d, [0.5]) for d in (4e-3, -3e-3, 5e-3)]  # speed jitter of a vertical branch
+    assert hopf_record(tc, hp, vertical)["criticality"] == ""
     rec = hopf_record(tc, hp)
     assert rec["criticality"] == "" and rec["mode"] == "forward conical"
     assert rec["film"].split(" (")[0] in frb.whirl.FILM_NAMES
@@ -217,3 +220,51 @@ def test_multiple_shooting_follows_a_branch_single_shooting_cannot(tc):
         end = solve_ivp(lambda t, y, prob=prob: prob.rhs(t, y, np.empty(y.size)).copy(), (0.0, p.period),
                         np.append(p.state, 0.0), method="LSODA", rtol=1e-10, atol=1e-16).y[:-1, -1]
         assert np.hypot(*(end[j:j + 2] - p.state[j:j + 2])) < 1e-4 * p.turbine_radius_m
+
+
+@pytest.mark.parametrize("segments", [1, 3])
+def test_shooting_jacobian_equals_differences_of_the_residual(segments):
+    """The continuation's Jacobian — segment monodromies, the coupling to the next start (with the wrap from the
+    last segment to the first), the period and speed columns, the phase row — equals central differences of its
+    residual, for single and multiple shooting. A linear flow exp(A(Omega) t) z with a speed-dependent rotation
+    stands in for the FRB flow (its monodromy by forward differences is exact to round-off); the differences'
+    truncation and round-off are ~1e-8 of the entries at the 1e-5 step used."""
+    from scipy.linalg import expm
+
+    from frbmodel.continuation import _Branch, _jacobian
+
+    def a_of(speed):
+        w = 2.0 + 1e-4 * speed
+        return np.array([[-0.3, -w, 0.0], [w, -0.3, 0.0], [0.0, 0.0, -1.0]])
+
+    class Flow:
+        method = "linear"
+
+        def __init__(self, speed):
+            self.a = a_of(speed)
+
+        def __call__(self, z, t):
+            return expm(self.a * t) @ z
+
+        def rhs(self, z):
+            return self.a @ z
+
+    br = object.__new__(_Branch)
+    br.scale_vec, br.workers = np.array([1e-6, 2e-6, 5.0]), 1
+    br.flow = lambda speed, like=None: Flow(speed)
+    br.set_segments(segments)
+    n_all, t_ref, w_ref = 3 * segments, 0.1, 100.0
+    rng = np.random.default_rng(1)
+    x = np.concatenate([rng.normal(size=n_all), [13.0, 50.0]])  # T = 1.3, speed 5000
+    f_ref = rng.normal(size=n_all)
+
+    def residual(x):
+        z, T, speed = x[:n_all] * br.scale(), x[n_all] * t_ref, x[n_all + 1] * w_ref
+        return np.append(br.residual(z, br.ends(z, T, speed)[0]), f_ref @ x[:n_all])
+
+    z, T, speed = x[:n_all] * br.scale(), x[n_all] * t_ref, x[n_all + 1] * w_ref
+    res, jac, mono, _ = _jacobian(br, z, T, speed, br.scale(), t_ref, w_ref, f_ref)
+    np.testing.assert_allclose(res[:-1], residual(x)[:-1], rtol=1e-12)
+    fd = np.column_stack([(residual(x + 1e-5 * e) - residual(x - 1e-5 * e)) / 2e-5 for e in np.eye(x.size)])
+    np.testing.assert_allclose(jac, fd, atol=1e-7 * np.abs(fd).max())
+    np.testing.assert_allclose(mono, expm(a_of(speed) * T), atol=1e-9)  # the segments' product: the whole period
