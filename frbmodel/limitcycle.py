@@ -187,7 +187,8 @@ class _Flow:
     5 ms flow of a 0.1 µm orbit took it 23k steps and 5 s with an error of 4e-4 of the motion, Rodas (difference
     steps from the states' typical sizes) 55 steps and 3e-13 m, 5e-6 of the motion (LSODA at 1e-11 as reference).
     ``method="auto"``: the first flow is integrated by Rodas, then by Radau with twice Rodas' steps as budget; Radau
-    is kept for this speed if it finishes, else Rodas. All flows of one instance use one integrator (the monodromy's differences need it).
+    is kept for this speed if it finishes, else Rodas. All flows of one instance use one integrator (the
+    monodromy's differences need it).
     """
 
     def __init__(self, problem, rtol, atol_m, method=None):
