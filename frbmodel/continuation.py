@@ -722,6 +722,44 @@ def _hopf_start(br, hp, n, t_ref, w_ref):
     return x0, tangent, _padded(br, v.imag / np.linalg.norm(v.imag))
 
 
+def shoot_segments(system, model, speed_rpm, z0, period, segments, tol=1e-6, max_iter=25):
+    """A periodic orbit at a constant speed by multiple shooting: the m segment starts and the period by Newton's
+    method on the segment defects and the phase condition (the equations of :func:`continuation` without the speed
+    unknown and the arclength row), from a guess (z0 [SI], period [s]).
+
+    Returns
+    -------
+    frbmodel.shooting.ShootingSolution
+        The start of segment 0, the period, the monodromy (product of the segments') and its multipliers.
+
+    Raises
+    ------
+    ConvergenceError
+        Newton did not converge within ``max_iter`` iterations.
+    """
+    from .limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
+    from .shooting import ShootingSolution
+
+    br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, speed_rpm, segments)
+    n_all, t_ref = br.segments * br.n, 0.01 * period
+    starts = br.flow(speed_rpm).states(np.asarray(z0, float), period * np.arange(br.segments + 1) / br.segments)
+    x = np.append(starts[:-1, :-1].ravel() / br.scale(), period / t_ref)
+    f_ref, u_ref = _phase_normal(br, starts[0, :-1], speed_rpm), x[:n_all].copy()
+    for it in range(max_iter + 1):
+        z, T = x[:n_all] * br.scale(), x[n_all] * t_ref
+        res, jac, mono, _ = _jacobian(br, z, T, speed_rpm, br.scale(), t_ref, 1.0, f_ref)
+        res[n_all] = f_ref @ (x[:n_all] - u_ref)
+        err = float(np.max(np.abs(res)))
+        if err < tol:
+            mult = np.linalg.eigvals(mono)
+            return ShootingSolution(z[:br.n].copy(), T, mono, mult[np.argsort(-np.abs(mult))], it, err, True)
+        x = x + np.linalg.solve(jac[:, :n_all + 1], -res)
+        if not x[n_all] > 0:
+            break
+    raise ConvergenceError(f"multiple shooting ({br.segments} segments) at {speed_rpm:.0f} rpm did not converge: "
+                           f"residual {err:.3g} (tolerance {tol:g}) after {it} Newton iterations")
+
+
 def _padded(br, f):
     """A phase normal on segment 0 as a vector over all segment starts."""
     out = np.zeros(br.segments * br.n)
@@ -736,4 +774,4 @@ def _phase_normal(br, z, speed):
 
 
 __all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_points",
-           "hopf_record"]
+           "hopf_record", "shoot_segments"]

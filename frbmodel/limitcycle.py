@@ -333,7 +333,7 @@ def _forced_guess(problem, y, t, samples_per_rev, max_multiple):
 
 
 def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), settle_s=0.3, tol=1e-6,
-                samples=400, max_iter=25):
+                samples=400, max_iter=25, segments=1):
     """Periodic whirl orbit of the full nonlinear model at a constant rotor speed, with its Floquet multipliers.
 
     Parameters
@@ -357,6 +357,10 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
         Samples of the returned orbit over one period.
     max_iter : int
         Newton iterations at most.
+    segments : int
+        Shooting segments: 1 single shooting; m > 1 multiple shooting (:func:`frbmodel.continuation.shoot_segments`),
+        for strongly unstable orbits (a flow over the period amplifies errors by the largest multiplier |mu|, a
+        segment by ~|mu|^(1/m)); autonomous orbits only.
 
     Returns
     -------
@@ -377,6 +381,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     model = check_model(film_model or system.film_model)
     problem = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), model, unbalance)
     forced = any(u.amount > 0 for u in unbalance)
+    _check_segments(segments, forced)
     m0 = None
     if guess is None:
         z0, period, info = _guess(problem, settle_s, forced)
@@ -387,9 +392,12 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
         z0, period, info = np.asarray(guess[0], dtype=float), float(guess[1]), {"given": True}
     flow = _Flow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
     scale = atol_vector(problem, SCALE_M)[0][:-1]
-    sol = shoot(flow, flow.rhs, z0, period, scale=scale, autonomous=not forced, tol=tol, max_iter=max_iter,
-                fd_step=FD_STEP, workers=WORKERS, monodromy0=m0)
-    sol = _minimal_period(flow, sol, scale, forced, tol, max_iter)
+    if segments != 1:
+        sol = _multiple(system, model, speed_rpm, z0, period, segments, forced, tol, max_iter)
+    else:
+        sol = shoot(flow, flow.rhs, z0, period, scale=scale, autonomous=not forced, tol=tol, max_iter=max_iter,
+                    fd_step=FD_STEP, workers=WORKERS, monodromy0=m0)
+        sol = _minimal_period(flow, sol, scale, forced, tol, max_iter)
     t = np.linspace(0.0, sol.period, samples + 1)
     y = flow.states(sol.z0, t)
     orbit = _orbit_result(problem, RunupSchema.from_system(system), t, y)
@@ -397,6 +405,21 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
             sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
     stable = stable_multipliers(sol.nontrivial_multipliers, MULTIPLIER_TOL)
     return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, stable, sol.z0, not forced, meta, sol.monodromy)
+
+
+def _check_segments(segments, forced):
+    """Refuse a segment count that is not a whole number >= 1, or > 1 for a forced orbit (before any work)."""
+    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
+        raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
+    if forced and segments > 1:
+        raise ParameterError(f"segments = {segments} is for autonomous orbits: with unbalance use segments = 1")
+
+
+def _multiple(system, model, speed_rpm, z0, period, segments, forced, tol, max_iter):
+    """Multiple shooting of an autonomous orbit."""
+    from .continuation import shoot_segments
+
+    return shoot_segments(system, model, speed_rpm, z0, period, int(segments), tol, max_iter)
 
 
 def _minimal_period(flow, sol, scale, forced, tol, max_iter):

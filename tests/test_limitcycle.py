@@ -176,3 +176,21 @@ def test_unstable_orbit_is_left_at_the_rate_of_its_largest_multiplier():
            for i in range(t.size)]
     rate = np.polyfit(np.arange(t.size), np.log(amp), 1)[0]
     assert rate == pytest.approx(math.log(abs(mu[k])), rel=0.10)
+
+
+@pytest.mark.slow
+def test_multiple_shooting_orbit_equals_single_shooting(lc60):
+    """limit_cycle(segments=3) (Newton on three segment starts and the period) finds the orbit single shooting
+    finds at 61 krpm: period to 1e-7 (both converge to 1e-6 of a micrometre scale with flows at rtol 3e-9) and
+    multipliers to 1e-3 (difference monodromies, columns ~3e-4). With unbalance (a forced orbit) segments > 1 is
+    refused with a clear error."""
+    from frbmodel.errors import ParameterError
+    from frbmodel.runup import Unbalance
+
+    tc = frb.turbocharger(36e-6)
+    one = limit_cycle(tc, 61e3, guess=lc60)
+    three = limit_cycle(tc, 61e3, guess=(lc60.state, lc60.period), segments=3)
+    assert three.period == pytest.approx(one.period, rel=1e-7)
+    np.testing.assert_allclose(three.multipliers[:6], one.multipliers[:6], atol=1e-3)
+    with pytest.raises(ParameterError, match="autonomous"):
+        limit_cycle(tc, 61e3, unbalance=[Unbalance("turbine_wheel", 1e-6)], segments=2)
