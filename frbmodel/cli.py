@@ -398,6 +398,8 @@ def cmd_bifurcation(args):
             raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm") from None
     if args.max_points < 2:
         raise ParameterError(f"--max-points = {args.max_points} is invalid: valid range >= 2")
+    if args.segments < 1:
+        raise ParameterError(f"--segments = {args.segments} is invalid: valid range >= 1 (1: single shooting)")
     out = writable_dir(args.out)
     hps = hopf_points(tc, (lo, hi))
     print(f"Hopf points of the full model, {lo:.0f} ... {hi:.0f} rpm (equilibrium loses stability):")

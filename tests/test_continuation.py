@@ -268,3 +268,15 @@ def test_shooting_jacobian_equals_differences_of_the_residual(segments):
     fd = np.column_stack([(residual(x + 1e-5 * e) - residual(x - 1e-5 * e)) / 2e-5 for e in np.eye(x.size)])
     np.testing.assert_allclose(jac, fd, atol=1e-7 * np.abs(fd).max())
     np.testing.assert_allclose(mono, expm(a_of(speed) * T), atol=1e-9)  # the segments' product: the whole period
+
+
+@pytest.mark.parametrize("opt, value, shown", [("--segments", "0", "--segments = 0 is invalid: valid range >= 1"),
+                                               ("--max-points", "1", "--max-points = 1 is invalid: valid range >= 2")])
+def test_cli_bifurcation_refuses_bad_counts_before_computing(opt, value, shown, tmp_path, capsys):
+    """Bad counts exit 2 with one line naming option, value and valid range — before the Hopf points are searched
+    (nothing printed on stdout)."""
+    from frbmodel.cli import main
+
+    assert main(["bifurcation", opt, value, "--out", str(tmp_path / "b")]) == 2
+    out = capsys.readouterr()
+    assert shown in out.err and "Traceback" not in out.err and "Hopf points" not in out.out
