@@ -106,7 +106,7 @@ class _Branch:
         return self._scale_all
 
 
-def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref):
+def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref, speed_column=True):
     """Residual (N+1) and its Jacobian (N+1, N+2) in the scaled unknowns (u_0 … u_{m−1}, τ, p) at (z, T, speed),
     N = m n, and the monodromy M = M_{m−1} ⋯ M_0 (each segment's by differences of its flow)."""
     from .shooting import monodromy
@@ -116,15 +116,17 @@ def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref):
     end, fl = br.ends(z, T, speed)
     zs, es, s1, su = z.reshape(m, n), end.reshape(m, n), br.scale_vec, br.start_scale
     blocks = [monodromy(fl, zs[k], T / m, s1, es[k], 1e-4, br.workers) for k in range(m)]
-    ds = SPEED_FD * speed
-    d_speed = (br.ends(z, T, speed + ds, like=fl)[0] - end) / ds
     jac = np.zeros((N + 1, N + 2))
+    if speed_column:  # (one more set of flows; left zero where the speed is fixed)
+        ds = SPEED_FD * speed
+        d_speed = (br.ends(z, T, speed + ds, like=fl)[0] - end) / ds
     for k in range(m):
         rows, nxt = slice(k * n, (k + 1) * n), ((k + 1) % m) * n
         jac[rows, rows] = blocks[k] * su[None, :] / s1[:, None]
         jac[rows, nxt:nxt + n] -= np.diag(su / s1)
         jac[rows, N] = fl.rhs(es[k]) / s1 * t_ref / m
-        jac[rows, N + 1] = d_speed[rows] / s1 * w_ref
+        if speed_column:
+            jac[rows, N + 1] = d_speed[rows] / s1 * w_ref
     jac[N, :N] = f_ref
     mono = blocks[0]
     for b in blocks[1:]:
@@ -747,7 +749,7 @@ def shoot_segments(system, model, speed_rpm, z0, period, segments, tol=1e-6, max
     f_ref, u_ref = _phase_normal(br, starts[0, :-1], speed_rpm), x[:n_all].copy()
     for it in range(max_iter + 1):
         z, T = x[:n_all] * br.scale(), x[n_all] * t_ref
-        res, jac, mono, _ = _jacobian(br, z, T, speed_rpm, br.scale(), t_ref, 1.0, f_ref)
+        res, jac, mono, _ = _jacobian(br, z, T, speed_rpm, br.scale(), t_ref, 1.0, f_ref, speed_column=False)
         res[n_all] = f_ref @ (x[:n_all] - u_ref)
         err = float(np.max(np.abs(res)))
         if err < tol:
