@@ -36,7 +36,9 @@ def _user_copies():
 @pytest.fixture(scope="module", autouse=True)
 def _remove_new_user_copies():
     """The FMUs copy their bundled frbmodel into the user's cache (by design: numba's kernels survive fresh
-    extractions). The copies these tests make are removed afterwards; copies that existed before stay."""
+    extractions). The copies these tests make are removed afterwards; copies that existed before stay. (With
+    pytest-xdist the suite runs with --dist loadfile: no test of this module runs on another worker meanwhile,
+    whose host could be using a copy removed here.)"""
     before = _user_copies()
     yield
     for d in _user_copies() - before:
