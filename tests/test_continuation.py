@@ -222,6 +222,32 @@ def test_multiple_shooting_follows_a_branch_single_shooting_cannot(tc):
         assert np.hypot(*(end[j:j + 2] - p.state[j:j + 2])) < 1e-4 * p.turbine_radius_m
 
 
+@pytest.mark.slow
+def test_vertical_branch_of_the_first_hopf_point_grows(tc):
+    """The branch born at the 2.0 krpm Hopf point (36 um, forward conical mode) is vertical: its amplitude is neutral
+    to first order, the speed fixed only by higher-order terms (condition of the corrector's system ~1e4). With the
+    plain chord corrector it stalled at tiny steps (0.17 um after 15 points, 99 s); with Broyden's update 12 points
+    must take the turbine-wheel orbit beyond 1 um, and the speed must have moved by less than 0.1 % until then (the
+    branch is vertical: measured 1.07 um at 0.014 %; 7.4 um after 12 points). The last orbit is checked by another
+    integrator: LSODA from its state over its period returns within 1e-3 of the orbit's size (LSODA's 1e-10 and the
+    flows' 3e-9 tolerances over a 50 ms period, multipliers ~1)."""
+    from scipy.integrate import solve_ivp
+
+    from frbmodel.runup import SpeedProfile, build_problem
+
+    bd = continuation(tc, (1000.0, 6000.0), "hopf", max_points=12)
+    hopf = [b["speed_rpm"] for b in bd.bifurcations if b["type"] == "Hopf"][0]
+    p = bd.points[-1]
+    assert len(bd.points) == 12 and p.turbine_radius_m > 1e-6
+    first_um = next(q for q in bd.points if q.turbine_radius_m > 1e-6)
+    assert all(q.speed_rpm == pytest.approx(hopf, rel=1e-3) for q in bd.points[:bd.points.index(first_um) + 1])
+    prob = build_problem(tc, SpeedProfile.constant(p.speed_rpm, 1.0), tc.film_model)
+    end = solve_ivp(lambda t, y: prob.rhs(t, y, np.empty(y.size)).copy(), (0.0, p.period), np.append(p.state, 0.0),
+                    method="LSODA", rtol=1e-10, atol=1e-16).y[:-1, -1]
+    j = 4 * tc.rotor.discs[0].node
+    assert np.hypot(*(end[j:j + 2] - p.state[j:j + 2])) < 1e-3 * p.turbine_radius_m
+
+
 @pytest.mark.parametrize("segments", [1, 3])
 def test_shooting_jacobian_equals_differences_of_the_residual(segments):
     """The continuation's Jacobian — segment monodromies, the coupling to the next start (with the wrap from the
@@ -280,3 +306,60 @@ def test_cli_bifurcation_refuses_bad_counts_before_computing(opt, value, shown, 
     assert main(["bifurcation", opt, value, "--out", str(tmp_path / "b")]) == 2
     out = capsys.readouterr()
     assert shown in out.err and "Traceback" not in out.err and "Hopf points" not in out.out
+
+
+#: degenerate Hopf normal form r' = r (mu - r^4), theta' = OMEGA, mu = K (speed - S_H): its cycles r^4 = mu form a
+#: branch that leaves the Hopf point vertically (d speed / dr = 4 r^3 / K), with radial multiplier exp(-4 mu T)
+K_DH, S_H, OMEGA_DH = 1e-3, 1000.0, 2 * math.pi
+
+
+class _DegenerateHopfFlow:
+    """The normal form's flow in closed form (s = r^-4 obeys s' = 4 - 4 mu s)."""
+
+    method = "closed form"
+
+    def __init__(self, speed):
+        self.mu = K_DH * (speed - S_H)
+
+    def __call__(self, z, t):
+        r0, th = math.hypot(z[0], z[1]), math.atan2(z[1], z[0]) + OMEGA_DH * t
+        mu, s0 = self.mu, math.hypot(z[0], z[1]) ** -4
+        s = s0 + 4 * t if mu == 0 else 1 / mu + (s0 - 1 / mu) * math.exp(-4 * mu * t)
+        r = s ** -0.25 if r0 > 0 else 0.0
+        return np.array([r * math.cos(th), r * math.sin(th)])
+
+    def rhs(self, z):
+        g = self.mu - (z @ z) ** 2
+        return np.array([g * z[0] - OMEGA_DH * z[1], g * z[1] + OMEGA_DH * z[0]])
+
+
+def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(monkeypatch):
+    """On a nearly vertical branch (amplitude neutral to first order, as at the 2.0 krpm Hopf point of the 36 um
+    system) the continuation's linear system is ill-conditioned, and the difference monodromy's error (~3e-4 per
+    column for the FRB flows, SHOOT_RTOL / FD_STEP) decides whether the corrector converges. Here the monodromy is
+    deliberately wrong by 3e-4 (the same entries every time, like the FRB flows' systematic difference error); the
+    corrector must still land on the closed-form branch r^4 = mu, period 2 pi / OMEGA, within the accuracy its
+    residual tolerance (1e-6, scaled) allows through the problem's condition (radial multiplier >= 1 - 4e-4 from r =
+    0.1 on: a residual of 1e-6 moves r by at most ~1e-6 / 4e-4 = 2.5e-3 relative; 1e-2 is asserted)."""
+    import frbmodel.shooting
+    from frbmodel import continuation as cont
+
+    exact = frbmodel.shooting.monodromy
+    monkeypatch.setattr(frbmodel.shooting, "monodromy",
+                        lambda *a, **k: exact(*a, **k) + 3e-4 * np.array([[1.0, -0.5], [0.7, 1.0]]))
+    br = object.__new__(cont._Branch)
+    br.scale_vec, br.workers = np.array([1.0, 1.0]), 1
+    br.flow = lambda speed, like=None: _DegenerateHopfFlow(speed)
+    br.set_segments(1)
+    t_ref, w_ref = 0.01, 10.0
+    r_a = 0.1  # mu = 1e-4: radial multiplier exp(-4e-4)
+    x_prev = np.array([r_a, 0.0, 1.0 / t_ref, (S_H + r_a ** 4 / K_DH) / w_ref])
+    tangent = np.array([1.0, 0.0, 0.0, 4 * r_a ** 3 / K_DH / w_ref])
+    tangent /= np.linalg.norm(tangent)
+    ds = 0.2  # to r = 0.29 (the plain chord iteration with this monodromy diverges on this step)
+    f_ref = cont._phase_normal(br, x_prev[:2], x_prev[3] * w_ref)
+    x, *_ = cont._correct(br, x_prev + ds * tangent, tangent, x_prev, ds, 2, t_ref, w_ref, f_ref, x_prev[:2])
+    r, period, speed = math.hypot(x[0], x[1]), x[2] * t_ref, x[3] * w_ref
+    assert r ** 4 == pytest.approx(K_DH * (speed - S_H), rel=4e-2)  # r to 1e-2
+    assert period == pytest.approx(2 * math.pi / OMEGA_DH, rel=1e-4)
+    assert float(tangent @ (x - x_prev)) == pytest.approx(ds, rel=1e-9)  # on the arclength plane (a linear row)
