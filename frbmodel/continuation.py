@@ -438,13 +438,15 @@ class BifurcationDiagram:
     meta: dict = field(default_factory=dict)
 
     def to_dataframe(self):
-        """The branch points as a table (units in the column names)."""
+        """The branch points as a table (units in the column names). ``trivial multiplier error`` is the distance from
+        1 of the multiplier closest to it (1 exactly on a periodic orbit): the accuracy of the multipliers there."""
         import pandas as pd
 
         rows = [{"speed [rpm]": p.speed_rpm, "frequency [Hz]": 1 / p.period, "period [s]": p.period,
                  "turbine wheel orbit radius [um]": p.turbine_radius_m * 1e6, "stable": p.stable,
                  "max |multiplier| (nontrivial) [-]": float(np.max(np.abs(np.delete(
                      p.multipliers, int(np.argmin(np.abs(p.multipliers - 1.0))))))),
+                 "trivial multiplier error [-]": _trivial_error(p.multipliers),
                  **{f"max eps {k} [-]": v for k, v in zip(("turbine inner", "turbine outer", "compressor inner",
                                                           "compressor outer"), p.max_eps)}} for p in self.points]
         return pd.DataFrame(rows)
@@ -635,8 +637,9 @@ def hopf_record(system, hp, branch=(), film_model=None):
     """The bifurcation-table record of a Hopf point.
 
     ``criticality``: "supercritical" if its branch grows towards higher speeds, where the crossing pair is unstable
-    (:func:`hopf_points` lists crossings to instability only), "subcritical" if it grows backwards, "" without a
-    branch or when its first points stay within :data:`FOLD_MIN_REL` of the Hopf speed (a vertical branch).
+    (:func:`hopf_points` lists crossings to instability only), "subcritical" if it grows backwards — the side of
+    the first branch point more than :data:`FOLD_MIN_REL` from the Hopf speed —, "" without a branch or when all its
+    points stay within that of the Hopf speed (a vertical branch).
     ``mode``: precession and kind of the method-J Campbell mode nearest in frequency at that speed (the linear
     onsets agree to 0.03 %). ``film``: the film whose relative motion in the crossing eigenvector, over its
     clearance, is largest (inner: journal minus ring, outer: ring), with that share of the four.
@@ -667,9 +670,11 @@ def hopf_record(system, hp, branch=(), film_model=None):
                 np.linalg.norm(ring) / b.outer.clearance]
     rel = np.array(rel) / np.sum(rel)
     k = int(np.argmax(rel))
-    ahead = np.mean([q.speed_rpm - hp.speed_rpm for q in branch[:3]]) if len(branch) else 0.0
-    crit = ("" if abs(ahead) <= FOLD_MIN_REL * hp.speed_rpm  # no branch, or a vertical one: undetermined
-            else "supercritical" if ahead > 0 else "subcritical")
+    # the side of the branch's first speed excursion beyond the jitter of a vertical branch (the first points may
+    # all lie within it: small first steps, or a degenerate Hopf point whose branch bends only at finite amplitude)
+    ahead = next((d for d in (q.speed_rpm - hp.speed_rpm for q in branch) if abs(d) > FOLD_MIN_REL * hp.speed_rpm),
+                 0.0)
+    crit = "" if ahead == 0.0 else "supercritical" if ahead > 0 else "subcritical"  # "": no branch or all vertical
     return {"speed_rpm": hp.speed_rpm, "type": "Hopf", "criticality": crit, "frequency_hz": hp.frequency_hz,
             "turbine_radius_um": 0.0, "mode": f"{cd.precession[0, j]} {cd.mode_kind[0, j]}",
             "film": f"{film_names(system)[k]} ({100 * rel[k]:.0f} %)", "between": []}

@@ -146,7 +146,8 @@ def test_hopf_record_criticality_mode_and_film(tc):
     (above it: hopf_points lists crossings to instability), subcritical when it grows backwards. Its mode is the
     Campbell mode at that speed and frequency (the 2.0 krpm one: forward conical, README table), its film the one
     moving most relative to its clearance in the eigenvector, with the four shares summing to 100 %. A branch that
-    stays at the Hopf speed within the jitter of a vertical branch (FOLD_MIN_REL) leaves the criticality open."""
+    stays at the Hopf speed within the jitter of a vertical branch (FOLD_MIN_REL) leaves the criticality open; the
+    first excursion beyond it decides."""
     from frbmodel.continuation import hopf_record
 
     hp = hopf_points(tc, (1.5e3, 2.5e3), n_grid=4)[0]
@@ -155,6 +156,9 @@ def test_hopf_record_criticality_mode_and_film(tc):
     assert hopf_record(tc, hp, down)["criticality"] == "subcritical"
     vertical = [_bp(hp.speed_rpm + d, [0.5]) for d in (4e-3, -3e-3, 5e-3)]  # speed jitter of a vertical branch
     assert hopf_record(tc, hp, vertical)["criticality"] == ""
+    # small first steps within the jitter, then the branch bends back (the 2.0 and 58.5 krpm branches of 36 um)
+    bends = [_bp(hp.speed_rpm + d, [0.5]) for d in (4e-3, -3e-3, 5e-3, -0.2, -1.0)]
+    assert hopf_record(tc, hp, bends)["criticality"] == "subcritical"
     rec = hopf_record(tc, hp)
     assert rec["criticality"] == "" and rec["mode"] == "forward conical"
     assert rec["film"].split(" (")[0] in frb.whirl.FILM_NAMES
@@ -364,3 +368,25 @@ def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(m
     assert r ** 4 == pytest.approx(K_DH * (speed - S_H), rel=4e-2)  # r to 1e-2
     assert period == pytest.approx(2 * math.pi / OMEGA_DH, rel=1e-4)
     assert float(tangent @ (x - x_prev)) == pytest.approx(ds, rel=1e-9)  # on the arclength plane (a linear row)
+
+
+def test_inaccurate_monodromy_is_replaced_by_central_differences():
+    """The trivial multiplier (1 exactly on a periodic orbit) checks a point's monodromy: one whose multiplier
+    closest to 1 is off by more than MULTIPLIER_TOL is replaced by central differences of the flow; an accurate one
+    is kept. On the closed-form degenerate Hopf cycle r = 0.3 (mu = r^4) the multipliers are 1 and exp(-4 mu T)
+    (T = 1); central differences at the 1e-4 step are exact to ~1e-8 (truncation h^2 times the flow's curvature)."""
+    from frbmodel import continuation as cont
+
+    br = object.__new__(cont._Branch)
+    br.scale_vec, br.workers = np.array([1.0, 1.0]), 1
+    br.flow = lambda speed, like=None: _DegenerateHopfFlow(speed)
+    br.set_segments(1)
+    r, t_ref, w_ref = 0.3, 0.01, 10.0
+    x = np.array([r, 0.0, 1.0 / t_ref, (S_H + r ** 4 / K_DH) / w_ref])
+    expected = np.sort([1.0, math.exp(-4 * r ** 4)])
+    wrong = np.array([[1.0, 0.1], [0.1, math.exp(-4 * r ** 4)]])  # the exact diagonal, coupled: multipliers moved
+    assert cont._trivial_error(np.linalg.eigvals(wrong)) > 5e-3
+    fixed = cont._checked_monodromy(br, x, 2, t_ref, w_ref, wrong)
+    np.testing.assert_allclose(np.sort(np.linalg.eigvals(fixed).real), expected, atol=1e-6)
+    good = fixed + 1e-4  # within the tolerance: kept as it is
+    assert cont._checked_monodromy(br, x, 2, t_ref, w_ref, good) is good
