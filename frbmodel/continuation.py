@@ -61,6 +61,7 @@ class _Branch:
         self.system, self.model = system, model
         self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
         self._flows = {}
+        self._last = None  # the last flow that chose its integrator (the hint of the next new speed)
         self._flow_cls = _Flow
         #: one scaling of the states for the whole branch (that of the start speed): u = z / scale
         self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
@@ -102,7 +103,10 @@ class _Branch:
             if len(self._flows) > 8:
                 self._flows.clear()
             problem = build_problem(self.system, SpeedProfile.constant(key, 1.0), self.model)
-            self._flows[key] = self._flow_cls(problem, self.rtol, self.atol_m, None if like is None else like.method)
+            if like is not None:
+                self._flows[key] = self._flow_cls(problem, self.rtol, self.atol_m, like.method)
+            else:  # a new speed of the branch: its integrator chosen with the last chosen one as hint
+                self._flows[key] = self._last = self._flow_cls(problem, self.rtol, self.atol_m, hint=self._last)
         return self._flows[key]
 
     def scale(self, speed_rpm=None):

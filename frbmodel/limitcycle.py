@@ -187,11 +187,13 @@ class _Flow:
     5 ms flow of a 0.1 µm orbit took it 23k steps and 5 s with an error of 4e-4 of the motion, Rodas (difference
     steps from the states' typical sizes) 55 steps and 3e-13 m, 5e-6 of the motion (LSODA at 1e-11 as reference).
     ``method="auto"``: the first flow is integrated by Rodas, then by Radau with twice Rodas' steps as budget; Radau
-    is kept for this speed if it finishes, else Rodas. All flows of one instance use one integrator (the
-    monodromy's differences need it).
+    is kept for this speed if it finishes, else Rodas. ``hint``: a flow at a neighbouring speed that chose Radau —
+    Radau is then tried first, with twice the neighbour's Rodas steps as budget, and Rodas only if it does not
+    finish (a continuation saves one Rodas flow per branch point). All flows of one instance use one integrator
+    (the monodromy's differences need it).
     """
 
-    def __init__(self, problem, rtol, atol_m, method=None):
+    def __init__(self, problem, rtol, atol_m, method=None, hint=None):
         import threading
 
         from .compiled import pack_problem
@@ -205,6 +207,9 @@ class _Flow:
         self.fd_scale = typical_sizes(problem, FD_TYPICAL_M)
         self.cols = film_columns(problem.n_rotor, problem.args[3], problem.torque_driven, problem.args[10].size > 0)
         self._probe = threading.Lock()
+        #: Rodas steps of the probe (this flow's, or the hint's it relied on); None before a probe
+        self.rodas_steps = None
+        self._hint = hint if hint is not None and hint.method == "radau" and hint.rodas_steps else None
 
     def _radau(self, y0, t, max_steps=10**8):
         from .compiled import solve_chunk
@@ -220,8 +225,15 @@ class _Flow:
         return y[:good], (STATUS[status] if status else ""), steps
 
     def _choose(self, y0, t):
-        """The first flow: Rodas, then Radau within twice its steps; keep the one that worked best."""
+        """The first flow: Rodas, then Radau within twice its steps; keep the one that worked best. With a hint:
+        Radau within twice the hint's Rodas steps first."""
+        if self._hint is not None:
+            y_a, message_a = self._radau(y0, t, max_steps=2 * self._hint.rodas_steps + 100)
+            if not message_a:
+                self.method, self.rodas_steps = "radau", self._hint.rodas_steps
+                return y_a, message_a
         y, message, steps = self._rodas(y0, t)
+        self.rodas_steps = steps
         if message:
             self.method = "radau"
             return self._radau(y0, t)
