@@ -4,12 +4,13 @@ Unknowns X = (u0, τ, p): the scaled start state u0 = z0 / scale of a periodic o
 its period τ = T / T_ref and the rotor speed p = Ω / Ω_ref. Equations: the shooting residual (Φ_T(z0; Ω) − z0) /
 scale, the phase condition (the start point on the hyperplane through the previous point normal to the flow there)
 and the arclength condition t·(X − X_prev) = Δs along the unit tangent t of the branch. A predictor step along the
-tangent is corrected by Newton iterations with the Jacobian (monodromy by forward differences of the flow, ∂Φ/∂Ω by
-one more flow) computed at the predicted point and updated by Broyden's formula; the step length adapts to the
-number of corrector iterations. Folds (the speed turns: a multiplier through +1), period doublings (a real
-multiplier through −1) and Neimark-Sacker points (a complex pair leaving the unit circle: a second whirl frequency,
-a torus) are detected from the Floquet multipliers of consecutive points and located by linear interpolation between
-them.
+tangent is corrected by Newton iterations starting from the Jacobian of the last point (monodromy by forward
+differences of the flow, ∂Φ/∂Ω by one more flow; after a failed step, and at a Hopf point, one computed at the
+predicted point) and updated by Broyden's formula; the Jacobian and monodromy are then computed at the new point
+(its multipliers, the next tangent, the next corrector). The step length adapts to the number of corrector
+iterations. Folds (the speed turns: a multiplier through +1), period doublings (a real multiplier through −1) and
+Neimark-Sacker points (a complex pair leaving the unit circle: a second whirl frequency, a torus) are detected from
+the Floquet multipliers of consecutive points and located by linear interpolation between them.
 """
 from __future__ import annotations
 
@@ -61,7 +62,7 @@ class _Branch:
         self.system, self.model = system, model
         self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
         self._flows = {}
-        self._last = None  # the last flow that chose its integrator (the hint of the next new speed)
+        self._last = None  # the last flow made for a new speed (it has chosen its integrator by the next one)
         self._flow_cls = _Flow
         #: one scaling of the states for the whole branch (that of the start speed): u = z / scale
         self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
@@ -204,31 +205,34 @@ def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref, jac
 
 
 def _at_point(br, x, n, t_ref, w_ref):
-    """Phase normal, Jacobian (phase row = that normal) and monodromy at a converged branch point x."""
+    """Phase normal, Jacobian (phase row = that normal), monodromy and flow at a converged branch point x."""
     z, T, speed = x[:n] * br.scale(), x[n] * t_ref, x[n + 1] * w_ref
     f_ref = _phase_normal(br, z, speed)
-    _, jac, m, _ = _jacobian(br, z, T, speed, br.scale(), t_ref, w_ref, f_ref)
-    return f_ref, jac, m
+    _, jac, m, fl = _jacobian(br, z, T, speed, br.scale(), t_ref, w_ref, f_ref)
+    return f_ref, jac, m, fl
 
 
-def _checked_monodromy(br, x, n, t_ref, w_ref, m):
+def _checked_monodromy(br, x, n, t_ref, w_ref, m, fl):
     """The monodromy ``m`` (forward differences) at the orbit x, or central differences of the segment flows if
     that is more accurate. A periodic orbit of an autonomous system has the multiplier 1 exactly (the flow direction:
     M f = f); where the computed one closest to 1 is off by more than MULTIPLIER_TOL, the forward differences'
     O(h) truncation error dominates (measured on the 2.0 krpm branch past its fold, 29 µm at 1857 rpm: the pair
     1.077 / 0.876 instead of 1.000 / 0.940, M f − f 1.9e-2 of f; central 2.9e-5, the pair 0.9997 / 0.9405 as with
-    1e-11 tolerances)."""
+    1e-11 tolerances). ``fl``: the flow (and so the integrator) ``m`` was computed with. If a central-difference
+    flow fails, ``m`` is kept (the branch table's trivial-multiplier error shows its accuracy)."""
     from .limitcycle import MULTIPLIER_TOL
     from .shooting import monodromy
 
     if _trivial_error(np.linalg.eigvals(m)) <= MULTIPLIER_TOL:
         return m
     mseg = br.segments
-    z, T, speed = x[:n] * br.scale(), x[n] * t_ref, x[n + 1] * w_ref
-    fl = br.flow(speed)
+    z, T = x[:n] * br.scale(), x[n] * t_ref
     central = np.eye(br.n)
-    for zk in z.reshape(mseg, br.n):
-        central = monodromy(fl, zk, T / mseg, br.scale_vec, None, 1e-4, br.workers, central=True) @ central
+    try:
+        for zk in z.reshape(mseg, br.n):
+            central = monodromy(fl, zk, T / mseg, br.scale_vec, None, 1e-4, br.workers, central=True) @ central
+    except ConvergenceError:
+        return m
     better = _trivial_error(np.linalg.eigvals(central)) < _trivial_error(np.linalg.eigvals(m))
     return central if better else m
 
@@ -238,15 +242,14 @@ def _trivial_error(mult):
     return float(np.min(np.abs(np.asarray(mult) - 1.0)))
 
 
-def _point(br, x, n, t_ref, w_ref, m):
-    """A BranchPoint (orbit measures sampled from the flow) for the solution x with monodromy m."""
+def _point(br, x, n, t_ref, w_ref, m, fl):
+    """A BranchPoint (orbit measures sampled from the flow ``fl``) for the solution x with monodromy m."""
     from .limitcycle import MULTIPLIER_TOL, _orbit_result
     from .recorder import RunupSchema
     from .shooting import stable_multipliers
 
-    m = _checked_monodromy(br, x, n, t_ref, w_ref, m)
+    m = _checked_monodromy(br, x, n, t_ref, w_ref, m, fl)
     z, T, speed = x[:br.n] * br.start_scale, x[n] * t_ref, x[n + 1] * w_ref  # the orbit from segment 0's start
-    fl = br.flow(speed)
     t = np.linspace(0.0, T, POINT_SAMPLES + 1)
     orbit = _orbit_result(fl.problem, RunupSchema.from_system(br.system), t, fl.states(z, t))
     xy = orbit.displacement[orbit.schema.discs[0]][:-1]
@@ -751,7 +754,7 @@ def _follow_loop(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_point
         signals.check()
         try:
             x_new, iters = _correct(br, x + ds * tangent, tangent, x, ds, n, t_ref, w_ref, f_ref, x[:n], jac)
-            f_new, jac_new, m = _at_point(br, x_new, n, t_ref, w_ref)
+            f_new, jac_new, m, fl = _at_point(br, x_new, n, t_ref, w_ref)
         except (ConvergenceError, np.linalg.LinAlgError):
             ds, jac = 0.5 * ds, None
             if ds < 1e-3:
@@ -759,7 +762,7 @@ def _follow_loop(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_point
             continue
         tangent = _next_tangent(jac_new, tangent, x_new - x)
         x, jac, f_ref = x_new, jac_new, f_new
-        points.append(_point(br, x, n, t_ref, w_ref, m))
+        points.append(_point(br, x, n, t_ref, w_ref, m, fl))
         if on_point is not None:
             on_point(points[-1])
         if progress:
@@ -786,10 +789,10 @@ def _collapsed(points):
 def _start_tangent(br, x0, n, t_ref, w_ref, direction):
     """Unit tangent at a computed orbit x0, its speed component of sign ``direction``, the orbit as a point, and
     the Jacobian there."""
-    _, jac, m = _at_point(br, x0, n, t_ref, w_ref)
+    _, jac, m, fl = _at_point(br, x0, n, t_ref, w_ref)
     guide = np.zeros(n + 2)
     guide[n + 1] = direction
-    return _tangent(jac, guide), _point(br, x0, n, t_ref, w_ref, m), jac
+    return _tangent(jac, guide), _point(br, x0, n, t_ref, w_ref, m, fl), jac
 
 
 def _hopf_start(br, hp, n, t_ref, w_ref):

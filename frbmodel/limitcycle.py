@@ -32,6 +32,8 @@ SHOOT_RTOL, SHOOT_ATOL_M = 3e-9, 3e-13
 FD_STEP = 1e-4
 #: integrator of the shooting flows ("auto", "radau" or "rodas", see :class:`_Flow`)
 FLOW_METHOD = "auto"
+#: a flow takes a neighbour's integrator choice as hint (no Rodas probe) at most this many times in a row
+HINT_MAX_AGE = 10
 #: accuracy of the multipliers' moduli [-]: a double multiplier at 1 (the trivial one and, near a Hopf point or a
 #: fold, the critical one) splits by about the square root of the monodromy's error; measured: up to 8e-4 on an
 #: orbit 0.5 rpm from the 14.1 krpm Hopf point of the 36 µm system (1.0003 ± 0.0008j, 8 ms period) and 0.9966 ...
@@ -209,7 +211,11 @@ class _Flow:
         self._probe = threading.Lock()
         #: Rodas steps of the probe (this flow's, or the hint's it relied on); None before a probe
         self.rodas_steps = None
-        self._hint = hint if hint is not None and hint.method == "radau" and hint.rodas_steps else None
+        #: flows since the last full probe along a chain of hints: a hint older than HINT_MAX_AGE is not taken (the
+        #: Rodas step count it carries no longer describes the orbit)
+        self.hint_age = 0
+        ok = hint is not None and hint.method == "radau" and hint.rodas_steps and hint.hint_age < HINT_MAX_AGE
+        self._hint_steps, self._hint_age = (hint.rodas_steps, hint.hint_age) if ok else (None, 0)
 
     def _radau(self, y0, t, max_steps=10**8):
         from .compiled import solve_chunk
@@ -227,10 +233,10 @@ class _Flow:
     def _choose(self, y0, t):
         """The first flow: Rodas, then Radau within twice its steps; keep the one that worked best. With a hint:
         Radau within twice the hint's Rodas steps first."""
-        if self._hint is not None:
-            y_a, message_a = self._radau(y0, t, max_steps=2 * self._hint.rodas_steps + 100)
+        if self._hint_steps is not None:
+            y_a, message_a = self._radau(y0, t, max_steps=2 * self._hint_steps + 100)
             if not message_a:
-                self.method, self.rodas_steps = "radau", self._hint.rodas_steps
+                self.method, self.rodas_steps, self.hint_age = "radau", self._hint_steps, self._hint_age + 1
                 return y_a, message_a
         y, message, steps = self._rodas(y0, t)
         self.rodas_steps = steps

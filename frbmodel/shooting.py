@@ -120,14 +120,14 @@ def monodromy(flow, z0, period, scale, end=None, fd_step=1e-6, workers=1, centra
         Threads integrating columns side by side (worth it when ``flow`` runs compiled code without the GIL).
     central : bool
         Central differences (Φ(z0 + h) − Φ(z0 − h)) / 2h: truncation error O(h²) instead of O(h), twice the flows
-        (``end`` is then not used).
+        (``end`` is then not used in the columns).
 
     Returns
     -------
     ndarray (n, n)
         M, in the system's units.
     """
-    end = None if central else (flow(z0, period) if end is None else end)
+    end = flow(z0, period) if end is None else end  # first, on z0: a flow that chooses its integrator does it here
 
     def column(k):
         z = z0.copy()

@@ -37,8 +37,10 @@ def _user_copies():
 def _remove_new_user_copies():
     """The FMUs copy their bundled frbmodel into the user's cache (by design: numba's kernels survive fresh
     extractions). The copies these tests make are removed afterwards; copies that existed before stay. (With
-    pytest-xdist the suite runs with --dist loadfile: no test of this module runs on another worker meanwhile,
-    whose host could be using a copy removed here.)"""
+    pytest-xdist the suite runs with --dist loadfile: no test of this module runs on another worker meanwhile, whose
+    host could be using a copy removed here. Tests of other modules make no copies in the user's cache - the
+    packaging test sets XDG_CACHE_HOME to its tmp path, Python hosts import the checkout's frbmodel - else a copy
+    they made meanwhile would be removed too.)"""
     before = _user_copies()
     yield
     for d in _user_copies() - before:

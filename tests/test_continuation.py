@@ -244,8 +244,8 @@ def test_vertical_branch_of_the_first_hopf_point_grows(tc):
     hopf = [b["speed_rpm"] for b in bd.bifurcations if b["type"] == "Hopf"][0]
     p = bd.points[-1]
     assert len(bd.points) == 12 and p.turbine_radius_m > 1e-6
-    first_um = next(q for q in bd.points if q.turbine_radius_m > 1e-6)
-    assert all(q.speed_rpm == pytest.approx(hopf, rel=1e-3) for q in bd.points[:bd.points.index(first_um) + 1])
+    first_um = next(i for i, q in enumerate(bd.points) if q.turbine_radius_m > 1e-6)
+    assert all(q.speed_rpm == pytest.approx(hopf, rel=1e-3) for q in bd.points[:first_um + 1])
     prob = build_problem(tc, SpeedProfile.constant(p.speed_rpm, 1.0), tc.film_model)
     end = solve_ivp(lambda t, y: prob.rhs(t, y, np.empty(y.size)).copy(), (0.0, p.period), np.append(p.state, 0.0),
                     method="LSODA", rtol=1e-10, atol=1e-16).y[:-1, -1]
@@ -344,8 +344,10 @@ def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(m
     column for the FRB flows, SHOOT_RTOL / FD_STEP) decides whether the corrector converges. Here the monodromy is
     deliberately wrong by 3e-4 (the same entries every time, like the FRB flows' systematic difference error); the
     corrector must still land on the closed-form branch r^4 = mu, period 2 pi / OMEGA, within the accuracy its
-    residual tolerance (1e-6, scaled) allows through the problem's condition (radial multiplier >= 1 - 4e-4 from r =
-    0.1 on: a residual of 1e-6 moves r by at most ~1e-6 / 4e-4 = 2.5e-3 relative; 1e-2 is asserted)."""
+    residual tolerance (1e-6, scaled) allows through the problem's condition (radial multiplier <= 1 - 4e-4 from r =
+    0.1 on: a residual of 1e-6 moves r by at most ~1e-6 / 4e-4 = 2.5e-3 relative; 1e-2 is asserted). Both starts of
+    the iteration: a Jacobian computed at the predicted point, and the previous point's with another phase row (as
+    the continuation passes it from point to point; the corrector puts the current phase normal in)."""
     import frbmodel.shooting
     from frbmodel import continuation as cont
 
@@ -363,11 +365,15 @@ def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(m
     tangent /= np.linalg.norm(tangent)
     ds = 0.2  # to r = 0.29 (the plain chord iteration with this monodromy diverges on this step)
     f_ref = cont._phase_normal(br, x_prev[:2], x_prev[3] * w_ref)
-    x, *_ = cont._correct(br, x_prev + ds * tangent, tangent, x_prev, ds, 2, t_ref, w_ref, f_ref, x_prev[:2])
-    r, period, speed = math.hypot(x[0], x[1]), x[2] * t_ref, x[3] * w_ref
-    assert r ** 4 == pytest.approx(K_DH * (speed - S_H), rel=4e-2)  # r to 1e-2
-    assert period == pytest.approx(2 * math.pi / OMEGA_DH, rel=1e-4)
-    assert float(tangent @ (x - x_prev)) == pytest.approx(ds, rel=1e-9)  # on the arclength plane (a linear row)
+    z_prev = x_prev[:2] * br.scale()
+    jac_prev = cont._jacobian(br, z_prev, 1.0, x_prev[3] * w_ref, br.scale(), t_ref, w_ref, np.array([0.6, 0.8]))[1]
+    for jac, ds in ((None, ds), (jac_prev, 0.05)):  # from r = 0.1 to 0.29 and to 0.15
+        x, _ = cont._correct(br, x_prev + ds * tangent, tangent, x_prev, ds, 2, t_ref, w_ref, f_ref, x_prev[:2], jac)
+        r, period, speed = math.hypot(x[0], x[1]), x[2] * t_ref, x[3] * w_ref
+        assert r ** 4 == pytest.approx(K_DH * (speed - S_H), rel=4e-2)  # r to 1e-2
+        assert period == pytest.approx(2 * math.pi / OMEGA_DH, rel=1e-4)
+        assert float(tangent @ (x - x_prev)) == pytest.approx(ds, rel=1e-9)  # on the arclength plane (linear row)
+        assert float(f_ref @ (x[:2] - x_prev[:2])) == pytest.approx(0.0, abs=1e-9)  # on the current phase plane
 
 
 def test_inaccurate_monodromy_is_replaced_by_central_differences():
@@ -386,7 +392,7 @@ def test_inaccurate_monodromy_is_replaced_by_central_differences():
     expected = np.sort([1.0, math.exp(-4 * r ** 4)])
     wrong = np.array([[1.0, 0.1], [0.1, math.exp(-4 * r ** 4)]])  # the exact diagonal, coupled: multipliers moved
     assert cont._trivial_error(np.linalg.eigvals(wrong)) > 5e-3
-    fixed = cont._checked_monodromy(br, x, 2, t_ref, w_ref, wrong)
+    fixed = cont._checked_monodromy(br, x, 2, t_ref, w_ref, wrong, br.flow(x[3] * w_ref))
     np.testing.assert_allclose(np.sort(np.linalg.eigvals(fixed).real), expected, atol=1e-6)
     good = fixed + 1e-4  # within the tolerance: kept as it is
-    assert cont._checked_monodromy(br, x, 2, t_ref, w_ref, good) is good
+    assert cont._checked_monodromy(br, x, 2, t_ref, w_ref, good, None) is good
