@@ -367,12 +367,13 @@ def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(m
     f_ref = cont._phase_normal(br, x_prev[:2], x_prev[3] * w_ref)
     z_prev = x_prev[:2] * br.scale()
     jac_prev = cont._jacobian(br, z_prev, 1.0, x_prev[3] * w_ref, br.scale(), t_ref, w_ref, np.array([0.6, 0.8]))[1]
-    for jac, ds in ((None, ds), (jac_prev, 0.05)):  # from r = 0.1 to 0.29 and to 0.15
-        x, _ = cont._correct(br, x_prev + ds * tangent, tangent, x_prev, ds, 2, t_ref, w_ref, f_ref, x_prev[:2], jac)
+    for jac, step in ((None, ds), (jac_prev, 0.05)):  # from r = 0.1 to 0.29 and to 0.15
+        x, _ = cont._correct(br, x_prev + step * tangent, tangent, x_prev, step, 2, t_ref, w_ref, f_ref, x_prev[:2],
+                             jac)
         r, period, speed = math.hypot(x[0], x[1]), x[2] * t_ref, x[3] * w_ref
         assert r ** 4 == pytest.approx(K_DH * (speed - S_H), rel=4e-2)  # r to 1e-2
         assert period == pytest.approx(2 * math.pi / OMEGA_DH, rel=1e-4)
-        assert float(tangent @ (x - x_prev)) == pytest.approx(ds, rel=1e-9)  # on the arclength plane (linear row)
+        assert float(tangent @ (x - x_prev)) == pytest.approx(step, rel=1e-9)  # on the arclength plane (linear row)
         assert float(f_ref @ (x[:2] - x_prev[:2])) == pytest.approx(0.0, abs=1e-9)  # on the current phase plane
 
 
@@ -396,3 +397,10 @@ def test_inaccurate_monodromy_is_replaced_by_central_differences():
     np.testing.assert_allclose(np.sort(np.linalg.eigvals(fixed).real), expected, atol=1e-6)
     good = fixed + 1e-4  # within the tolerance: kept as it is
     assert cont._checked_monodromy(br, x, 2, t_ref, w_ref, good, None) is good
+    # three shooting segments: the monodromy is the product M2 M1 M0 of the segments' (in the reverse order the
+    # multipliers here would be 0.984 +- 2.5e-5j instead of 1 and 0.968)
+    br.set_segments(3)
+    starts = np.concatenate([r * np.array([math.cos(a), math.sin(a)]) for a in 2 * math.pi * np.arange(3) / 3])
+    x3 = np.concatenate([starts / br.scale(), x[2:]])
+    fixed = cont._checked_monodromy(br, x3, 6, t_ref, w_ref, wrong, br.flow(x[3] * w_ref))
+    np.testing.assert_allclose(np.sort(np.linalg.eigvals(fixed).real), expected, atol=1e-6)
