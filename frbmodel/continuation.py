@@ -118,13 +118,14 @@ class _Branch:
 def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref, speed_column=True):
     """Residual (N+1) and its Jacobian (N+1, N+2) in the scaled unknowns (u_0 … u_{m−1}, τ, p) at (z, T, speed),
     N = m n, and the monodromy M = M_{m−1} ⋯ M_0 (each segment's by differences of its flow)."""
+    from .limitcycle import FD_STEP
     from .shooting import monodromy
 
     m, n = br.segments, br.n
     N = m * n
     end, fl = br.ends(z, T, speed)
     zs, es, s1, su = z.reshape(m, n), end.reshape(m, n), br.scale_vec, br.start_scale
-    blocks = [monodromy(fl, zs[k], T / m, s1, es[k], 1e-4, br.workers) for k in range(m)]
+    blocks = [monodromy(fl, zs[k], T / m, s1, es[k], FD_STEP, br.workers) for k in range(m)]
     jac = np.zeros((N + 1, N + 2))
     if speed_column:  # (one more set of flows; left zero where the speed is fixed)
         ds = SPEED_FD * speed
@@ -199,7 +200,8 @@ def _correct(br, x_pred, tangent, x_prev, ds, n, t_ref, w_ref, f_ref, u_ref, jac
         new = np.append(br.residual(z, end), 0.0)
         if float(np.max(np.abs(new))) < TOL:
             return x, it
-        a[:n] += np.outer(new[:n] - res[:n] - a[:n] @ step, step) / (step @ step)
+        if step @ step > 0.0:
+            a[:n] += np.outer(new[:n] - res[:n] - a[:n] @ step, step) / (step @ step)
         res = new
     raise ConvergenceError("continuation: the corrector did not converge")
 
@@ -220,7 +222,7 @@ def _checked_monodromy(br, x, n, t_ref, w_ref, m, fl):
     1.077 / 0.876 instead of 1.000 / 0.940, M f − f 1.9e-2 of f; central 2.9e-5, the pair 0.9997 / 0.9405 as with
     1e-11 tolerances). ``fl``: the flow (and so the integrator) ``m`` was computed with. If a central-difference
     flow fails, ``m`` is kept (the branch table's trivial-multiplier error shows its accuracy)."""
-    from .limitcycle import MULTIPLIER_TOL
+    from .limitcycle import FD_STEP, MULTIPLIER_TOL
     from .shooting import monodromy
 
     if _trivial_error(np.linalg.eigvals(m)) <= MULTIPLIER_TOL:
@@ -230,7 +232,7 @@ def _checked_monodromy(br, x, n, t_ref, w_ref, m, fl):
     central = np.eye(br.n)
     try:
         for zk in z.reshape(mseg, br.n):
-            central = monodromy(fl, zk, T / mseg, br.scale_vec, None, 1e-4, br.workers, central=True) @ central
+            central = monodromy(fl, zk, T / mseg, br.scale_vec, None, FD_STEP, br.workers, central=True) @ central
     except ConvergenceError:
         return m
     better = _trivial_error(np.linalg.eigvals(central)) < _trivial_error(np.linalg.eigvals(m))
