@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 #: marker of each bifurcation type (matplotlib / plotly symbol)
-MARKS = {"Hopf": ("*", "star"), "fold": ("o", "circle"), "period doubling": ("s", "square"),
-         "Neimark-Sacker": ("D", "diamond")}
+MARKS = {"Hopf": ("*", "star"), "Hopf (restabilizing)": ("h", "hexagon"), "fold": ("o", "circle"),
+         "period doubling": ("s", "square"), "Neimark-Sacker": ("D", "diamond")}
 #: dynamic range [dB] of the spectrogram drawn behind the frequency panel (the ~10 µm whirls on the branches show
 #: beside ~100 µm ones)
 SPECTROGRAM_DB = 40.0

@@ -389,22 +389,27 @@ def cmd_bifurcation(args):
 
     tc = load_from_args(args)
     lo, hi = sorted(check_speed(f"--speeds {name}", v) for name, v in zip(("START", "END"), _speed_pair(args.speeds)))
-    if args.start == "hopf":
-        start = "hopf"
-    else:
+    start = []
+    for item in (args.start or "").split(","):
+        item = item.strip()
         try:
-            start = check_speed("--start", float(args.start))
+            start.append("hopf" if item == "hopf" else check_speed("--start", float(item)))
         except ValueError:
-            raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm") from None
+            raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm, or a comma-separated "
+                                 "list of them (e.g. 25000,60000)") from None
+        if start[-1] != "hopf" and not lo <= start[-1] <= hi:
+            raise ParameterError(f"--start = {item} rpm is outside --speeds {lo:.0f}:{hi:.0f} rpm")
     if args.max_points < 2:
         raise ParameterError(f"--max-points = {args.max_points} is invalid: valid range >= 2")
     if args.segments < 1:
         raise ParameterError(f"--segments = {args.segments} is invalid: valid range >= 1 (1: single shooting)")
     out = writable_dir(args.out)
-    hps = hopf_points(tc, (lo, hi))
-    print(f"Hopf points of the full model, {lo:.0f} ... {hi:.0f} rpm (equilibrium loses stability):")
+    hps = hopf_points(tc, (lo, hi), restabilizing=True)
+    print(f"Hopf points of the full model, {lo:.0f} ... {hi:.0f} rpm (where a mode of the equilibrium loses or "
+          "regains stability with rising speed):")
     for hp in hps:
-        print(f"  {hp.speed_rpm:10.1f} rpm  {hp.frequency_hz:8.2f} Hz  ({hp.frequency_hz * 60 / hp.speed_rpm:.3f} X)")
+        print(f"  {hp.speed_rpm:10.1f} rpm  {hp.frequency_hz:8.2f} Hz  ({hp.frequency_hz * 60 / hp.speed_rpm:.3f} X)  "
+              f"{'regains' if hp.restabilizing else 'loses'}")
     if args.hopf_only:
         return 0
     points = []
@@ -1093,7 +1098,8 @@ def _add_bifurcation(sub):
     b.add_argument("--speeds", default="1000:250000", help="START:END speed range [rpm]")
     b.add_argument("--start", default="hopf",
                    help="'hopf': a branch from each Hopf point in the range; or a speed [rpm]: the branch through "
-                        "the orbit the whirl settles on there (both directions)")
+                        "the orbit the whirl settles on there (both directions); or a comma-separated list of "
+                        "these (e.g. 25000,60000)")
     b.add_argument("--max-points", type=int, default=40, help="points per branch and direction at most")
     b.add_argument("--segments", type=int, default=1,
                    help="shooting segments per orbit (multiple shooting, e.g. 4, for strongly unstable branches)")

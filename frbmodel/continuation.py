@@ -278,12 +278,16 @@ class HopfPoint:
         Right eigenvector of the pair (state units).
     equilibrium : ndarray (n,)
         The equilibrium state there.
+    restabilizing : bool
+        True where the pair regains stability as the speed rises (unstable below the point), False where it loses
+        it (unstable above).
     """
 
     speed_rpm: float
     frequency_hz: float
     eigenvector: np.ndarray = field(repr=False)
     equilibrium: np.ndarray = field(repr=False)
+    restabilizing: bool = False
 
 
 def equilibrium_jacobian(system, speed_rpm, film_model=None):
@@ -336,20 +340,30 @@ def _refine_crossing(system, model, a, b, f_hz, count_a):
     from scipy.optimize import brentq
 
     ra, rb = (_crossing_real(system, s, model, f_hz) for s in (a, b))
-    if ra <= 0.0 < rb:
+    if (ra <= 0.0 < rb) or (rb <= 0.0 < ra):
         return brentq(lambda s: _crossing_real(system, s, model, f_hz), a, b, xtol=1e-6 * a)
     while b - a > 1e-6 * a:
         mid = 0.5 * (a + b)
-        if _unstable_pairs(system, mid, model) > count_a:
-            b = mid
-        else:
+        if _unstable_pairs(system, mid, model) == count_a:
             a = mid
+        else:
+            b = mid
     return 0.5 * (a + b)
 
 
-def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60):
+def _crossing_pair(lam_a, lam_b, count_a, count_b):
+    """The eigenvalue (upper half plane) at the end of a grid interval that is unstable on the interval's unstable
+    side and whose nearest partner on the other side is stable: the pair that crossed."""
+    if count_b < count_a:  # regains stability: unstable at a, its partner stable at b
+        lam_a, lam_b = lam_b, lam_a
+    new = [x for x in lam_b if x.real > 0 and x.imag > 0]
+    return min(new, key=lambda x: np.min(np.abs(lam_a[(lam_a.real <= 0) & (lam_a.imag > 0)] - x)))
+
+
+def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, restabilizing=False):
     """Hopf points of the full model's equilibrium in a speed range: where the number of unstable complex pairs of
-    its Jacobian rises, refined by Brent's method on the real part of the crossing pair.
+    its Jacobian rises (and, with ``restabilizing``, falls), refined by Brent's method on the real part of the
+    crossing pair.
 
     Parameters
     ----------
@@ -361,30 +375,30 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60):
         Default: the system's.
     n_grid : int
         Grid speeds.
+    restabilizing : bool
+        Also list where a pair regains stability (:attr:`HopfPoint.restabilizing`); by default only the crossings
+        to instability (the linear onsets). A grid interval where one pair gains and another loses stability keeps
+        the count and shows neither: refine ``n_grid`` to separate them.
 
     Returns
     -------
     list of HopfPoint
-        In increasing speed (only crossings to instability; a pair regaining stability is not listed).
+        In increasing speed.
     """
     model = film_model or system.film_model
     grid = np.geomspace(*sorted(speeds_rpm), n_grid)
     counts = [_unstable_pairs(system, s, model) for s in grid]
     out = []
     for a, b, ca, cb in zip(grid[:-1], grid[1:], counts[:-1], counts[1:]):
-        if cb <= ca:
+        if cb == ca or (cb < ca and not restabilizing):
             continue
-        lam_b = np.linalg.eigvals(equilibrium_jacobian(system, b, model)[1])
-        lam_a = np.linalg.eigvals(equilibrium_jacobian(system, a, model)[1])
-        new = [x for x in lam_b if x.real > 0 and x.imag > 0]
-        # the pair that crossed: unstable at b, with the closest stable partner at a
-        cand = min(new, key=lambda x: np.min(np.abs(lam_a[(lam_a.real <= 0) & (lam_a.imag > 0)] - x)))
-        f_hz = cand.imag / (2 * math.pi)
+        lam_a, lam_b = (np.linalg.eigvals(equilibrium_jacobian(system, s, model)[1]) for s in (a, b))
+        f_hz = _crossing_pair(lam_a, lam_b, ca, cb).imag / (2 * math.pi)
         s_h = _refine_crossing(system, model, a, b, f_hz, ca)
         z_eq, jac = equilibrium_jacobian(system, s_h, model)
         lam, vec = np.linalg.eig(jac)
         k = int(np.argmin(np.where(lam.imag > 0, np.abs(lam.real), np.inf)))  # the pair on the imaginary axis there
-        out.append(HopfPoint(float(s_h), float(lam[k].imag / (2 * math.pi)), vec[:, k], z_eq))
+        out.append(HopfPoint(float(s_h), float(lam[k].imag / (2 * math.pi)), vec[:, k], z_eq, cb < ca))
     return out
 
 
@@ -569,10 +583,11 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
         The system.
     speeds_rpm : (float, float)
         Speed range [rpm]; a branch is followed until it leaves it (or ``max_points`` are computed).
-    start : "hopf", LimitCycle or float
+    start : "hopf", LimitCycle or float, or a list of them
         ``"hopf"``: one branch from each Hopf point of the full model in the range (:func:`hopf_points`), started
         along the Hopf eigenvector; a limit cycle or a speed [rpm] to compute one at: the branch through it, both
-        directions.
+        directions; a list: each of them in turn (e.g. ``[25e3, 60e3]``: the branches of the whirls settled on at
+        25 and 60 krpm).
     film_model : str, optional
         Default: the system's.
     ds, ds_max : float
@@ -593,41 +608,61 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     BifurcationDiagram
     """
     from .film import check_model
-    from .limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, LimitCycle, limit_cycle
+    from .limitcycle import LimitCycle, limit_cycle
 
     lo, hi = sorted(float(s) for s in speeds_rpm)
     model = check_model(film_model or system.film_model)
     if int(segments) != segments or segments < 1:
         raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
-    branches, hopfs = [], []
-    if isinstance(start, str):
-        if start != "hopf":
-            raise ParameterError(f"start = {start!r} is invalid: 'hopf', a LimitCycle or a speed [rpm]")
-        hopfs = hopf_points(system, (lo, hi), model)
-        for hp in hopfs:
-            br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments)
-            n = br.segments * br.n
-            t_ref, w_ref = 0.01 / hp.frequency_hz, 0.01 * hp.speed_rpm
-            x0, tangent, f0 = _hopf_start(br, hp, n, t_ref, w_ref)
-            branches.append(_follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, 0.2, ds_max, max_points, progress, f0,
-                                    on_point))
-    else:
-        lc = start if isinstance(start, LimitCycle) else limit_cycle(system, float(start), film_model=model)
-        if not lo <= lc.speed_rpm <= hi:
-            raise ParameterError(f"start speed {lc.speed_rpm:.0f} rpm is outside the speed range {lo:.0f} ... "
-                                 f"{hi:.0f} rpm")
-        br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments)
-        n = br.segments * br.n
-        t_ref, w_ref = 0.01 * lc.period, 0.01 * lc.speed_rpm
-        starts = br.flow(lc.speed_rpm).states(lc.state, lc.period * np.arange(br.segments + 1) / br.segments)
-        x0 = np.concatenate([starts[:-1, :-1].ravel() / br.scale(), [lc.period / t_ref, lc.speed_rpm / w_ref]])
-        halves = []
-        for direction in (+1, -1):
-            tangent, first, jac0 = _start_tangent(br, x0, n, t_ref, w_ref, direction)
-            halves.append([first] + _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points,
-                                            progress, on_point=on_point, jac0=jac0))
-        branches.append(halves[1][::-1] + halves[0][1:])
-    return _diagram(system, model, branches, hopfs, lo, hi)
+    starts = [start] if isinstance(start, (str, LimitCycle)) or np.ndim(start) == 0 else list(start)
+    for s0 in starts:
+        if isinstance(s0, str) and s0 != "hopf":
+            raise ParameterError(f"start = {s0!r} is invalid: 'hopf', a LimitCycle or a speed [rpm] (or a list of "
+                                 "them)")
+        speed = s0.speed_rpm if isinstance(s0, LimitCycle) else None if isinstance(s0, str) else float(s0)
+        if speed is not None and not lo <= speed <= hi:
+            raise ParameterError(f"start speed {speed:.0f} rpm is outside the speed range {lo:.0f} ... {hi:.0f} rpm")
+    branches, origins = [], []  # origins: the Hopf point a branch starts at, None for a branch through an orbit
+    for s0 in starts:
+        if isinstance(s0, str):
+            for hp in hopf_points(system, (lo, hi), model, restabilizing=True):
+                branches.append(_hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point,
+                                             segments))
+                origins.append(hp)
+        else:
+            lc = s0 if isinstance(s0, LimitCycle) else limit_cycle(system, float(s0), film_model=model)
+            branches.append(_branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress, on_point,
+                                            segments))
+            origins.append(None)
+    return _diagram(system, model, branches, origins, lo, hi)
+
+
+def _hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point, segments):
+    """The branch born at the Hopf point ``hp``, started along its eigenvector."""
+    from .limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
+
+    br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments)
+    n = br.segments * br.n
+    t_ref, w_ref = 0.01 / hp.frequency_hz, 0.01 * hp.speed_rpm
+    x0, tangent, f0 = _hopf_start(br, hp, n, t_ref, w_ref)
+    return _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, 0.2, ds_max, max_points, progress, f0, on_point)
+
+
+def _branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress, on_point, segments):
+    """The branch through the orbit ``lc``, followed in both directions (lower speeds first in the result)."""
+    from .limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
+
+    br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments)
+    n = br.segments * br.n
+    t_ref, w_ref = 0.01 * lc.period, 0.01 * lc.speed_rpm
+    starts = br.flow(lc.speed_rpm).states(lc.state, lc.period * np.arange(br.segments + 1) / br.segments)
+    x0 = np.concatenate([starts[:-1, :-1].ravel() / br.scale(), [lc.period / t_ref, lc.speed_rpm / w_ref]])
+    halves = []
+    for direction in (+1, -1):
+        tangent, first, jac0 = _start_tangent(br, x0, n, t_ref, w_ref, direction)
+        halves.append([first] + _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress,
+                                        on_point=on_point, jac0=jac0))
+    return halves[1][::-1] + halves[0][1:]
 
 
 def _event(kind, a, c, frac, between, films=(), mode=""):
@@ -645,10 +680,11 @@ def _event(kind, a, c, frac, between, films=(), mode=""):
 def hopf_record(system, hp, branch=(), film_model=None):
     """The bifurcation-table record of a Hopf point.
 
-    ``criticality``: "supercritical" if its branch grows towards higher speeds, where the crossing pair is unstable
-    (:func:`hopf_points` lists crossings to instability only), "subcritical" if it grows backwards — the side of
-    the first branch point more than :data:`FOLD_MIN_REL` from the Hopf speed —, "" without a branch or when all its
-    points stay within that of the Hopf speed (a vertical branch).
+    ``type``: "Hopf", or "Hopf (restabilizing)" where the pair regains stability with rising speed
+    (:attr:`HopfPoint.restabilizing`). ``criticality``: "supercritical" if its branch grows towards the side where
+    the crossing pair is unstable (higher speeds; lower ones at a restabilizing point), "subcritical" if it grows
+    towards the other side — the side of the first branch point more than :data:`FOLD_MIN_REL` from the Hopf speed
+    —, "" without a branch or when all its points stay within that of the Hopf speed (a vertical branch).
     ``mode``: precession and kind of the method-J Campbell mode nearest in frequency at that speed (the linear
     onsets agree to 0.03 %). ``film``: the film whose relative motion in the crossing eigenvector, over its
     clearance, is largest (inner: journal minus ring, outer: ring), with that share of the four.
@@ -683,10 +719,29 @@ def hopf_record(system, hp, branch=(), film_model=None):
     # all lie within it: small first steps, or a degenerate Hopf point whose branch bends only at finite amplitude)
     ahead = next((d for d in (q.speed_rpm - hp.speed_rpm for q in branch) if abs(d) > FOLD_MIN_REL * hp.speed_rpm),
                  0.0)
-    crit = "" if ahead == 0.0 else "supercritical" if ahead > 0 else "subcritical"  # "": no branch or all vertical
-    return {"speed_rpm": hp.speed_rpm, "type": "Hopf", "criticality": crit, "frequency_hz": hp.frequency_hz,
+    unstable_side = -1.0 if hp.restabilizing else 1.0
+    crit = "" if ahead == 0.0 else "supercritical" if ahead * unstable_side > 0 else "subcritical"  # "": vertical
+    return {"speed_rpm": hp.speed_rpm, "type": "Hopf (restabilizing)" if hp.restabilizing else "Hopf",
+            "criticality": crit, "frequency_hz": hp.frequency_hz,
             "turbine_radius_um": 0.0, "mode": f"{cd.precession[0, j]} {cd.mode_kind[0, j]}",
             "film": f"{film_names(system)[k]} ({100 * rel[k]:.0f} %)", "between": []}
+
+
+def _end_hopf(system, model, b, at_start, offset, films):
+    """The record of the Hopf point at which the branch ``b`` (through a given orbit) collapses onto the equilibrium:
+    the full model's Hopf point (either direction of crossing) within :data:`END_HOPF_REL` of the end's speed and
+    frequency, recorded as from :func:`hopf_record` with the branch read from that end; without one, the end point
+    itself (type "Hopf", no criticality or mode)."""
+    end = b[0] if at_start else b[-1]
+    s, f = end.speed_rpm, 1.0 / end.period
+    near = [hp for hp in hopf_points(system, ((1 - END_HOPF_REL) * s, (1 + END_HOPF_REL) * s), model, n_grid=8,
+                                     restabilizing=True) if abs(hp.frequency_hz / f - 1) < END_HOPF_REL]
+    if not near:
+        return _event("Hopf", end, end, 0.0, [offset + b.index(end)], films)
+    hp = min(near, key=lambda h: abs(h.speed_rpm - s))
+    rec = hopf_record(system, hp, b if at_start else b[::-1], model)
+    rec["between"] = [offset + b.index(end)]
+    return rec
 
 
 def _branch_events(b, off, films=(), mode=""):
@@ -708,14 +763,20 @@ def _branch_events(b, off, films=(), mode=""):
     return events
 
 
-def _diagram(system, model, branches, hopfs, lo, hi):
-    """The BifurcationDiagram of computed branches: Hopf points, folds and multiplier crossings."""
+#: largest relative distance in speed and frequency between the end of a branch that collapses onto the equilibrium
+#: and the Hopf point it is attributed to (the end is one step short of the point: 0.1 % measured at 30.7 krpm)
+END_HOPF_REL = 0.03
+
+
+def _diagram(system, model, branches, origins, lo, hi):
+    """The BifurcationDiagram of computed branches (``origins``: per branch the Hopf point it starts at, or None):
+    Hopf points, folds and multiplier crossings."""
     from .limitcycle import SHOOT_RTOL
     from .whirl import film_names
 
     films = film_names(system)
     points, bifs = [], []
-    for b, hp in zip(branches, hopfs or [None] * len(branches)):
+    for b, hp in zip(branches, origins):
         mode = ""
         if hp is not None:
             bifs.append(hopf_record(system, hp, b, model))
@@ -723,7 +784,7 @@ def _diagram(system, model, branches, hopfs, lo, hi):
         bifs += _branch_events(b, len(points), films, mode)
         for end in ((b[0], b[-1]) if hp is None and len(b) > 1 else ()):
             if end.turbine_radius_m < COLLAPSE * max(p.turbine_radius_m for p in b):  # the branch ends at a Hopf point
-                bifs.append(_event("Hopf", end, end, 0.0, [len(points) + b.index(end)], films))
+                bifs.append(_end_hopf(system, model, b, end is b[0], len(points), films))
         points.extend(b)
     meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
             "branches": [len(b) for b in branches]}

@@ -39,6 +39,52 @@ def test_hopf_points_are_the_method_j_onsets(tc):
         assert hp.frequency_hz == pytest.approx(f, rel=0.005)
 
 
+def test_restabilizing_hopf_points_are_method_j_crossings_back_to_stability(tc):
+    """With ``restabilizing=True`` the crossings back to stability are listed too, flagged: at 36 um the forward
+    conical mode that loses stability at 2.0 krpm regains it at ~30.8 krpm (the end of the large whirl branch). The
+    speed and frequency equal the method-J crossing (0.5 %, as the onsets), and method J's eigenvalue is unstable
+    1 % below the point and stable 1 % above (the independent linear analysis decides the direction)."""
+    onsets = hopf_points(tc, (1e3, 120e3))
+    hps = hopf_points(tc, (1e3, 120e3), restabilizing=True)
+    back = [hp for hp in hps if hp.restabilizing]
+    assert [hp.speed_rpm for hp in hps if not hp.restabilizing] == [hp.speed_rpm for hp in onsets]
+    assert len(back) == 1 and 25e3 < back[0].speed_rpm < 35e3
+    hp = back[0]
+    s, f = _method_j_crossing(tc, hp.speed_rpm, hp.frequency_hz)
+    assert hp.speed_rpm == pytest.approx(s, rel=0.005)
+    assert hp.frequency_hz == pytest.approx(f, rel=0.005)
+    for factor, unstable in ((0.99, True), (1.01, False)):
+        ls = frb.linear_system(tc, "J", factor * hp.speed_rpm)
+        ev = np.linalg.eigvals(state_matrix(ls.M, ls.C, ls.K))
+        ev = ev[ev.imag > 0]
+        assert (ev[np.argmin(np.abs(ev.imag / (2 * math.pi) - f))].real > 0) == unstable
+
+
+def test_branch_collapsing_onto_the_equilibrium_ends_at_the_full_models_hopf_point(tc):
+    """A branch through a given orbit that shrinks onto the equilibrium is recorded as ending at the full model's
+    Hopf point there (either crossing direction; its speed and frequency, not the last point's), with criticality
+    from the side the branch grows to; branches from Hopf points and through orbits keep all their points when
+    mixed (one origin per branch). Synthetic branch points near the 30.8 krpm restabilizing point (116 Hz), growing
+    towards lower speeds: the unstable side there, so supercritical."""
+    from frbmodel.continuation import _diagram
+
+    hp = hopf_points(tc, (29e3, 33e3), n_grid=8, restabilizing=True)[0]
+    f = hp.frequency_hz
+    through = [_bp(hp.speed_rpm * (1 - 0.002 * k), [0.5, 0.4]) for k in range(5)]
+    for k, p in enumerate(through):
+        p.period, p.turbine_radius_m = 1 / f, (1 + 100 * k) * 1e-6  # 1 um at the end (< COLLAPSE x largest)
+    from_hopf = [_bp(2.2e3 + 10 * k, [0.5, 0.4]) for k in range(3)]
+    start = hopf_points(tc, (1.5e3, 2.5e3), n_grid=4)[0]
+    bd = _diagram(tc, "short", [from_hopf, through[::-1]], [start, None], 1e3, 40e3)
+    assert len(bd.points) == 8
+    end = [b for b in bd.bifurcations if b["type"].startswith("Hopf") and b["speed_rpm"] > 20e3]
+    assert len(end) == 1 and end[0]["type"] == "Hopf (restabilizing)"
+    # the same crossing, refined from another grid bracket: equal within the refinement's 1e-6
+    assert end[0]["speed_rpm"] == pytest.approx(hp.speed_rpm, rel=2e-6)
+    assert end[0]["frequency_hz"] == pytest.approx(hp.frequency_hz, rel=2e-6)
+    assert end[0]["criticality"] == "supercritical" and end[0]["mode"]
+
+
 def _bp(speed, mults):
     return BranchPoint(speed, 1e-3, np.array([1.0] + list(mults), dtype=complex), bool(np.all(np.abs(mults) < 1)),
                        1e-6, np.zeros(4))
@@ -304,7 +350,10 @@ def test_shooting_jacobian_equals_differences_of_the_residual(segments):
 
 
 @pytest.mark.parametrize("opt, value, shown", [("--segments", "0", "--segments = 0 is invalid: valid range >= 1"),
-                                               ("--max-points", "1", "--max-points = 1 is invalid: valid range >= 2")])
+                                               ("--max-points", "1", "--max-points = 1 is invalid: valid range >= 2"),
+                                               ("--start", "25000,fast", "--start = '25000,fast' is invalid"),
+                                               ("--start", "hopf,300000",
+                                                "--start = 300000 rpm is outside --speeds 1000:250000 rpm")])
 def test_cli_bifurcation_refuses_bad_counts_before_computing(opt, value, shown, tmp_path, capsys):
     """Bad counts exit 2 with one line naming option, value and valid range — before the Hopf points are searched
     (nothing printed on stdout)."""
@@ -406,3 +455,15 @@ def test_inaccurate_monodromy_is_replaced_by_central_differences():
     x3 = np.concatenate([starts / br.scale(), x[2:]])
     fixed = cont._checked_monodromy(br, x3, 6, t_ref, w_ref, wrong, br.flow(x[3] * w_ref))
     np.testing.assert_allclose(np.sort(np.linalg.eigvals(fixed).real), expected, atol=1e-6)
+
+
+def test_cli_hopf_only_lists_both_crossing_directions(tmp_path, capsys):
+    """`frb bifurcation --hopf-only` says for each Hopf point whether the mode loses or regains stability: at 36 um
+    between 10 and 40 krpm the forward cylindrical mode loses it at 14.1 krpm and the forward conical mode regains
+    it at 30.8 krpm (both checked against method J above)."""
+    from frbmodel.cli import main
+
+    assert main(["bifurcation", "--outer-clearance", "36e-6", "--speeds", "10000:40000", "--hopf-only",
+                 "--out", str(tmp_path / "b")]) == 0
+    lines = [ln.split() for ln in capsys.readouterr().out.splitlines() if ln.strip().endswith(("loses", "regains"))]
+    assert [(round(float(ln[0]) / 1e3, 1), ln[-1]) for ln in lines] == [(14.1, "loses"), (30.8, "regains")]
