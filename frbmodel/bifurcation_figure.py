@@ -145,7 +145,7 @@ def diagram_figure(bd, title=None, envelopes=(), spectrogram=None, campbell=None
         handles, labels = a.get_legend_handles_labels()
         uniq = dict(zip(labels, handles))
         if uniq:
-            a.legend(uniq.values(), uniq.keys(), fontsize=7, loc="upper left", framealpha=0.7)
+            a.legend(uniq.values(), uniq.keys(), fontsize=7, loc="best", framealpha=0.7)  # where it hides least
         a.grid(alpha=0.3)
     if envelopes:
         ax.set_yscale("log")  # branches of a few µm next to whirls of 100 µm

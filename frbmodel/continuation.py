@@ -648,6 +648,59 @@ def _hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_poi
     return _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, 0.2, ds_max, max_points, progress, f0, on_point)
 
 
+def hopf_guess(system, speed_rpm, film_model=None, search=0.25, max_points=40):
+    """A guess of the orbit at ``speed_rpm`` born at the nearest Hopf point (:func:`hopf_points`, either crossing
+    direction, within ``search`` of the speed): its branch followed from the Hopf eigenvector (continuation) until
+    it passes the speed; the branch point nearest to it.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    speed_rpm : float
+    film_model : str, optional
+    search : float
+        Relative speed range searched for Hopf points, speed / (1 + search) ... speed (1 + search).
+    max_points : int
+        Branch points at most.
+
+    Returns
+    -------
+    state : ndarray
+        State without the rotation angle [SI] of that branch point.
+    period : float
+        Its period [s].
+    info : dict
+        ``hopf_rpm``, ``hopf_hz``, ``branch_points`` computed, ``from_point_rpm``.
+
+    Raises
+    ------
+    ConvergenceError
+        No Hopf point within ``search``, or its branch does not reach the speed within ``max_points`` (it grows
+        towards the other side, or turns back).
+    """
+    model = film_model or system.film_model
+    hps = hopf_points(system, (speed_rpm / (1 + search), speed_rpm * (1 + search)), model, n_grid=12,
+                      restabilizing=True)
+    if not hps:
+        raise ConvergenceError(f"limit cycle guess 'hopf': the full model has no Hopf point within {search:.0%} of "
+                               f"{speed_rpm:.0f} rpm")
+    hp = min(hps, key=lambda h: abs(h.speed_rpm - speed_rpm))
+    margin = 0.05 * abs(speed_rpm - hp.speed_rpm) + 10 * FOLD_MIN_REL * hp.speed_rpm  # vertical start's jitter
+    lo, hi = min(hp.speed_rpm, speed_rpm) - margin, max(hp.speed_rpm, speed_rpm) + margin
+    pts = _hopf_branch(system, model, hp, lo, hi, 8.0, max_points, False, None, 1)
+    side = np.sign(speed_rpm - hp.speed_rpm)
+    passed = [p for p in pts if side * (p.speed_rpm - speed_rpm) >= 0]
+    if side != 0 and not passed:
+        reach = max((side * (p.speed_rpm - hp.speed_rpm) for p in pts), default=0.0)
+        raise ConvergenceError(f"limit cycle guess 'hopf': the branch of the Hopf point at {hp.speed_rpm:.0f} rpm "
+                               f"({hp.frequency_hz:.2f} Hz) does not reach {speed_rpm:.0f} rpm in {len(pts)} points "
+                               f"(at most {reach:.0f} rpm towards it: it grows the other way or turns back); "
+                               "use another guess")
+    best = min(pts, key=lambda p: abs(p.speed_rpm - speed_rpm))
+    return best.state.copy(), best.period, {"hopf_rpm": hp.speed_rpm, "hopf_hz": hp.frequency_hz,
+                                            "branch_points": len(pts), "from_point_rpm": best.speed_rpm}
+
+
 def _branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress, on_point, segments):
     """The branch through the orbit ``lc``, followed in both directions (lower speeds first in the result)."""
     from .limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
@@ -777,14 +830,12 @@ def _diagram(system, model, branches, origins, lo, hi):
     films = film_names(system)
     points, bifs = [], []
     for b, hp in zip(branches, origins):
-        mode = ""
-        if hp is not None:
-            bifs.append(hopf_record(system, hp, b, model))
-            mode = bifs[-1]["mode"]
-        bifs += _branch_events(b, len(points), films, mode)
+        ends = [hopf_record(system, hp, b, model)] if hp is not None else []
         for end in ((b[0], b[-1]) if hp is None and len(b) > 1 else ()):
             if end.turbine_radius_m < COLLAPSE * max(p.turbine_radius_m for p in b):  # the branch ends at a Hopf point
-                bifs.append(_end_hopf(system, model, b, end is b[0], len(points), films))
+                ends.append(_end_hopf(system, model, b, end is b[0], len(points), films))
+        mode = next((e["mode"] for e in ends if e["mode"]), "")  # the branch's points inherit its Hopf point's mode
+        bifs += ends + _branch_events(b, len(points), films, mode)
         points.extend(b)
     meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
             "branches": [len(b) for b in branches]}
@@ -923,5 +974,5 @@ def _phase_normal(br, z, speed):
     return _padded(br, f / np.linalg.norm(f))
 
 
-__all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_points",
-           "hopf_record", "shoot_segments"]
+__all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_guess",
+           "hopf_points", "hopf_record", "shoot_segments"]

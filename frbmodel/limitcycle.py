@@ -279,8 +279,9 @@ def _crossings(t, x):
     return t[k] - x[k] * (t[k + 1] - t[k]) / (x[k + 1] - x[k]), k
 
 
-def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4):
-    """Guess (z0, period) from a constant-speed simulation of ``settle_s`` [s] from the method-J equilibrium.
+def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4, y0=None):
+    """Guess (z0, period) from a constant-speed simulation of ``settle_s`` [s] from the method-J equilibrium (or
+    from the full state ``y0``, e.g. a run-up's: :func:`runup_state`).
 
     Returns
     -------
@@ -302,7 +303,7 @@ def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4):
     w = float(problem.profile.omega[0])
     dt = 2 * math.pi / w / samples_per_rev
     tail = min(settle_s / 2, 60 * 2 * math.pi / w)  # the last 60 revolutions (at most half the settling time)
-    y0 = initial_state(problem)
+    y0 = initial_state(problem) if y0 is None else y0
     atol = atol_vector(problem)[0]
     packed = pack_problem(problem)
     y_mid, _, msg = solve_chunk(packed, y0, np.array([0.0, settle_s - tail]), 1e-8, atol)
@@ -317,9 +318,14 @@ def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4):
                                "(non-finite: the journal or ring reached its wall)")
     j = 4 * problem.system.bearings[0].node
     tc, k = _crossings(t, y[:, j])
-    if tc.size < 2 * max_multiple + 1 or np.ptp(y[:, j]) < 1e-9:
+    if np.ptp(y[:, j]) < 1e-9 or tc.size < 2:
         raise ConvergenceError(f"limit cycle guess: no whirl at {w / RPM:.0f} rpm after {settle_s:g} s (the journal "
                                "stays at its equilibrium or drifts): no orbit to continue from")
+    if tc.size < 2 * max_multiple + 1:
+        need = 2 * (2 * max_multiple + 1) * float(np.mean(np.diff(tc)))
+        raise ConvergenceError(f"limit cycle guess: only {tc.size} whirl periods in the last {tail:.3g} s of the "
+                               f"settling run at {w / RPM:.0f} rpm ({2 * max_multiple + 1} needed to find the period): "
+                               f"use settle_s >= {need:.2g} s")
     size = np.ptp(y[:, :problem.n_rotor], axis=0).max()
     last = k[-1]
     for m in range(1, max_multiple + 1):
@@ -360,9 +366,14 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
         The system (two floating-ring bearings).
     speed_rpm : float
         Constant rotor speed [rpm].
-    guess : LimitCycle or (ndarray, float), optional
-        A nearby orbit (e.g. at a neighbouring speed) or (state without the rotation angle [SI], period [s]);
-        default: settle from the equilibrium for ``settle_s`` and read the orbit off (:func:`settle_guess`).
+    guess : LimitCycle, RunupResult, "hopf" or (ndarray, float), optional
+        A nearby orbit (e.g. at a neighbouring speed); ``"hopf"``: the orbit born at the nearest Hopf point,
+        followed there from its eigenvector (:func:`frbmodel.continuation.hopf_guess`; autonomous orbits only); a
+        recorded run-up or run-down of this system, whose state
+        where it passes the speed (re-simulated, :func:`runup_state`) settles for ``settle_s`` instead of the
+        equilibrium: the orbit of the attractor the run is on there; or (state without the rotation angle [SI],
+        period [s]). Default: settle from the equilibrium for ``settle_s`` and read the orbit off
+        (:func:`settle_guess`).
     film_model : {"short", "short_corrected"}, optional
         Default: the system's.
     unbalance : sequence of Unbalance
@@ -392,6 +403,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
         Invalid speed or settling time.
     """
     from .film import check_model
+    from .recorder import RunupResult
     from .runup import RunupSchema, SpeedProfile, atol_vector, build_problem, check_speed
     from .shooting import shoot, stable_multipliers
 
@@ -406,8 +418,21 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     elif isinstance(guess, LimitCycle):
         z0, period, info = guess.state.copy(), guess.period, {"from_orbit_at_rpm": guess.speed_rpm}
         m0 = guess.monodromy
+    elif isinstance(guess, str):
+        if guess != "hopf" or forced:
+            raise ParameterError(f"guess = {guess!r} is invalid" + (" with unbalance (a Hopf point's orbit is "
+                                                                    "autonomous)" if guess == "hopf" else
+                                                                    ": 'hopf', a LimitCycle, a RunupResult or "
+                                                                    "(state, period)"))
+        from .continuation import hopf_guess
+
+        z0, period, info = hopf_guess(system, speed_rpm, model)
+    elif isinstance(guess, RunupResult):
+        y_run, from_run = runup_state(guess, system, speed_rpm, model)
+        z0, period, info = _guess(problem, settle_s, forced, y0=y_run)
+        info = {**from_run, **info}
     else:
-        z0, period, info = np.asarray(guess[0], dtype=float), float(guess[1]), {"given": True}
+        z0, period, info = (*_given_guess(guess, problem.n_states - 1), {"given": True})
     flow = _Flow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
     scale = atol_vector(problem, SCALE_M)[0][:-1]
     if segments != 1:
@@ -423,6 +448,22 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
             sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
     stable = stable_multipliers(sol.nontrivial_multipliers, MULTIPLIER_TOL)
     return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, stable, sol.z0, not forced, meta, sol.monodromy)
+
+
+def _given_guess(guess, n):
+    """(state, period) of a guess given as a pair, or a ParameterError naming what is wrong with it."""
+    try:
+        state, period = guess
+        state, period = np.asarray(state, dtype=float), float(period)
+    except (TypeError, ValueError):
+        raise ParameterError(f"guess = {type(guess).__name__} is invalid: a LimitCycle, a RunupResult, 'hopf' or "
+                             "(state without the rotation angle [SI], period [s])") from None
+    if state.shape != (n,) or not np.all(np.isfinite(state)):
+        raise ParameterError(f"guess state: shape {state.shape}{'' if np.all(np.isfinite(state)) else ', non-finite'}"
+                             f" is invalid: {n} finite values (the run-up state without the rotation angle) needed")
+    if not (math.isfinite(period) and period > 0):
+        raise ParameterError(f"guess period = {period!r} s is invalid: valid range (0, inf) s")
+    return state, period
 
 
 def _check_segments(segments, forced):
@@ -457,13 +498,101 @@ def _minimal_period(flow, sol, scale, forced, tol, max_iter):
     return sol
 
 
-def _guess(problem, settle_s, forced, samples_per_rev=40, max_multiple=4):
-    """(z0, period, info) from a settling simulation: forced by whole revolutions, autonomous by crossings."""
+#: largest journal position difference between a re-simulated run-up and the recorded run at the guess sample, as a
+#: fraction of the inner clearance, that still counts as the same run (the same integrator and tolerances give ~1e-9;
+#: a round-off-seeded whirl growing at that time can make the runs part)
+RERUN_TOL = 0.05
+
+
+def _rerun_inputs(run, system):
+    """Unbalance and run-up options of a recorded monolithic run-up, or a ParameterError saying why it cannot be
+    re-simulated for ``system``."""
+    from .runup import Unbalance
+
+    meta = run.meta
+    why = ("it is a co-simulation (its states live in the FMUs)" if "ssp" in meta else
+           "it is torque-driven" if meta.get("speed_source") == "torque" else
+           "it ran on linear springs" if meta.get("linear_springs_N_per_m") is not None else
+           "its metadata has no system" if "system" not in meta else
+           "it was computed for another system" if meta["system"] != system.to_dict() else "")
+    if why:
+        raise ParameterError(f"guess = a run-up result: {why}; a run-up guess re-simulates a monolithic, "
+                             "speed-prescribed frb.runup of the same system")
+    unb = [Unbalance(**u) for u in meta.get("unbalance", [])]
+    opts = {k: meta[m] for k, m in (("rtol", "rtol"), ("atol", "atol_displacement_m"), ("integrator", "integrator"),
+                                    ("perturbation", "perturbation_of_clearance"),
+                                    ("output_rate_hz", "output_rate_hz")) if m in meta}
+    return unb, opts
+
+
+def runup_state(run, system, speed_rpm, film_model=None):
+    """The full state of a recorded run-up where its speed first reaches ``speed_rpm``, to start a limit-cycle
+    guess from the attractor the run is on there (e.g. a run-down's whirl where a settling run from the equilibrium
+    finds another orbit).
+
+    The recorded results hold no full state, so the run is re-simulated up to the first sample at or past that
+    speed: the same system, unbalance, start, tolerances and integrator, with the recorded speeds as a
+    piecewise-linear profile (exact for a ramp). The re-simulated journal positions there are checked against the
+    recorded ones (:data:`RERUN_TOL` of the inner clearance).
+
+    Parameters
+    ----------
+    run : RunupResult
+        A monolithic, speed-prescribed run-up (or run-down) of ``system`` (:func:`frbmodel.runup`, or loaded).
+    system : Turbocharger
+    speed_rpm : float
+    film_model : str, optional
+        Default: the run's.
+
+    Returns
+    -------
+    state : ndarray
+        Full state vector of the run-up problem at that sample [SI].
+    info : dict
+        ``run_time_s``, ``run_speed_rpm`` of the sample, ``rerun_difference_of_clearance``.
+
+    Raises
+    ------
+    ParameterError
+        The run cannot be re-simulated (co-simulation, torque-driven, linear springs, another system) or does not
+        reach the speed.
+    ConvergenceError
+        The re-simulation departs from the recorded run by more than :data:`RERUN_TOL`.
+    """
+    from .runup import SpeedProfile, runup
+
+    unb, opts = _rerun_inputs(run, system)
+    d = np.asarray(run.speed_rpm, dtype=float) - speed_rpm
+    hit = np.flatnonzero((d[:-1] < 0) != (d[1:] < 0))
+    if not hit.size:
+        raise ParameterError(f"speed {speed_rpm:.0f} rpm is not reached by the run-up guess (its speeds "
+                             f"{np.min(run.speed_rpm):.0f} ... {np.max(run.speed_rpm):.0f} rpm)")
+    k = int(hit[0]) + 1
+    prof = SpeedProfile.piecewise_linear(run.time[:k + 1], run.speed_rpm[:k + 1], "the recorded run's speeds")
+    model = film_model or run.meta.get("film_model")
+    rerun = runup(system, profile=prof, duration=float(run.time[k]), film_model=model, unbalance=unb, progress=False,
+                  **opts)
+    diff = max(float(np.max(np.abs(rerun.journal[b.name][-1] - run.journal[b.name][k]))) / b.inner.clearance
+               for b in system.bearings)
+    info = {"run_time_s": float(run.time[k]), "run_speed_rpm": float(run.speed_rpm[k]),
+            "rerun_difference_of_clearance": diff}
+    if not diff <= RERUN_TOL:
+        raise ConvergenceError(f"limit cycle guess: the run-up re-simulated to t = {run.time[k]:.6g} s "
+                               f"({run.speed_rpm[k]:.0f} rpm) differs from the recorded run by {diff:.2g} of the inner "
+                               f"clearance (> {RERUN_TOL}): the run is not reproducible there (a whirl growing from "
+                               "round-off, or another version or integrator); use the default settling guess or a "
+                               "seeded (unbalanced) run")
+    return rerun.final_state, info
+
+
+def _guess(problem, settle_s, forced, samples_per_rev=40, max_multiple=4, y0=None):
+    """(z0, period, info) from a settling simulation (from the equilibrium or ``y0``): forced by whole
+    revolutions, autonomous by crossings."""
     from .errors import check_positive
 
     settle_s = check_positive("settle_s", settle_s, "s")
     if not forced:
-        return settle_guess(problem, settle_s, samples_per_rev, max_multiple)
+        return settle_guess(problem, settle_s, samples_per_rev, max_multiple, y0)
     from .compiled import pack_problem, solve_chunk
     from .runup import atol_vector, initial_state
 
@@ -472,7 +601,8 @@ def _guess(problem, settle_s, forced, samples_per_rev=40, max_multiple=4):
     tail = min(n_rev // 2, 60)
     t = (n_rev - tail) * rev + np.arange(tail * samples_per_rev + 1) * rev / samples_per_rev
     packed, atol = pack_problem(problem), atol_vector(problem)[0]
-    y_mid, _, msg = solve_chunk(packed, initial_state(problem), np.array([0.0, t[0]]), 1e-8, atol)
+    y_start = initial_state(problem) if y0 is None else y0
+    y_mid, _, msg = solve_chunk(packed, y_start, np.array([0.0, t[0]]), 1e-8, atol)
     y, _, msg2 = solve_chunk(packed, y_mid[-1], t, 1e-8, atol) if not msg else (None, 0, msg)
     if msg or msg2:
         raise ConvergenceError(f"limit cycle guess: the settling run failed ({msg or msg2})")
@@ -489,4 +619,4 @@ def _orbit_result(problem, schema, t, y):
                                                 "profile": problem.profile.description})
 
 
-__all__ = ["LimitCycle", "limit_cycle", "settle_guess"]
+__all__ = ["LimitCycle", "limit_cycle", "runup_state", "settle_guess"]

@@ -454,6 +454,9 @@ class RunupResult(Result):
     power_loss : dict of str to ndarray (n,)
         Bearing name -> friction power of both films of the bearing [W] (NaN where the run did not record them:
         linear springs, results of older versions, FMUs without the outputs).
+    final_state : ndarray or None
+        The full state vector [SI] at the last sample of a monolithic run-up (:func:`frbmodel.runup`), to continue
+        from (e.g. :func:`frbmodel.limit_cycle`'s run-up guess); not saved: None for a loaded or co-simulated result.
 
     Examples
     --------
@@ -480,6 +483,7 @@ class RunupResult(Result):
     meta: dict = field(default_factory=dict)
     journal_torque: dict = field(default_factory=dict)
     power_loss: dict = field(default_factory=dict)
+    final_state: np.ndarray = field(default=None, repr=False, compare=False)
 
     @property
     def schema(self):

@@ -1286,27 +1286,29 @@ def _show_progress(bar, t_out, rows, k):
 def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     """The integration loop: the chosen integrator's samples recorded a solver call's worth at a time (their rows
     built in one compiled pass, :func:`sample_rows`), wall contact and speed checked on every row (the run stops at
-    the first offending row, recorded). Returns (status, message, counts)."""
+    the first offending row, recorded). Returns (status, message, counts, the state at the last recorded sample)."""
     integrator = solver_opts["integrator"]
     counts = {"lsoda": {"rhs_evaluations": 0, "jacobian_evaluations": 0}, "radau": {"solver_steps": 0},
               "rodas": {"solver_steps": 0, "rejected_steps": 0}}[integrator]
     stepper = {"lsoda": _lsoda_samples, "radau": _radau_samples, "rodas": _rodas_samples}[integrator]
     samples = stepper(problem, y0, t_out, solver_opts, counts)
     rec.extend(sample_rows(problem, rec.schema, t_out[:1], y0[None, :]))
-    status, message = "finished", ""
+    status, message, last = "finished", "", y0
     label = {"down": "run-down", "up-down": "run-up/down"}.get(problem.profile.direction, "run-up")
     with deferred_signals() as signals, simulation_bar(t_out[-1], label, progress) as bar:
         for k, ys, failure in samples:
             rows = sample_rows(problem, rec.schema, t_out[k:k + ys.shape[0]], ys)
             stop, message = _first_stop(problem, rec.schema, rows, contact_eps)
             rec.extend(rows if stop is None else rows[:stop + 1])
+            if ys.shape[0]:
+                last = ys[-1] if stop is None else ys[stop]
             _show_progress(bar, t_out, rows if stop is None else rows[:stop], k)
             message = message or failure
             if message:
                 status = "stopped"
                 break
             signals.check()  # Ctrl-C / SIGTERM between solver calls, never inside the compiled callbacks
-    return status, message, counts
+    return status, message, counts, last
 
 
 def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_model=None, unbalance=(),
@@ -1405,7 +1407,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
                else {})}
     t_wall = time.perf_counter()
     with Recorder(RunupSchema.from_system(system), t_out.size, out_dir, meta) as rec:
-        status, message, counts = _integrate(
+        status, message, counts, last = _integrate(
             problem, y0, rec, t_out, {"atol": (atol_v, scale), "rtol": rtol, "nsteps": nsteps, "integrator": integrator,
                                       "max_step": max_step or 0.0}, contact_eps, progress)
         wall = time.perf_counter() - t_wall
@@ -1413,6 +1415,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
             work = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in counts.items())
             sys.stderr.write(f"run-up: {status} after {wall:.1f} s wall ({integrator}: {work})\n")
         result = rec.close(status, message, wall_time_s=wall, **counts)
+        result.final_state = np.array(last, dtype=float)
     if status != "finished":
         raise RunupStopped(message, result)
     return result

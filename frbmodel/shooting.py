@@ -25,11 +25,16 @@ of micrometres, ring speeds of 10⁴ rad/s) weigh alike in the residual and in t
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import ConvergenceError
+
+#: largest Floquet multiplier modulus above which a failed single shooting names multiple shooting as the remedy
+#: (the 36 um branches of the 58.5 / 95.9 krpm Hopf points: 335 / 149; single shooting stalled at ~1e-4 there)
+STRONGLY_UNSTABLE = 50.0
 
 
 @dataclass
@@ -238,9 +243,14 @@ def shoot(flow, rhs, z0, period, scale=None, autonomous=True, tol=1e-8, max_iter
         T = T + damp * dT
         if not T > 0:
             raise ConvergenceError(f"shooting: the period became {T:.6g} s at iteration {it} (no orbit near the guess)")
+    mu = float(np.max(np.abs(np.linalg.eigvals(m)))) if m is not None and np.all(np.isfinite(m)) else math.nan
+    unstable = (f"; the last iterate's largest Floquet multiplier is {mu:.3g}: a flow over the whole period "
+                "amplifies errors by that much, multiple shooting (frbmodel.limit_cycle segments > 1) splits it"
+                if mu > STRONGLY_UNSTABLE else "")
     raise ConvergenceError(f"shooting did not converge in {max_iter} Newton iterations: scaled residuals "
                            f"{', '.join(f'{r:.2g}' for r in history[-5:])} (tolerance {tol:g}); a better guess "
-                           "(longer settling) or a quasi-periodic response (two whirl frequencies) are likely causes")
+                           "(longer settling) or a quasi-periodic response (two whirl frequencies) are likely causes"
+                           + unstable)
 
 
 __all__ = ["ShootingSolution", "monodromy", "shoot"]

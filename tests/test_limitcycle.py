@@ -58,6 +58,27 @@ def test_subcritical_cycle_is_unstable_with_the_closed_form_multiplier():
     assert not sol.stable
 
 
+def test_failed_shooting_names_a_large_multiplier_and_multiple_shooting():
+    """A Newton failure on a strongly unstable orbit says so: the normal-form cycle (r = 1, period 2 pi) times an
+    unstable direction z3' = g z3 (multiplier exp(2 pi g) = 535 for g = 1, closed form), one Newton iteration
+    allowed from a guess off the cycle. The message gives the multiplier (the difference monodromy at the guess:
+    within 1 %) and names multiple shooting; a weakly unstable one (g = 0.1, 1.9) does not."""
+    from frbmodel.errors import ConvergenceError
+
+    for g, named in ((1.0, True), (0.1, False)):
+        def f(t, z, g=g):
+            r2 = z[0] ** 2 + z[1] ** 2
+            return np.array([(1 - r2) * z[0] - z[1], (1 - r2) * z[1] + z[0], g * z[2]])
+
+        with pytest.raises(ConvergenceError) as err:
+            shoot(_flow(f), lambda z: f(0.0, z), np.array([1.3, 0.0, 1e-3]), 2 * math.pi, max_iter=1)
+        msg = str(err.value)
+        assert ("multiple shooting" in msg) == named
+        if named:
+            mu = float(msg.split("largest Floquet multiplier is ")[1].split(":")[0])
+            assert mu == pytest.approx(math.exp(2 * math.pi * g), rel=0.01)
+
+
 def test_forced_oscillator_response_equals_closed_form():
     """x'' + 2 zeta w x' + w^2 x = cos(W t): the periodic response of period 2 pi / W has amplitude
     1 / sqrt((w^2 - W^2)^2 + (2 zeta w W)^2), and the multipliers are exp(lambda T), lambda = -zeta w +/- i w_d.
@@ -99,10 +120,12 @@ def lc60():
 
 
 @pytest.mark.parametrize("clearance, speed_rpm", [(36e-6, 60e3), pytest.param(36e-6, 50e3, marks=pytest.mark.slow),
-                                                   pytest.param(46e-6, 30e3, marks=pytest.mark.slow)])
+                                                   pytest.param(46e-6, 30e3, marks=pytest.mark.slow),
+                                                   pytest.param(36e-6, 25e3, marks=pytest.mark.slow)])
 def test_limit_cycle_equals_long_constant_speed_run(clearance, speed_rpm, request):
-    """Acceptance (issue #14): at three constant speeds where the whirl settles on a periodic orbit (the stable
-    stretches of the 36 and 46 um branches: 45.7-65.1 and 24.8-34.8 krpm), the shooting result equals a long
+    """Acceptance (issue #14): at constant speeds where the whirl settles on a periodic orbit (the stable stretches
+    of the 36 um 0.47 X branch, 45.7-65.1 krpm, of the 36 um large forward conical whirl, 1.8-31.4 krpm, and of the
+    46 um branch, 24.8-34.8 krpm), the shooting result equals a long
     constant-speed simulation by another integrator (the run-up's Rosenbrock method; the shooting flows use
     Radau IIA), at tight tolerances: frequency 0.5 %, turbine-wheel orbit radius and the four films' max eps 2 %,
     and it is stable (the simulation settled on it)."""
@@ -138,6 +161,30 @@ def test_orbit_from_a_neighbouring_orbit_is_periodic(lc60):
     size = np.ptp(b.orbit.journal["turbine"][:, 0])
     assert abs(end[j] - b.state[j]) < 1e-6 * size and abs(end[j + 1] - b.state[j + 1]) < 1e-6 * size
     assert np.min(np.abs(b.multipliers - 1.0)) < 1e-3
+
+
+@pytest.mark.slow
+def test_hopf_guess_gives_the_small_orbit_born_at_the_hopf_point():
+    """guess="hopf": the orbit 50 rpm from the 30.77 krpm Hopf point (where the forward conical mode regains
+    stability; its branch is born towards lower speeds) is followed there from the Hopf eigenvector. Near a Hopf
+    point the orbit is small and whirls at the linear frequency: the Hopf point's frequency within 0.5 % (the
+    acceptance tolerance for branch starts), radius < 5 um; periodic per scipy's LSODA (rtol 1e-10; its largest
+    multiplier ~20 amplifies LSODA's errors: 1e-5 of the orbit allowed)."""
+    from frbmodel.continuation import hopf_points
+    from frbmodel.runup import build_problem
+
+    tc = frb.turbocharger(36e-6)
+    hp = hopf_points(tc, (29e3, 33e3), restabilizing=True)[0]
+    lc = limit_cycle(tc, hp.speed_rpm - 50.0, guess="hopf")
+    assert lc.meta["guess"]["hopf_rpm"] == pytest.approx(hp.speed_rpm, rel=2e-6)  # refined from another grid
+    assert lc.frequency_hz == pytest.approx(hp.frequency_hz, rel=0.005)
+    assert lc.orbit_radius("turbine_wheel") < 5e-6
+    p = build_problem(tc, SpeedProfile.constant(lc.speed_rpm, 1.0), tc.film_model)
+    end = solve_ivp(lambda t, y: p.rhs(t, y, np.empty(y.size)).copy(), (0.0, lc.period), np.append(lc.state, 0.0),
+                    method="LSODA", rtol=1e-10, atol=1e-15).y[:-1, -1]
+    j = 4 * tc.bearings[0].node
+    size = np.ptp(lc.orbit.journal["turbine"][:, 0])
+    assert np.max(np.abs(end[[j, j + 1]] - lc.state[[j, j + 1]])) < 1e-5 * size
 
 
 def test_unstable_orbit_is_left_at_the_rate_of_its_largest_multiplier():
@@ -226,3 +273,68 @@ def test_flow_integrator_hint_skips_the_probe_only_where_radau_keeps_its_budget(
     f = _Flow(near, SHOOT_RTOL, SHOOT_ATOL_M, hint=probed)
     f(small, 0.005)
     assert f.method == "rodas" and calls
+
+
+@pytest.fixture(scope="module")
+def short_run():
+    """A 10 ms ramp 20 -> 22 krpm of the 36 um system (0.2 s wall)."""
+    tc = frb.turbocharger(36e-6)
+    return tc, runup(tc, speed_rpm=(20e3, 22e3), duration=0.01, progress=False)
+
+
+def test_runup_state_is_the_run_state_where_it_passes_the_speed(short_run):
+    """The run-up guess's state: the run re-simulated to the first sample at or past the speed. Checked against an
+    independent run of the same ramp stopped at that sample (its final state; same integrator and tolerances:
+    translations within 1e-7 of the clearance, 3e-9 measured) and against the recorded journal positions."""
+    from frbmodel.limitcycle import runup_state
+
+    tc, run = short_run
+    state, info = runup_state(run, tc, 21e3)
+    step = (22e3 - 20e3) / (run.time.size - 1)  # rpm per recorded sample
+    assert 21e3 <= info["run_speed_rpm"] < 21e3 + step + 1e-6
+    ref = runup(tc, speed_rpm=(20e3, 20e3 + (22e3 - 20e3) * info["run_time_s"] / 0.01), duration=info["run_time_s"],
+                progress=False)
+    c = tc.bearings[0].inner.clearance
+    q = np.arange(tc.rotor.n_dof)  # rotor DoFs: per node x, y [m], rotations about x, y [rad]
+    trans, rot = q[q % 4 < 2], q[q % 4 >= 2]
+    assert np.max(np.abs(state[trans] - ref.final_state[trans])) < 1e-7 * c
+    # rotations: the integrator's rtol 1e-7 (2e-7 of the largest measured)
+    assert np.max(np.abs(state[rot] - ref.final_state[rot])) < 1e-6 * np.max(np.abs(ref.final_state[rot]))
+    # the re-simulation (speed table from the recorded samples) vs the recorded ramp: both at rtol 1e-7 (1.7e-7)
+    assert info["rerun_difference_of_clearance"] < 1e-6
+    k = int(np.argmin(np.abs(run.time - info["run_time_s"])))
+    for b in tc.bearings:
+        jx, jy = 4 * b.node, 4 * b.node + 1
+        np.testing.assert_allclose(state[[jx, jy]], run.journal[b.name][k], rtol=0, atol=1e-6 * c)  # as above
+
+
+def test_runup_guess_refuses_runs_it_cannot_re_simulate(short_run):
+    """Clear errors (no re-simulation started): the speed is not reached, the run belongs to another system, it is a
+    co-simulation (states inside the FMUs)."""
+    from dataclasses import replace
+
+    from frbmodel.errors import ParameterError
+    from frbmodel.limitcycle import runup_state
+
+    tc, run = short_run
+    with pytest.raises(ParameterError, match=r"speed 30000 rpm is not reached .* 20000 \.\.\. 22000 rpm"):
+        runup_state(run, tc, 30e3)
+    with pytest.raises(ParameterError, match="computed for another system"):
+        runup_state(run, frb.turbocharger(46e-6), 21e3)
+    with pytest.raises(ParameterError, match="co-simulation"):
+        runup_state(replace(run, meta={**run.meta, "ssp": "x.ssp"}), tc, 21e3)
+
+
+@pytest.mark.parametrize("guess, shown", [((None, 0.01), "guess state: shape ()"),
+                                          ((np.zeros(3), 0.01), "guess state: shape (3,) is invalid: 42 finite"),
+                                          ((np.zeros(42), -1.0), "guess period = -1.0 s is invalid"),
+                                          ("hop", "guess = 'hop' is invalid"),
+                                          (5, "guess = int is invalid")])
+def test_bad_guesses_are_refused_with_what_is_wrong(guess, shown):
+    """A guess that is none of the accepted kinds, a state of the wrong size or non-finite, a period <= 0: a
+    ParameterError naming the problem (never a numba shape error from inside the right-hand side)."""
+    from frbmodel.errors import ParameterError
+
+    with pytest.raises(ParameterError) as err:
+        limit_cycle(frb.turbocharger(36e-6), 60e3, guess=guess)
+    assert shown in str(err.value)
