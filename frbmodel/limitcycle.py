@@ -403,7 +403,6 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
         Invalid speed or settling time.
     """
     from .film import check_model
-    from .recorder import RunupResult
     from .runup import RunupSchema, SpeedProfile, atol_vector, build_problem, check_speed
     from .shooting import shoot, stable_multipliers
 
@@ -412,27 +411,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     problem = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), model, unbalance)
     forced = any(u.amount > 0 for u in unbalance)
     _check_segments(segments, forced)
-    m0 = None
-    if guess is None:
-        z0, period, info = _guess(problem, settle_s, forced)
-    elif isinstance(guess, LimitCycle):
-        z0, period, info = guess.state.copy(), guess.period, {"from_orbit_at_rpm": guess.speed_rpm}
-        m0 = guess.monodromy
-    elif isinstance(guess, str):
-        if guess != "hopf" or forced:
-            raise ParameterError(f"guess = {guess!r} is invalid" + (" with unbalance (a Hopf point's orbit is "
-                                                                    "autonomous)" if guess == "hopf" else
-                                                                    ": 'hopf', a LimitCycle, a RunupResult or "
-                                                                    "(state, period)"))
-        from .continuation import hopf_guess
-
-        z0, period, info = hopf_guess(system, speed_rpm, model)
-    elif isinstance(guess, RunupResult):
-        y_run, from_run = runup_state(guess, system, speed_rpm, model)
-        z0, period, info = _guess(problem, settle_s, forced, y0=y_run)
-        info = {**from_run, **info}
-    else:
-        z0, period, info = (*_given_guess(guess, problem.n_states - 1), {"given": True})
+    z0, period, info, m0 = _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced)
     flow = _Flow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
     scale = atol_vector(problem, SCALE_M)[0][:-1]
     if segments != 1:
@@ -448,6 +427,30 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
             sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
     stable = stable_multipliers(sol.nontrivial_multipliers, MULTIPLIER_TOL)
     return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, stable, sol.z0, not forced, meta, sol.monodromy)
+
+
+def _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced):
+    """(state, period, info, monodromy or None) of each kind of ``guess`` of :func:`limit_cycle`."""
+    from .recorder import RunupResult
+
+    if guess is None:
+        return (*_guess(problem, settle_s, forced), None)
+    if isinstance(guess, LimitCycle):
+        return guess.state.copy(), guess.period, {"from_orbit_at_rpm": guess.speed_rpm}, guess.monodromy
+    if isinstance(guess, str):
+        if guess != "hopf" or forced:
+            raise ParameterError(f"guess = {guess!r} is invalid" + (" with unbalance (a Hopf point's orbit is "
+                                                                    "autonomous)" if guess == "hopf" else
+                                                                    ": 'hopf', a LimitCycle, a RunupResult or "
+                                                                    "(state, period)"))
+        from .continuation import hopf_guess
+
+        return (*hopf_guess(system, speed_rpm, model), None)
+    if isinstance(guess, RunupResult):
+        y_run, from_run = runup_state(guess, system, speed_rpm, model)
+        z0, period, info = _guess(problem, settle_s, forced, y0=y_run)
+        return z0, period, {**from_run, **info}, None
+    return (*_given_guess(guess, problem.n_states - 1), {"given": True}, None)
 
 
 def _given_guess(guess, n):
