@@ -222,11 +222,13 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j, ax, ay, ring, omega_r, omeg
     y[:] = ring
     eps_max = 0.0
     have_jac = False
+    k_end = np.zeros(5)  # f at the end of the last substep (stiffly accurate: (Y2 − base) / γh), the predictor
     for s in range(n_sub):
-        # stage 1 at t + γh: Y1 = y + γh f(Y1)
+        # stage 1 at t + γh: Y1 = y + γh f(Y1), started at y + γh f(y) with f(y) from the last substep
         ta = (s + g) * h
         _journal_on_path(j0, ta, jj)
-        y1[:] = y
+        for k in range(5):
+            y1[k] = y[k] + g * h * k_end[k]
         ei, eo, fresh, st, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj,
                                                       omega_r + omega_r_dot * ta, y, y1, g * h, lu, piv,
                                                       not have_jac, eps_cap, free_spin, rsr_fixed, max_iter, work)
@@ -240,12 +242,15 @@ def _ring_step(geom, polys, ring_m, ring_i, grav, j, ax, ay, ring, omega_r, omeg
             base[k] = y[k] + c * (y1[k] - y[k])
         tb = (s + 1) * h
         _journal_on_path(j0, tb, jj)
-        y2[:] = y1
+        for k in range(5):  # started at y + h k1 (f(Y2) ≈ k1 = (Y1 − y) / γh)
+            y2[k] = y[k] + (y1[k] - y[k]) / g
         ei, eo, _, st, dpos, dspeed = _ring_stage(geom, polys, ring_m, ring_i, grav, jj, omega_r + omega_r_dot * tb,
                                                   base, y2, g * h, lu, piv, False, eps_cap, free_spin, rsr_fixed,
                                                   max_iter, work)
         if st != RING_OK:
             return st, eps_max, math.nan, math.nan, tb, dpos, dspeed
+        for k in range(5):
+            k_end[k] = (y2[k] - base[k]) / (g * h)
         y[:] = y2
         eps_max = max(eps_max, ei, eo)
     _journal_on_path(j0, H, jj)

@@ -1,16 +1,19 @@
 """Co-simulation master on fmpy's FMU2Slave, driven by the SSP (:class:`Master`, :func:`cosimulate`).
 
-Per communication point: the rotor's outputs (journal states, speed) go to the bearings; the bearings'
-outputs (force, interface stiffness and damping, the journal state they belong to) are read *after* their inputs
-are set and go to the rotor. Then the bearings step first (journal on a quadratic path) and publish their
-end-of-step force and journal acceleration, which go to the rotor before it steps (staggered coupling, README
-"Using the FMUs"). Every FMI call goes through :meth:`FmuInstance.call` (status checked, optional trace). Results
-stream through the :class:`~frbmodel.recorder.Recorder` in the same format as the monolithic run-up, so the
-same spectrogram and composite figure apply. Optional rollback: an interval that an FMU discards (or whose new
-state gives non-finite outputs) is retried with half the step after restoring all FMU states. Optional
-error-controlled macro step (``adaptive``): each step's coupling error is the journal path defect
-(:meth:`Master.coupling_error`); steps above the tolerance are rolled back and retried shorter. The rotor speed
-can follow a :class:`~frbmodel.runup.SpeedProfile` through the rotor FMU's ``speed_in`` (``profile``).
+Per communication point: the rotor's outputs (journal states, speed) go to the bearings; the bearings' outputs
+(force, interface stiffness and damping, the journal state they belong to) are read *after* their inputs are set and
+go to the rotor. Then the bearings step first (journal on a quadratic path) and publish their end-of-step force and
+journal acceleration, which go to the rotor before it steps (staggered coupling, README "Using the FMUs"). One
+getReal per FMU and direction, one setReal per FMU and step: the rotor's inputs (the bearings' outputs of the
+communication point, their end-of-step values, a profile's speed) are set together just before its doStep, and at a
+recorded point the recorded outputs come with the exchange's getReal calls (11 FMI calls per macro step, was 13).
+Every FMI call goes through :meth:`FmuInstance.call` (status checked, optional trace). Results stream through the
+:class:`~frbmodel.recorder.Recorder` in the same format as the monolithic run-up, so the same spectrogram and
+composite figure apply. Optional rollback: an interval that an FMU discards (or whose new state gives non-finite
+outputs) is retried with half the step after restoring all FMU states. Optional error-controlled macro step
+(``adaptive``): each step's coupling error is the journal path defect (:meth:`Master.coupling_error`); steps above
+the tolerance are rolled back and retried shorter. The rotor speed can follow a
+:class:`~frbmodel.runup.SpeedProfile` through the rotor FMU's ``speed_in`` (``profile``).
 """
 from __future__ import annotations
 
@@ -271,11 +274,14 @@ class Master:
         self.schema = RunupSchema.from_system(self.system)
         self._rec_rotor = self.rotor.vr(["rotor_speed"] + [f"{n}_bearing.journal.{q}" for n in names for q in "xy"] +
                                         [f"{d}.{q}" for d in self.schema.discs for q in "xy"])
-        self._rec_bearing = [b.vr(BEARING_RECORD) for b in self.bearings]
+        self._rec_bearing = [b.vr(BEARING_RECORD + (BEARING_LOSSES if all(map(b.has, BEARING_LOSSES)) else ()))
+                             for b in self.bearings]
+        self._speed_vr = []
         if self.profile is not None:  # speed_source "input", speed_in = the profile at t = 0
             self.params.setdefault(self.rotor.name, {}).update(speed_source=("String", "input"),
                                                                speed_in=("Real", float(self.profile(0.0))))
             self._speed_vr = self.rotor.vr(["speed_in"])
+        self._plan_recording()
         self._primed = self.profile is None
         if self.adaptive:
             self._plan_defect()
@@ -304,6 +310,26 @@ class Master:
                         for first in (True, False)]
         self._end_gets = [(self.fmus[s], self.fmus[s].vr([a for a, _ in c])) for s, c in end.items()]
         self._end_dvr = self.rotor.vr([b for c in end.values() for _, b in c])
+        # the rotor's inputs from the second phase are set together with its other inputs, just before its doStep
+        # (one setReal per step; nothing reads the rotor in between: its outputs depend on its state only)
+        sets = self._phases[1][1]
+        self._rotor_sets = [(dvr, idx) for dst, dvr, idx in sets if dst is self.rotor]
+        self._phases[1] = (self._phases[1][0], [x for x in sets if x[0] is not self.rotor])
+        self._rotor_in_vr = None  # speed_in, end-of-step values, second-phase values (made in _plan_recording)
+        self._rotor_pending = []
+
+    def _plan_recording(self):
+        """The value references read at a recorded communication point: each source's exchange values followed by
+        its recorded outputs (rotor: speed, journals, discs; bearings: :data:`BEARING_RECORD` and, when the FMU has
+        them, :data:`BEARING_LOSSES`), so that a recorded point costs no extra FMI call."""
+        extra = {self.rotor.name: self._rec_rotor, **{b.name: v for b, v in zip(self.bearings, self._rec_bearing)}}
+        self._rec_phases = []
+        for gets, _sets in self._phases:
+            self._rec_phases.append([(src, svr + extra.pop(src.name, [])) for src, svr in gets])
+        self._rec_rest = [(self.fmus[n], v) for n, v in extra.items()]  # sources not read in the exchange
+        self._rotor_in_vr = (list(self._speed_vr) + (list(self._end_dvr) if self._end_gets else []) +
+                             [r for dvr, _ in self._rotor_sets for r in dvr])
+        self._stash = None
 
     def _plan_defect(self):
         """Positions, in the exchanged values, of what :meth:`coupling_error` needs: per bearing its journal_ref
@@ -403,48 +429,65 @@ class Master:
             except Exception as exc:  # noqa: BLE001  (a value fmpy cannot convert)
                 raise CosimStopped(f"{fmu.name}: setting parameters failed: {exc}") from None
             fmu.call("exitInitializationMode")
-        self.exchange()
+        self.exchange(record=True)
 
     # ------------------------------------------------------------------ exchange
-    def exchange(self):
-        """Pass all coupling values at the current communication point (two phases)."""
+    def exchange(self, record=False):
+        """Pass all coupling values at the current communication point (two phases). The rotor's inputs of the
+        second phase are kept and set with its other inputs before its next doStep (:meth:`_set_rotor_inputs`).
+        With ``record``, the recorded outputs are read in the same getReal calls and kept for :meth:`sample`."""
         t0 = time.perf_counter()
+        stash = {} if record else None
+        self._stash = None
         try:
             for phase, (gets, sets) in enumerate(self._phases):
                 vals = []
-                for src, svr in gets:
+                for i, (src, svr) in enumerate(self._rec_phases[phase] if record else gets):
                     v = src.call("getReal", svr)
                     if not math.isfinite(sum(v)):
                         names = [n for n, var in src.vars.items() if var.valueReference in svr]
                         raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
+                    if record:  # the exchange values, then the recorded ones
+                        n = len(gets[i][1])
+                        stash[src.name], v = v[n:], v[:n]
                     vals += v
                 self._xvals[phase] = vals
                 for dst, dvr, idx in sets:
                     dst.call("setReal", dvr, [vals[i] for i in idx])
+            vals = self._xvals[1]
+            self._rotor_pending = [vals[i] for _, idx in self._rotor_sets for i in idx]
+            if record:
+                for src, svr in self._rec_rest:
+                    stash[src.name] = src.call("getReal", svr)
+                self._stash = stash
         finally:
             self.fmi_time_s += time.perf_counter() - t0
 
-    def _pass_end_of_step(self):
-        vals = []
-        for src, svr in self._end_gets:
-            v = src.call("getReal", svr)
-            if not math.isfinite(sum(v)):
-                raise CosimStopped(f"{src.name}: published a non-finite end-of-step force")
-            vals += v
-        self._evals = vals
-        self.rotor.call("setReal", self._end_dvr, vals)
+    def _set_rotor_inputs(self, t):
+        """All of the rotor's inputs in one setReal before its doStep at ``t``: the profile's speed (if any), the
+        bearings' end-of-step values (staggered coupling, read here) and the kept second-phase values."""
+        vals = [float(self.profile(t))] if self.profile is not None else []
+        if self._end_gets:
+            end = []
+            for src, svr in self._end_gets:
+                v = src.call("getReal", svr)
+                if not math.isfinite(sum(v)):
+                    raise CosimStopped(f"{src.name}: published a non-finite end-of-step force")
+                end += v
+            self._evals = end
+            vals += end
+        self.rotor.call("setReal", self._rotor_in_vr, vals + self._rotor_pending)
 
     # ------------------------------------------------------------------ step
-    def _do_step(self, t, h):
-        """Bearings, end-of-step values, rotor, exchange. Returns None or (message, retryable)."""
+    def _do_step(self, t, h, record=False):
+        """Bearings, rotor inputs, rotor, exchange (``record``: with the recorded outputs). Returns None or
+        (message, retryable, fmu)."""
         t0 = time.perf_counter()
+        self._stash = None
         try:
-            if self.profile is not None:  # the prescribed speed at the start of this (sub)step
-                self.rotor.call("setReal", self._speed_vr, [float(self.profile(t))])
             for fmu in self.bearings:
                 fmu.call("doStep", t, h, True)
-            if self._end_gets:
-                self._pass_end_of_step()
+            self._set_rotor_inputs(t)
             self.rotor.call("doStep", t, h, True)
         except FmiCallFailed as exc:
             return str(exc).replace(" (see the FMU log above)", ""), exc.discarded, exc.fmu
@@ -453,21 +496,22 @@ class Master:
         finally:
             self.fmi_time_s += time.perf_counter() - t0
         try:  # the new journal states may already put a film at its wall: non-finite outputs
-            self.exchange()
+            self.exchange(record)
         except CosimStopped as exc:
             return str(exc), True, None
         return None
 
-    def step(self, t, H):
+    def step(self, t, H, record=False):
         """Advance from ``t`` by ``H`` [s]; with rollback, rejected intervals are retried with halved steps.
-        Returns the new time. Raises :class:`CosimStopped` naming the FMU and the interval."""
+        ``record``: the last exchange also reads the recorded outputs (for :meth:`sample` at ``t + H``). Returns the
+        new time. Raises :class:`CosimStopped` naming the FMU and the interval."""
         t_target, h = t + H, H
         while t < t_target - 1e-12 * H:
             h = min(h, t_target - t)
             if not self._primed:  # a profile's first sub-step gives the rotor its speed-input history
                 h = min(h, PRIME_STEP_S)
             states = self._get_states() if self.rollback else None
-            failure = self._do_step(t, h)
+            failure = self._do_step(t, h, record)
             retry = (failure is not None and failure[1] and self.rollback and bool(states)
                      and h > H / 2 ** self.max_halvings)
             if states:
@@ -490,14 +534,14 @@ class Master:
         return t_target
 
     # ------------------------------------------------------------------ adaptive step
-    def _try_step(self, t, h):
+    def _try_step(self, t, h, record=False):
         """One step of the adaptive run from ``t`` by ``h`` [s], after saving all FMU states. Returns ``(accepted,
         error)`` (error: :meth:`coupling_error`, inf for a discarded step; 0 for the run's first step, whose
         bearings have no journal history yet and take the linear path as in the fixed-step run). A rejected step
         is rolled back; a failure that cannot be retried (or one at ``min_step``) raises :class:`CosimStopped`."""
         states = self._get_states()
         before = self._xvals[1]
-        failure = self._do_step(t, h)
+        failure = self._do_step(t, h, record)
         at_min = h <= self.min_step * (1.0 + 1e-9)
         if failure is not None and (not failure[1] or at_min):
             self._restore_and_free(states, restore=False)
@@ -540,7 +584,7 @@ class Master:
                 if n == 0 or h < h_try * (1.0 - 1e-9):
                     n = max(1, math.ceil((t_out - t) / h - 1e-9))
                     h_try = (t_out - t) / n
-                accepted, err = self._try_step(t, h_try)
+                accepted, err = self._try_step(t, h_try, record=n == 1)
                 if accepted:
                     t, n = (t_out if n == 1 else t + h_try), n - 1
                 h = self._next_step(h_try, err)
@@ -554,7 +598,7 @@ class Master:
         """Step to ``T`` by ``H`` [s], recording every ``every``-th communication point."""
         t = 0.0
         for k in range(1, int(round(T / H)) + 1):
-            t = self.step(t, H)
+            t = self.step(t, H, record=k % every == 0)
             if k % every == 0:
                 rec.append(self.sample(t))
                 signals.check()
@@ -576,21 +620,23 @@ class Master:
 
     # ------------------------------------------------------------------ record
     def sample(self, t):
-        """The recorder row at time ``t`` from the rotor's and bearings' outputs (journal torque and power loss
-        NaN for a bearing FMU without the outputs :data:`BEARING_LOSSES`)."""
-        r = self.rotor.call("getReal", self._rec_rotor)
-        b = np.array([f.call("getReal", v) for f, v in zip(self.bearings, self._rec_bearing)])
+        """The recorder row at time ``t`` from the rotor's and bearings' outputs: those read with the last exchange
+        when it was a recorded one (``exchange(record=True)``, no step since), else read now (journal torque and
+        power loss NaN for a bearing FMU without the outputs :data:`BEARING_LOSSES`)."""
+        stash = self._stash
+        if stash is None:
+            stash = {f.name: f.call("getReal", v) for f, v in [(self.rotor, self._rec_rotor),
+                                                               *zip(self.bearings, self._rec_bearing)]}
+        r = stash[self.rotor.name]
+        b = np.full((len(self.bearings), len(BEARING_RECORD) + len(BEARING_LOSSES)), math.nan)
+        for i, f in enumerate(self.bearings):
+            v = stash[f.name]
+            b[i, :len(v)] = v
         nb, nd = len(self.bearings), len(self.schema.discs)
-        cached = getattr(self, "_rec_losses", None)
-        if cached is None or cached[0] is not self.bearings:  # value references of the instances set up now
-            cached = self._rec_losses = (self.bearings, [f.vr(BEARING_LOSSES) if all(map(f.has, BEARING_LOSSES))
-                                                         else None for f in self.bearings])
-        losses = np.array([f.call("getReal", v) if v is not None else [math.nan, math.nan]
-                           for f, v in zip(self.bearings, cached[1])], dtype=float)
         journal = np.reshape(r[1:1 + 2 * nb], (nb, 2))
         discs = np.reshape(r[1 + 2 * nb:1 + 2 * nb + 2 * nd], (nd, 2))
         return self.schema.row(t, rad_s_to_rpm(r[0]), b[:, 0], journal, b[:, 1:3], b[:, 3:5], discs,
-                               journal_torque=losses[:, 0], power_loss=losses[:, 1])
+                               journal_torque=b[:, 5], power_loss=b[:, 6])
 
     def _adaptive_stats(self):
         """Metadata of the adaptive step at the end of a run (empty for a fixed step)."""
