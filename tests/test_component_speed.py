@@ -87,8 +87,9 @@ def test_bearing_exchange_is_force_jacobian_and_losses_bit_for_bit():
 
 
 def _former_ring_step(bc, j, a, w, H):
-    """The ring step as it was before the fused kernel: SDIRK substeps, each stage by modified Newton with the FD
-    Jacobian of the step's first stage (refreshed from the 5th iteration on) and a dense solve per iteration."""
+    """The ring step written out in Python (as before the fused kernel): SDIRK substeps, each stage by modified
+    Newton with the FD Jacobian of the step's first stage (refreshed from the 5th iteration on) and a dense solve per
+    iteration, started from the predictors (stage 1: y + γh f at the last substep's end; stage 2: y + h k1)."""
     args = bc._args()
     c_o = bc.bearing.outer.clearance
     g = SDIRK_GAMMA
@@ -123,13 +124,14 @@ def _former_ring_step(bc, j, a, w, H):
                 return max(ei, eo)
         raise AssertionError("the former Newton iteration did not converge")
 
-    y, eps = bc.ring.copy(), 0.0
+    y, eps, k_end = bc.ring.copy(), 0.0, np.zeros(5)
     for s in range(n_sub):
-        y1 = y.copy()
+        y1 = y + g * h * k_end  # predictor: the last substep's end derivative (zero in the first substep)
         eps = max(eps, stage(path((s + g) * h), y, y1, s == 0))
         base = y + (1.0 - g) / g * (y1 - y)
-        y2 = y1.copy()
+        y2 = y + (y1 - y) / g  # predictor: y + h k1, k1 the first stage's slope
         eps = max(eps, stage(path((s + 1) * h), base, y2, False))
+        k_end = (y2 - base) / (g * h)  # stiffly accurate: f(Y2)
         y = y2
     fx, fy, _, _ = rhs(path(H), y, f)
     return y, np.array([fx, fy]), eps

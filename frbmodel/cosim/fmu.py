@@ -96,8 +96,9 @@ class FmuInstance:
         # the C functions as fmpy configured them (argument and return types), and the prepared arrays per list of
         # value references: {tuple of value references: (C array of them, count, C value buffer)}
         self._c_get, self._c_set = self.slave.dll.fmi2GetReal, self.slave.dll.fmi2SetReal
+        self._c_step = self.slave.dll.fmi2DoStep
         self._get_plans, self._set_plans = {}, {}
-        self._fast = {"getReal": self._get_real, "setReal": self._set_real}
+        self._fast = {"getReal": self._get_real, "setReal": self._set_real, "doStep": self._do_step}
         self.call("instantiate", True)
 
     def call(self, function, *args):
@@ -164,6 +165,12 @@ class FmuInstance:
         status = self._c_set(self.slave.component, refs, n, buf)
         if status > 1:
             raise _fmi_call_exception()(function="fmi2SetReal", status=status)
+
+    def _do_step(self, t, h, no_set_prior=True):
+        """fmpy's ``doStep(t, h, flag)`` as one C call (fmpy's wrapper adds ~1 µs of Python per call)."""
+        status = self._c_step(self.slave.component, t, h, 1 if no_set_prior else 0)
+        if status > 1:
+            raise _fmi_call_exception()(function="fmi2DoStep", status=status)
 
     def _count(self, function, t0):
         stat = self.calls.get(function)
