@@ -1005,8 +1005,10 @@ def cmd_sweep(args):
                     "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
         else:
             lo, hi = _speed_pair(args.speeds if args.speeds.count(":") == 1 else "1000:250000")
-            opts = {"speed_rpm": (lo, hi)} if args.analysis == "hopf" else {"speed_rpm": (lo, hi),
-                                                                            "duration": args.duration}
+            opts = {"speed_rpm": (lo, hi)} if args.analysis in ("hopf", "bifurcation") else \
+                {"speed_rpm": (lo, hi), "duration": args.duration}
+            if args.analysis == "bifurcation":
+                opts["max_points"] = args.max_points
             if args.analysis == "cosim":
                 if not args.ssp:
                     raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
@@ -1247,9 +1249,11 @@ def _add_sweep(sub):
     sw.add_argument("--param", action="append", metavar="NAME=V1,V2",
                     help="swept parameter (repeatable; SI): outer_clearance, inner_clearance, viscosity_turbine, "
                          "viscosity_compressor, viscosity_scale, ring_mass, unbalance_turbine, unbalance_compressor")
-    sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf"], default="campbell",
+    sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default="campbell",
                     help="'hopf': the Hopf points of the full model (linear onsets) in --speeds START:END; two swept "
-                         "parameters give a stability chart")
+                         "parameters give a stability chart; 'bifurcation': the limit-cycle branches from those Hopf "
+                         "points (each case's diagram in cases/<id>/, its bifurcation points in the map)")
+    sw.add_argument("--max-points", type=int, default=25, help="bifurcation: points per branch and direction")
     sw.add_argument("--methods", default="J", help="Campbell methods, comma list")
     sw.add_argument("--speeds", default="1000:250000:200",
                     help="campbell: START:STOP:COUNT; run-ups: START:END [rpm]")

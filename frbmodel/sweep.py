@@ -45,7 +45,7 @@ PARAMETERS = {
     "unbalance_turbine": ("kg m", "unbalance of the disc named 'turbine_wheel' (or 'turbine')"),
     "unbalance_compressor": ("kg m", "unbalance of the disc named 'compressor_wheel' (or 'compressor')"),
 }
-ANALYSES = ("campbell", "runup", "cosim", "hopf")
+ANALYSES = ("campbell", "runup", "cosim", "hopf", "bifurcation")
 #: seconds to wait for an existing Dask scheduler before giving up
 SCHEDULER_TIMEOUT_S = 5.0
 
@@ -101,7 +101,9 @@ def check_options(analysis, options):
         One of :data:`ANALYSES`.
     options : dict
         ``campbell``: ``methods`` (letters, default ["J"]) and ``speeds_rpm`` (START, STOP, COUNT) in any order of
-        START and STOP; run-ups: ``speed_rpm`` (START, END) — a run-down if END < START — and ``duration`` [s].
+        START and STOP; run-ups: ``speed_rpm`` (START, END) — a run-down if END < START — and ``duration`` [s];
+        ``hopf``: ``speed_rpm``; ``bifurcation``: ``speed_rpm``, ``start`` ("hopf", a speed [rpm] or a list),
+        ``max_points`` (>= 2, default 25) and ``segments`` (>= 1, default 1), as :func:`frbmodel.continuation`.
 
     Raises
     ------
@@ -136,6 +138,15 @@ def check_options(analysis, options):
             check_speed("end speed", b)
         if "duration" in options:
             check_positive("duration", options["duration"], "s")
+    if analysis == "bifurcation":
+        for key, low in (("max_points", 2), ("segments", 1)):
+            v = options.get(key, low)
+            if isinstance(v, bool) or int(v) != v or v < low:
+                raise ParameterError(f"bifurcation {key} = {v!r} is invalid: valid range integer >= {low}")
+        start = options.get("start", "hopf")
+        for s0 in ([start] if isinstance(start, str) or np.ndim(start) == 0 else start):
+            if s0 != "hopf":
+                check_speed("bifurcation start speed", s0)
 
 
 def grid(params: dict, analysis="campbell", **options):
@@ -320,6 +331,23 @@ def _hopf_rows(tc, o):
             for k, hp in enumerate(hopf_points(tc, (lo, hi)), start=1)]
 
 
+def _bifurcation_rows(tc, o, case_dir):
+    """Limit-cycle branches of the case's system (:func:`frbmodel.continuation.continuation` over ``speed_rpm``
+    from ``start``: its Hopf points by default, or the orbits at given speeds), written to ``case_dir``
+    (``branch.csv``, ``bifurcations.csv``, ``branch.nc``, ``bifurcation.png`` / ``.html``); one row per bifurcation
+    point (item: type and criticality; "onset [rpm]" its speed)."""
+    from .continuation import continuation
+
+    lo, hi = sorted(o.get("speed_rpm", (1e3, 250e3)))
+    bd = continuation(tc, (lo, hi), start=o.get("start", "hopf"), max_points=int(o.get("max_points", 25)),
+                      segments=int(o.get("segments", 1)))
+    bd.save(case_dir)
+    return [{"kind": "bifurcation", "method": "full model",
+             "item": b["type"] + (f" ({b['criticality']})" if b.get("criticality") else ""),
+             "onset [rpm]": b["speed_rpm"], "end [rpm]": float("nan"), "f at onset [Hz]": b["frequency_hz"],
+             "onset at sweep start": False} for b in bd.bifurcations]
+
+
 def _runup_rows(tc, unb, o):
     from .runup import SpeedProfile, runup
 
@@ -402,6 +430,8 @@ def run_case(case: Case, out_dir) -> dict:
             rows = _cosim_rows(tc, unb, o)
         elif case.analysis == "hopf":
             rows = _hopf_rows(tc, o)
+        elif case.analysis == "bifurcation":
+            rows = _bifurcation_rows(tc, o, out / "cases" / case.case_id)
         else:
             raise ParameterError(f"analysis = {case.analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
         rec.update({"status": "finished", "rows": rows})
@@ -437,6 +467,9 @@ COST_CAMPBELL_S_PER_SPEED = 2e-3
 
 #: wall time [s] of one ``hopf`` case (60 equilibrium Jacobians and the Brent refinements; measured 0.5-1 s)
 COST_HOPF_S = 1.0
+#: wall time [s] per branch point of a ``bifurcation`` case (1-5 s measured at 36 um; its Hopf points' branches:
+#: about four, each ``max_points`` long)
+COST_BIFURCATION_S_PER_POINT = 4 * 2.0
 
 
 def estimated_cost_s(case) -> float:
@@ -444,7 +477,8 @@ def estimated_cost_s(case) -> float:
 
     Run-ups: simulated duration × :data:`COST_RUNUP_S_PER_SIMULATED_S`; co-simulations: duration ×
     :data:`COST_COSIM_S_PER_SIMULATED_S`; both × :data:`COST_UNBALANCE_FACTOR` if an ``unbalance_*`` parameter is
-    > 0; Campbell: speeds × methods × :data:`COST_CAMPBELL_S_PER_SPEED`; Hopf points: :data:`COST_HOPF_S`. Only the
+    > 0; Campbell: speeds × methods × :data:`COST_CAMPBELL_S_PER_SPEED`; Hopf points: :data:`COST_HOPF_S`; bifurcation
+    diagrams: that plus ``max_points`` × :data:`COST_BIFURCATION_S_PER_POINT`. Only the
     order of the estimates matters; the defaults of the options are those :func:`run_case` uses.
 
     Parameters
@@ -472,6 +506,8 @@ def estimated_cost_s(case) -> float:
         return n * len(o.get("methods", ["J"])) * COST_CAMPBELL_S_PER_SPEED
     if case.analysis == "hopf":
         return COST_HOPF_S
+    if case.analysis == "bifurcation":
+        return COST_HOPF_S + int(o.get("max_points", 25)) * COST_BIFURCATION_S_PER_POINT
     forced = any(k.startswith("unbalance_") and v > 0 for k, v in case.params.items())
     factor = COST_UNBALANCE_FACTOR if forced else 1.0
     if case.analysis == "cosim":

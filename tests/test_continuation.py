@@ -254,6 +254,34 @@ def test_two_parameter_stability_chart(tmp_path):
     assert first == pytest.approx(_method_j_crossing(tc, first, hp.frequency_hz)[0], rel=0.005)
 
 
+def test_bifurcation_study_writes_each_cases_diagram_and_its_points(tmp_path):
+    """A ``bifurcation`` study (frbmodel.sweep): per case the limit-cycle branches from its Hopf points, the diagram
+    in ``cases/<id>/`` (loadable) and one stability-map row per bifurcation point, equal to the saved table; resumable
+    (a second run computes nothing). Two outer clearances, 29-32 krpm, 2 points per branch: the restabilizing Hopf
+    point there is the case's Hopf row (the same as hopf_points, checked against method J above)."""
+    import pandas as pd
+
+    from frbmodel.errors import ParameterError
+    from frbmodel.sweep import build_case_system, grid, run_study, stability_map
+
+    with pytest.raises(ParameterError, match="bifurcation max_points = 1 is invalid"):
+        grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(29e3, 32e3), max_points=1)
+    cases = grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(29e3, 32e3), max_points=2)
+    run_study(cases, tmp_path, scheduler="serial")
+    folder = tmp_path / "cases" / cases[0].case_id
+    bd = BifurcationDiagram.load(folder / "branch.nc")
+    table = pd.read_csv(folder / "bifurcations.csv")
+    sm = stability_map(tmp_path)
+    assert len(bd.points) >= 2 and (folder / "bifurcation.png").exists()
+    assert sorted(sm["onset [rpm]"]) == pytest.approx(sorted(table["speed_rpm"]), rel=1e-12)
+    hp = hopf_points(build_case_system({"outer_clearance": 36e-6})[0], (29e3, 32e3), restabilizing=True)[0]
+    hopf_row = sm[sm["item"].str.startswith("Hopf (restabilizing)")]
+    assert hopf_row["onset [rpm]"].tolist() == pytest.approx([hp.speed_rpm], rel=1e-9)
+    mtime = (tmp_path / "cases" / f"{cases[0].case_id}.json").stat().st_mtime
+    run_study(cases, tmp_path, scheduler="serial")  # resumed: the finished case is kept
+    assert (tmp_path / "cases" / f"{cases[0].case_id}.json").stat().st_mtime == mtime
+
+
 @pytest.mark.slow
 def test_multiple_shooting_follows_a_strongly_unstable_branch(tc):
     """The branch of the 58.5 krpm Hopf point (36 um) runs through orbits whose largest multiplier is ~335 (a flow
