@@ -844,7 +844,21 @@ def _diagram(system, model, branches, origins, lo, hi):
         points.extend(b)
     meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
             "branches": [len(b) for b in branches]}
-    return BifurcationDiagram(points, sorted(bifs, key=lambda e: e["speed_rpm"]), meta)
+    return BifurcationDiagram(points, sorted(_unique_hopf(bifs), key=lambda e: e["speed_rpm"]), meta)
+
+
+def _unique_hopf(bifs):
+    """The records with each Hopf point once (a branch from it and a branch through an orbit that ends there both
+    record it; the one with a criticality is kept)."""
+    out = []
+    for b in bifs:
+        same = next((i for i, o in enumerate(out) if b["type"].startswith("Hopf") and o["type"] == b["type"]
+                     and abs(o["speed_rpm"] - b["speed_rpm"]) <= 1e-5 * b["speed_rpm"]), None)
+        if same is None:
+            out.append(b)
+        elif b["criticality"] and not out[same]["criticality"]:
+            out[same] = b
+    return out
 
 
 def _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first=None,

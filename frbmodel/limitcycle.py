@@ -279,6 +279,10 @@ def _crossings(t, x):
     return t[k] - x[k] * (t[k + 1] - t[k]) / (x[k + 1] - x[k]), k
 
 
+#: revolutions at most in the sampled end of a settling run (its orbit read-off): 9 whirl periods down to 0.045 X
+TAIL_REVOLUTIONS = 200
+
+
 def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4, y0=None):
     """Guess (z0, period) from a constant-speed simulation of ``settle_s`` [s] from the method-J equilibrium (or
     from the full state ``y0``, e.g. a run-up's: :func:`runup_state`).
@@ -302,7 +306,8 @@ def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4, y0=None)
 
     w = float(problem.profile.omega[0])
     dt = 2 * math.pi / w / samples_per_rev
-    tail = min(settle_s / 2, 60 * 2 * math.pi / w)  # the last 60 revolutions (at most half the settling time)
+    # the last TAIL_REVOLUTIONS revolutions, at most half the settling time (9 whirl periods down to ~0.05 X)
+    tail = min(settle_s / 2, TAIL_REVOLUTIONS * 2 * math.pi / w)
     y0 = initial_state(problem) if y0 is None else y0
     atol = atol_vector(problem)[0]
     packed = pack_problem(problem)
@@ -323,9 +328,12 @@ def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4, y0=None)
                                "stays at its equilibrium or drifts): no orbit to continue from")
     if tc.size < 2 * max_multiple + 1:
         need = 2 * (2 * max_multiple + 1) * float(np.mean(np.diff(tc)))
+        remedy = (f"use settle_s >= {need:.2g} s" if tail >= settle_s / 2 else
+                  f"the whirl is slower than {2 * max_multiple + 1} periods in {TAIL_REVOLUTIONS} revolutions: give "
+                  "a guess (a neighbouring orbit, 'hopf' or (state, period))")
         raise ConvergenceError(f"limit cycle guess: only {tc.size} whirl periods in the last {tail:.3g} s of the "
                                f"settling run at {w / RPM:.0f} rpm ({2 * max_multiple + 1} needed to find the period): "
-                               f"use settle_s >= {need:.2g} s")
+                               + remedy)
     size = np.ptp(y[:, :problem.n_rotor], axis=0).max()
     last = k[-1]
     for m in range(1, max_multiple + 1):
@@ -447,7 +455,8 @@ def _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced):
 
         return (*hopf_guess(system, speed_rpm, model), None)
     if isinstance(guess, RunupResult):
-        y_run, from_run = runup_state(guess, system, speed_rpm, model)
+        y_run, from_run = runup_state(guess, system, speed_rpm)
+        y_run[-1] = 0.0  # the rotation angle: a forced orbit's revolutions are counted from angle 0 at t = 0
         z0, period, info = _guess(problem, settle_s, forced, y0=y_run)
         return z0, period, {**from_run, **info}, None
     return (*_given_guess(guess, problem.n_states - 1), {"given": True}, None)
@@ -523,12 +532,12 @@ def _rerun_inputs(run, system):
                              "speed-prescribed frb.runup of the same system")
     unb = [Unbalance(**u) for u in meta.get("unbalance", [])]
     opts = {k: meta[m] for k, m in (("rtol", "rtol"), ("atol", "atol_displacement_m"), ("integrator", "integrator"),
-                                    ("perturbation", "perturbation_of_clearance"),
+                                    ("perturbation", "perturbation_of_clearance"), ("contact_eps", "contact_eps"),
                                     ("output_rate_hz", "output_rate_hz")) if m in meta}
     return unb, opts
 
 
-def runup_state(run, system, speed_rpm, film_model=None):
+def runup_state(run, system, speed_rpm):
     """The full state of a recorded run-up where its speed first reaches ``speed_rpm``, to start a limit-cycle
     guess from the attractor the run is on there (e.g. a run-down's whirl where a settling run from the equilibrium
     finds another orbit).
@@ -544,13 +553,12 @@ def runup_state(run, system, speed_rpm, film_model=None):
         A monolithic, speed-prescribed run-up (or run-down) of ``system`` (:func:`frbmodel.runup`, or loaded).
     system : Turbocharger
     speed_rpm : float
-    film_model : str, optional
-        Default: the run's.
 
     Returns
     -------
     state : ndarray
-        Full state vector of the run-up problem at that sample [SI].
+        Full state vector of the run-up problem at that sample [SI] (re-simulated with the run's film model and
+        contact limit).
     info : dict
         ``run_time_s``, ``run_speed_rpm`` of the sample, ``rerun_difference_of_clearance``.
 
@@ -572,9 +580,8 @@ def runup_state(run, system, speed_rpm, film_model=None):
                              f"{np.min(run.speed_rpm):.0f} ... {np.max(run.speed_rpm):.0f} rpm)")
     k = int(hit[0]) + 1
     prof = SpeedProfile.piecewise_linear(run.time[:k + 1], run.speed_rpm[:k + 1], "the recorded run's speeds")
-    model = film_model or run.meta.get("film_model")
-    rerun = runup(system, profile=prof, duration=float(run.time[k]), film_model=model, unbalance=unb, progress=False,
-                  **opts)
+    rerun = runup(system, profile=prof, duration=float(run.time[k]), film_model=run.meta.get("film_model"),
+                  unbalance=unb, progress=False, **opts)
     diff = max(float(np.max(np.abs(rerun.journal[b.name][-1] - run.journal[b.name][k]))) / b.inner.clearance
                for b in system.bearings)
     info = {"run_time_s": float(run.time[k]), "run_speed_rpm": float(run.speed_rpm[k]),

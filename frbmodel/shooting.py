@@ -244,7 +244,7 @@ def shoot(flow, rhs, z0, period, scale=None, autonomous=True, tol=1e-8, max_iter
         if not T > 0:
             raise ConvergenceError(f"shooting: the period became {T:.6g} s at iteration {it} (no orbit near the guess)")
     mu = float(np.max(np.abs(np.linalg.eigvals(m)))) if m is not None and np.all(np.isfinite(m)) else math.nan
-    unstable = (f"; the last iterate's largest Floquet multiplier is {mu:.3g}: a flow over the whole period "
+    unstable = (f"; the largest Floquet multiplier of the last monodromy computed is {mu:.3g}: a flow over the period "
                 "amplifies errors by that much, multiple shooting (frbmodel.limit_cycle segments > 1) splits it"
                 if mu > STRONGLY_UNSTABLE else "")
     raise ConvergenceError(f"shooting did not converge in {max_iter} Newton iterations: scaled residuals "

@@ -141,12 +141,15 @@ def check_options(analysis, options):
     if analysis == "bifurcation":
         for key, low in (("max_points", 2), ("segments", 1)):
             v = options.get(key, low)
-            if isinstance(v, bool) or int(v) != v or v < low:
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or int(v) != v \
+                    or v < low:
                 raise ParameterError(f"bifurcation {key} = {v!r} is invalid: valid range integer >= {low}")
         start = options.get("start", "hopf")
+        lo, hi = sorted(options.get("speed_rpm", (1e3, 250e3)))
         for s0 in ([start] if isinstance(start, str) or np.ndim(start) == 0 else start):
-            if s0 != "hopf":
-                check_speed("bifurcation start speed", s0)
+            if s0 != "hopf" and not lo <= check_speed("bifurcation start speed", s0) <= hi:
+                raise ParameterError(f"bifurcation start speed = {s0!r} rpm is outside speed_rpm {lo:g} ... {hi:g} "
+                                     "rpm")
 
 
 def grid(params: dict, analysis="campbell", **options):
@@ -956,10 +959,11 @@ def plot_stability_map(out_dir, parameter=None):
         x = g[pcol].to_numpy() * scale
         y = g["onset [rpm]"].to_numpy() / 1e3
         lab = f"{method}: {item}"
-        ls = "-" if kind == "linear" else "--"
-        mk = "o" if kind == "linear" else "s"
+        # a case can have several bifurcation points of one type (two folds): markers only, no line joining them
+        ls = "-" if kind == "linear" else "--" if kind != "bifurcation" else "none"
+        mk = "o" if kind == "linear" else "s" if kind != "bifurcation" else "D"
         ax.plot(x, y, ls, marker=mk, label=lab)
-        pfig.add_trace(go.Scatter(x=x, y=y, mode="lines+markers", name=lab,
+        pfig.add_trace(go.Scatter(x=x, y=y, mode="markers" if kind == "bifurcation" else "lines+markers", name=lab,
                                   line=dict(dash="solid" if kind == "linear" else "dash"),
                                   customdata=g["f at onset [Hz]"].to_numpy(),
                                   hovertemplate=f"{xlabel} %{{x:.4g}}<br>onset %{{y:.1f}} krpm<br>"
@@ -1008,6 +1012,8 @@ def plot_stability_chart(out_dir, x, y, item=None):
     if df.empty:
         return []
     df = df[df["kind"] == "linear"]
+    if df.empty:  # no linear onsets (a run-up or bifurcation study): no chart
+        return []
     item = item or ("Hopf #1" if (df["item"] == "Hopf #1").any() else
                     df.sort_values("onset [rpm]")["item"].iloc[0])
     xc, yc = f"{x} [{PARAMETERS[x][0]}]", f"{y} [{PARAMETERS[y][0]}]"

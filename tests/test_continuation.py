@@ -81,6 +81,8 @@ def test_branch_collapsing_onto_the_equilibrium_ends_at_the_full_models_hopf_poi
     start = hopf_points(tc, (1.5e3, 2.5e3), n_grid=4)[0]
     bd = _diagram(tc, "short", [from_hopf, through[::-1]], [start, None], 1e3, 40e3)
     assert len(bd.points) == 8
+    both = _diagram(tc, "short", [through[::-1], through], [hp, None], 1e3, 40e3)  # the point from both sides
+    assert [b["type"] for b in both.bifurcations].count("Hopf (restabilizing)") == 1
     end = [b for b in bd.bifurcations if b["type"].startswith("Hopf") and b["speed_rpm"] > 20e3]
     assert len(end) == 1 and end[0]["type"] == "Hopf (restabilizing)"
     # the same crossing, refined from another grid bracket: equal within the refinement's 1e-6
@@ -262,7 +264,14 @@ def test_bifurcation_study_writes_each_cases_diagram_and_its_points(tmp_path):
     import pandas as pd
 
     from frbmodel.errors import ParameterError
-    from frbmodel.sweep import build_case_system, grid, run_study, stability_map
+    from frbmodel.sweep import (
+        build_case_system,
+        grid,
+        plot_stability_chart,
+        plot_stability_map,
+        run_study,
+        stability_map,
+    )
 
     with pytest.raises(ParameterError, match="bifurcation max_points = 1 is invalid"):
         grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(29e3, 32e3), max_points=1)
@@ -277,6 +286,9 @@ def test_bifurcation_study_writes_each_cases_diagram_and_its_points(tmp_path):
     hp = hopf_points(build_case_system({"outer_clearance": 36e-6})[0], (29e3, 32e3), restabilizing=True)[0]
     hopf_row = sm[sm["item"].str.startswith("Hopf (restabilizing)")]
     assert hopf_row["onset [rpm]"].tolist() == pytest.approx([hp.speed_rpm], rel=1e-9)
+    # its map draws the points (markers), and a two-parameter chart of linear onsets has none to draw (no crash)
+    assert plot_stability_map(tmp_path)[1].exists()
+    assert plot_stability_chart(tmp_path, "outer_clearance", "viscosity_scale") == []
     mtime = (tmp_path / "cases" / f"{cases[0].case_id}.json").stat().st_mtime
     run_study(cases, tmp_path, scheduler="serial")  # resumed: the finished case is kept
     assert (tmp_path / "cases" / f"{cases[0].case_id}.json").stat().st_mtime == mtime

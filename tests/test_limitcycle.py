@@ -75,7 +75,7 @@ def test_failed_shooting_names_a_large_multiplier_and_multiple_shooting():
         msg = str(err.value)
         assert ("multiple shooting" in msg) == named
         if named:
-            mu = float(msg.split("largest Floquet multiplier is ")[1].split(":")[0])
+            mu = float(msg.split("monodromy computed is ")[1].split(":")[0])
             assert mu == pytest.approx(math.exp(2 * math.pi * g), rel=0.01)
 
 

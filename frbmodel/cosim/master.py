@@ -444,12 +444,12 @@ class Master:
                 vals = []
                 for i, (src, svr) in enumerate(self._rec_phases[phase] if record else gets):
                     v = src.call("getReal", svr)
-                    if not math.isfinite(sum(v)):
-                        names = [n for n, var in src.vars.items() if var.valueReference in svr]
-                        raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
-                    if record:  # the exchange values, then the recorded ones
+                    if record:  # the exchange values, then the recorded ones (recorded as they are, NaN included)
                         n = len(gets[i][1])
                         stash[src.name], v = v[n:], v[:n]
+                    if not math.isfinite(sum(v)):
+                        names = [n for n, var in src.vars.items() if var.valueReference in gets[i][1]]
+                        raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
                     vals += v
                 self._xvals[phase] = vals
                 for dst, dvr, idx in sets:
