@@ -338,3 +338,25 @@ def test_bad_guesses_are_refused_with_what_is_wrong(guess, shown):
     with pytest.raises(ParameterError) as err:
         limit_cycle(frb.turbocharger(36e-6), 60e3, guess=guess)
     assert shown in str(err.value)
+
+
+@pytest.mark.slow
+def test_runup_guess_of_a_forced_orbit_starts_at_the_orbits_phase():
+    """With unbalance the orbit is locked to the rotor angle, which shooting counts from 0: the run-up's state has
+    the run's angle and is reset to 0 before settling, so the guess lies on the forced orbit (1 g mm at 1.5 krpm,
+    below the first Hopf point: a stable 1X orbit, lightly damped there: 1.5 s of settling). The guess state is
+    within 2 % of the orbit's size of the shot orbit's start; with the run's angle kept the guess is off by the run's
+    phase, 3.9 rad here."""
+    from frbmodel.limitcycle import _initial_guess
+    from frbmodel.runup import Unbalance, build_problem
+
+    tc = frb.turbocharger(36e-6)
+    unb = [Unbalance("turbine_wheel", 1e-6)]
+    run = runup(tc, speed_rpm=(1.4e3, 1.6e3), duration=0.05, unbalance=unb, progress=False)
+    lc = limit_cycle(tc, 1.5e3, unbalance=unb, settle_s=1.5)
+    problem = build_problem(tc, SpeedProfile.constant(1.5e3, 1.0), tc.film_model, unb)
+    z0, period, info, _ = _initial_guess(tc, problem, tc.film_model, 1.5e3, run, 1.5, True)
+    assert period == pytest.approx(lc.period, rel=1e-9)  # one revolution
+    j = 4 * tc.bearings[0].node
+    size = np.ptp(lc.orbit.journal["turbine"][:, 0])
+    assert np.max(np.abs(z0[[j, j + 1]] - lc.state[[j, j + 1]])) < 0.02 * size
