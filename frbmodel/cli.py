@@ -384,21 +384,17 @@ def cmd_runup(args):
 
 def cmd_bifurcation(args):
     """``frb bifurcation``: Hopf points and limit-cycle branches vs speed (continuation), tables and diagram."""
-    from .continuation import BifurcationDiagram, continuation, hopf_points
+    from .continuation import BifurcationDiagram, check_starts, continuation, hopf_points
     from .runup import check_speed
 
     tc = load_from_args(args)
     lo, hi = sorted(check_speed(f"--speeds {name}", v) for name, v in zip(("START", "END"), _speed_pair(args.speeds)))
-    start = []
-    for item in (args.start or "").split(","):
-        item = item.strip()
-        try:
-            start.append("hopf" if item == "hopf" else check_speed("--start", float(item)))
-        except ValueError:
-            raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm, or a comma-separated "
-                                 "list of them (e.g. 25000,60000)") from None
-        if start[-1] != "hopf" and not lo <= start[-1] <= hi:
-            raise ParameterError(f"--start = {item} rpm is outside --speeds {lo:.0f}:{hi:.0f} rpm")
+    try:
+        start = [s if s == "hopf" else float(s) for s in (x.strip() for x in (args.start or "").split(","))]
+    except ValueError:
+        raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm, or a comma-separated "
+                             "list of them (e.g. 25000,60000)") from None
+    start = check_starts(start, (lo, hi), "--start", "--speeds")
     if args.max_points < 2:
         raise ParameterError(f"--max-points = {args.max_points} is invalid: valid range >= 2")
     if args.segments < 1:

@@ -619,14 +619,7 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     model = check_model(film_model or system.film_model)
     if int(segments) != segments or segments < 1:
         raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
-    starts = [start] if isinstance(start, (str, LimitCycle)) or np.ndim(start) == 0 else list(start)
-    for s0 in starts:
-        if isinstance(s0, str) and s0 != "hopf":
-            raise ParameterError(f"start = {s0!r} is invalid: 'hopf', a LimitCycle or a speed [rpm] (or a list of "
-                                 "them)")
-        speed = s0.speed_rpm if isinstance(s0, LimitCycle) else None if isinstance(s0, str) else float(s0)
-        if speed is not None and not lo <= speed <= hi:
-            raise ParameterError(f"start speed {speed:.0f} rpm is outside the speed range {lo:.0f} ... {hi:.0f} rpm")
+    starts = check_starts(start, (lo, hi))
     branches, origins = [], []  # origins: the Hopf point a branch starts at, None for a branch through an orbit
     for s0 in starts:
         if isinstance(s0, str):
@@ -640,6 +633,41 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
                                             segments))
             origins.append(None)
     return _diagram(system, model, branches, origins, lo, hi)
+
+
+def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
+    """The branch starts of :func:`continuation` as a list (``start``: "hopf", a LimitCycle, a speed [rpm] or a list
+    of them), or a ParameterError naming the bad one and the valid values (used by the API, ``frb bifurcation`` and
+    the ``bifurcation`` study before any computation).
+
+    Examples
+    --------
+    >>> check_starts([25e3, "hopf"], (1e3, 40e3))
+    [25000.0, 'hopf']
+    >>> try:
+    ...     check_starts(60e3, (1e3, 40e3))
+    ... except ParameterError as exc:
+    ...     print(exc)
+    start = 60000 rpm is outside the speed range 1000:40000 rpm
+    """
+    from .limitcycle import LimitCycle
+    from .runup import check_speed
+
+    lo, hi = sorted(float(s) for s in speeds_rpm)
+    starts = [start] if isinstance(start, (str, LimitCycle)) or np.ndim(start) == 0 else list(start)
+    out = []
+    for s0 in starts:
+        if isinstance(s0, str):
+            if s0 != "hopf":
+                raise ParameterError(f"{name} = {s0!r} is invalid: 'hopf', a LimitCycle or a speed [rpm] (or a "
+                                     "list of them)")
+            out.append(s0)
+            continue
+        speed = s0.speed_rpm if isinstance(s0, LimitCycle) else check_speed(name, s0)
+        if not lo <= speed <= hi:
+            raise ParameterError(f"{name} = {speed:.0f} rpm is outside {range_name} {lo:.0f}:{hi:.0f} rpm")
+        out.append(s0 if isinstance(s0, LimitCycle) else speed)
+    return out
 
 
 def _hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point, segments):
@@ -994,4 +1022,4 @@ def _phase_normal(br, z, speed):
 
 
 __all__ = ["BifurcationDiagram", "BranchPoint", "HopfPoint", "continuation", "equilibrium_jacobian", "hopf_guess",
-           "hopf_points", "hopf_record", "shoot_segments"]
+           "hopf_points", "hopf_record", "check_starts", "shoot_segments"]

@@ -144,12 +144,10 @@ def check_options(analysis, options):
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or int(v) != v \
                     or v < low:
                 raise ParameterError(f"bifurcation {key} = {v!r} is invalid: valid range integer >= {low}")
-        start = options.get("start", "hopf")
-        lo, hi = sorted(options.get("speed_rpm", (1e3, 250e3)))
-        for s0 in ([start] if isinstance(start, str) or np.ndim(start) == 0 else start):
-            if s0 != "hopf" and not lo <= check_speed("bifurcation start speed", s0) <= hi:
-                raise ParameterError(f"bifurcation start speed = {s0!r} rpm is outside speed_rpm {lo:g} ... {hi:g} "
-                                     "rpm")
+        from .continuation import check_starts
+
+        check_starts(options.get("start", "hopf"), options.get("speed_rpm", (1e3, 250e3)), "bifurcation start",
+                     "speed_rpm")
 
 
 def grid(params: dict, analysis="campbell", **options):
