@@ -275,6 +275,8 @@ def test_bifurcation_study_writes_each_cases_diagram_and_its_points(tmp_path):
 
     with pytest.raises(ParameterError, match="bifurcation max_points = 1 is invalid"):
         grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(29e3, 32e3), max_points=1)
+    with pytest.raises(ParameterError, match="bifurcation start = 50000 rpm is outside speed_rpm 29000:32000 rpm"):
+        grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(29e3, 32e3), start=[30e3, 50e3])
     cases = grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(29e3, 32e3), max_points=2)
     run_study(cases, tmp_path, scheduler="serial")
     folder = tmp_path / "cases" / cases[0].case_id
