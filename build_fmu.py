@@ -2,14 +2,18 @@
 
 Usage: python build_fmu.py [OUT_DIR]   (same as `frb build-fmus --out OUT_DIR`)
 """
+import argparse
 import sys
 
 from frbmodel.cosim.build import build_fmus
 from frbmodel.errors import FRBError
 
 if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description="Build the two FMUs and the SSP (same as `frb build-fmus`).")
+    ap.add_argument("out_dir", nargs="?", default="build", help="output folder (default: build)")
+    args = ap.parse_args()  # --help prints this; an unknown option exits with status 2
     try:
-        build_fmus(sys.argv[1] if len(sys.argv) > 1 else "build")
+        build_fmus(args.out_dir)
     except FRBError as exc:  # e.g. the FMU sources are missing: the message says what and how to fix it
         print(f"build_fmu.py: error: {exc}", file=sys.stderr)
         sys.exit(2)

@@ -18,12 +18,13 @@ import argparse
 import time
 
 import numpy as np
+from _cli import count, run_script  # (benchmarks/ is the script's folder)
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--points", type=int, default=50, help="branch points per direction")
-    ap.add_argument("--segments", type=int, default=1, help="shooting segments of the branch")
+    ap.add_argument("--points", type=count, default=50, help="branch points per direction")
+    ap.add_argument("--segments", type=count, default=1, help="shooting segments of the branch")
     args = ap.parse_args(argv)
 
     import frbmodel as frb
@@ -67,4 +68,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -14,6 +14,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from _cli import run_script  # (benchmarks/ is the script's folder)
 
 import frbmodel as frb
 from frbmodel.runup import SpeedProfile
@@ -90,4 +91,4 @@ def main():
 
 if __name__ == "__main__":
     np.seterr(all="ignore")
-    main()
+    run_script(main)

@@ -23,6 +23,8 @@ from __future__ import annotations
 import argparse
 import time
 
+from _cli import nonnegative, positive, run_script  # (benchmarks/ is the script's folder)
+
 import frbmodel as frb
 from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.master import CosimStopped, Master, cosimulate
@@ -116,9 +118,10 @@ def _compare(ref, other):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--duration", type=float, default=1.0, help="simulated time [s] of the 20 -> 250 krpm ramp")
+    ap.add_argument("--duration", type=positive, default=1.0, help="simulated time [s] of the 20 -> 250 krpm ramp")
     ap.add_argument("--build", default="build")
-    ap.add_argument("--unbalance", type=float, default=0.0, help="turbine-wheel unbalance [kg m] (0.1 g mm = 1e-7)")
+    ap.add_argument("--unbalance", type=nonnegative, default=0.0,
+                    help="turbine-wheel unbalance [kg m] (0.1 g mm = 1e-7)")
     ap.add_argument("--no-monolithic", action="store_true", help="skip the monolithic run")
     args = ap.parse_args(argv)
     ssp = built_ssp(args.build)
@@ -145,6 +148,9 @@ def main(argv=None):
         print(f"{'ratio co-sim fixed / monolithic':<46}{t_fixed / t_mono:10.2f}   (target <= 1.5)")
         print(f"{'ratio co-sim adaptive / monolithic':<46}{t_adapt / t_mono:10.2f}")
     print(f"{'cost of a one-value FMI call [us]':<46}{call_cost * 1e6:10.2f}")
+    stopped = [f"{n}: {s}" for n, s in (("fixed 10 us", s_fixed), ("adaptive", s_adapt)) if s != "finished"]
+    if stopped:  # nothing to split per step or compare
+        raise CosimStopped(f"the co-simulation did not finish ({'; '.join(stopped)})")
     _split("fixed 10 us", fixed, t_fixed, call_cost)
     _split(f"adaptive (tolerance {adapt.meta['coupling_tol']:g}, steps {adapt.meta['shortest_step_s'] * 1e6:.2f} ... "
            f"{adapt.meta['longest_step_s'] * 1e6:.2f} us, {adapt.meta['forced_steps']} forced)", adapt, t_adapt,
@@ -156,4 +162,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -19,6 +19,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from _cli import run_script  # (benchmarks/ is the script's folder)
+
 import frbmodel as frb
 from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.master import cosimulate, operating_point_overrides
@@ -131,4 +133,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

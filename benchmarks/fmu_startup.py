@@ -21,6 +21,8 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
+from _cli import count, run_script  # (benchmarks/ is the script's folder)
+
 from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.loader import PYTHONFMU_SUFFIX, find_compiler, install_loader
 
@@ -49,7 +51,7 @@ def start(host, fmu, workdir, env, steps):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default="build")
-    ap.add_argument("--steps", type=int, default=1)
+    ap.add_argument("--steps", type=count, default=1)
     args = ap.parse_args(argv)
     cc = find_compiler()
     if cc is None:
@@ -76,4 +78,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _cli import count, run_script  # (benchmarks/ is the script's folder)
 
 import frbmodel as frb
 
@@ -65,7 +66,7 @@ def ross_times(counts, python, repeat):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--ross-python", default=os.environ.get("FRB_ROSS_PYTHON"))
-    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--repeat", type=count, default=5)
     args = ap.parse_args(argv)
     tc = frb.turbocharger(36e-6)
     print(f"frbmodel {frb.__version__}, numpy {np.__version__}, Python {sys.version.split()[0]}")
@@ -114,4 +115,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -45,6 +45,7 @@ import uuid
 from pathlib import Path
 
 import numpy as np
+from _cli import positive, run_script, whole  # (benchmarks/ is the script's folder)
 
 import frbmodel as frb
 from frbmodel.cosim.build import built_ssp
@@ -443,9 +444,9 @@ def _print_checks(params, checks, ref):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default="build", help="folder of frb build-fmus (built if missing)")
-    ap.add_argument("--step", type=float, default=1e-5, help="macro step H [s] of every master (default: 10 us)")
-    ap.add_argument("--halvings", type=int, default=1, help="also run each co-simulation at H/2, H/4, ... (default: 1;"
-                    " 0: only H)")
+    ap.add_argument("--step", type=positive, default=1e-5, help="macro step H [s] of every master (default: 10 us)")
+    ap.add_argument("--halvings", type=whole, default=1,
+                    help="also run each co-simulation at H/2, H/4, ... (default: 1; 0: only H)")
     args = ap.parse_args(argv)
     ssp_path = built_ssp(args.build)
     t0 = time.perf_counter()
@@ -475,4 +476,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -16,6 +16,7 @@ import argparse
 import time
 
 import numpy as np
+from _cli import count, positive, run_script  # (benchmarks/ is the script's folder)
 from numba import njit
 
 import frbmodel as frb
@@ -46,8 +47,8 @@ def _rhs_cost_us(tc):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--duration", type=float, default=1.0)
-    ap.add_argument("--repeats", type=int, default=1)
+    ap.add_argument("--duration", type=positive, default=1.0)
+    ap.add_argument("--repeats", type=count, default=1)
     args = ap.parse_args(argv)
     tc = frb.turbocharger(36e-6)
     for integrator in INTEGRATORS:  # compile / load the numba kernels of both paths
@@ -79,4 +80,4 @@ def main(argv=None):
           f"{min(walls['lsoda']) / min(walls[best]):.2f}x faster than scipy's LSODA (target >= 2)")
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

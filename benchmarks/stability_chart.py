@@ -15,14 +15,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _cli import count, run_script  # (benchmarks/ is the script's folder)
 
 from frbmodel.sweep import grid, plot_stability_chart, run_study
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--clearances", type=int, default=8, help="outer clearances, 30 ... 50 um")
-    ap.add_argument("--viscosities", type=int, default=5, help="viscosity scales, 0.5 ... 2 (geometric)")
+    ap.add_argument("--clearances", type=count, default=8, help="outer clearances, 30 ... 50 um")
+    ap.add_argument("--viscosities", type=count, default=5, help="viscosity scales, 0.5 ... 2 (geometric)")
     ap.add_argument("--out", default="results/bench_chart")
     args = ap.parse_args(argv)
     out = Path(args.out)
@@ -42,4 +43,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

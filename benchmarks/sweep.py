@@ -29,6 +29,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from _cli import positive, run_script  # (benchmarks/ is the script's folder)
+
 from frbmodel.sweep import estimated_cost_s, grid, prepare_worker, run_study, run_summary
 
 
@@ -98,7 +100,7 @@ def _worker_lines(summary):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--duration", type=float, default=0.5)
+    ap.add_argument("--duration", type=positive, default=0.5)
     ap.add_argument("--no-running-cluster", action="store_true", help="skip the study on an already running cluster")
     args = ap.parse_args(argv)
     cases = grid({"outer_clearance": [36e-6, 38e-6, 40e-6, 42e-6], "unbalance_turbine": [0.0, 1e-6]}, "runup",
@@ -145,4 +147,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -182,3 +182,25 @@ def test_build_fmus_without_sources_names_what_is_missing_and_the_fix(tmp_path, 
     monkeypatch.setattr(build, "PACKAGE_DATA", checkout / "frbmodel" / "_data")
     with pytest.raises(frb.FRBError, match=f"the checkout '{checkout}' lacks fmu_src/"):
         build.find_source()
+
+
+@pytest.mark.parametrize("script, args, words", [
+    ("build_fmu.py", ["--out", "x"], ["unrecognized arguments: --out"]),
+    ("benchmarks/cosim.py", ["--duration", "-1"], ["argument --duration: '-1' is invalid", "finite and > 0"]),
+    ("benchmarks/cosim.py", ["--unbalance=-1e-7"], ["argument --unbalance", "finite and >= 0"]),
+    ("benchmarks/masters.py", ["--halvings", "-1"], ["argument --halvings", "an integer >= 0"]),
+    ("benchmarks/sweep.py", ["--duration", "nan"], ["argument --duration: 'nan' is invalid"]),
+    ("benchmarks/continuation.py", ["--points", "x"], ["argument --points: 'x' is not a number"]),
+])
+def test_scripts_refuse_bad_arguments_with_exit_2_before_any_work(tmp_path, script, args, words):
+    """The scripts a user runs from the checkout: a bad argument is one line naming it, its value and the valid
+    range, exit status 2, nothing created (build_fmu.py once took '--help' or '--out' for its output folder)."""
+    p = subprocess.run([sys.executable, str(ROOT / script), *args], cwd=tmp_path, capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 2, p.stderr
+    assert "Traceback" not in p.stderr and all(w in p.stderr for w in words), p.stderr
+    assert list(tmp_path.iterdir()) == []
+    if script == "build_fmu.py":
+        p = subprocess.run([sys.executable, str(ROOT / script), "--help"], cwd=tmp_path, capture_output=True,
+                           text=True, timeout=120)
+        assert p.returncode == 0 and "out_dir" in p.stdout and list(tmp_path.iterdir()) == []
