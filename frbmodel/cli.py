@@ -1221,7 +1221,8 @@ def _add_cosim(sub):
                          "and label the onsets that move by > 1 %% as not converged")
     cs.add_argument("--unvalidated-step", action="store_true",
                     help="allow a macro step outside the validated range 1e-7 ... 2e-5 s")
-    cs.add_argument("--trace-fmi", action="store_true", help="print every FMI call with its arguments and status")
+    cs.add_argument("--trace-fmi", action="store_true",
+                    help="print every FMI call with its arguments and status, and every message the FMUs log")
     cs.add_argument("--no-figure", action="store_true")
     cs.add_argument("--out", default="results/cosim")
     cs.set_defaults(func=cmd_cosim)

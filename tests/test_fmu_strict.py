@@ -53,7 +53,7 @@ _LOGGER = fmi2CallbackLoggerTYPE(_log)
 class Host:
     """One FMU instance driven by fmpy's FMU2Slave; records every logged message with its status."""
 
-    def __init__(self, fmu, name, tmp):
+    def __init__(self, fmu, name, tmp, logging_on=True):
         self.md = read_model_description(str(fmu))
         self.dir = extract(str(fmu), unzipdir=str(tmp / name))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
@@ -68,12 +68,14 @@ class Host:
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         _HOSTS[name] = self
-        self.slave.instantiate(callbacks=cb, loggingOn=True)
+        self.slave.instantiate(callbacks=cb, loggingOn=logging_on)
 
     def __call__(self, expected, function, *args):
         """``slave.<function>(*args)``; the slave must report ``expected`` (the worst status of the messages it
         logged during the call; pythonfmu's own fmi2Fatal message aside) and an FMU with the status marker must
         also return it. Returns (value or None, the messages of the call joined)."""
+        self._callbacks.logger = _LOGGER  # the proxy forwards to the last logger given to it (frbmodel's master
+        addLoggerProxy(byref(self._callbacks))  # gives it its own): make it this module's again
         n = len(self.messages)
         try:
             value, returned = getattr(self.slave, function)(*args), OK
@@ -119,8 +121,8 @@ def judge(*hosts):
                      f"OK, Discard from doStep and Fatal; the slave reported the right statuses, but: {bad[:4]}")
 
 
-def _bearing(built, name, tmp):
-    return Host(built / "fmus" / "FloatingRingBearing.fmu", name, tmp)
+def _bearing(built, name, tmp, logging_on=True):
+    return Host(built / "fmus" / "FloatingRingBearing.fmu", name, tmp, logging_on)
 
 
 def _rotor(built, name, tmp):
@@ -261,6 +263,32 @@ def test_invalid_parameters_are_an_error_naming_quantity_value_and_range(built, 
         _, msg = h(ERROR, "doStep", 0.0, 1e-5)
         assert "failed" in msg
     judge(h)
+
+
+def test_reasons_reach_a_host_that_instantiated_with_logging_off(built, tmp_path):
+    """Most FMI hosts instantiate with loggingOn = fmi2False. The reason of a status above fmi2OK must still reach
+    their logger (as the Modelica Reference FMUs log errors whatever loggingOn says; pythonfmu alone drops every
+    message then), until the host switches all logging off with fmi2SetDebugLogging(fmi2False, 0, NULL): then the
+    status is still returned, without a message."""
+    h = _bearing(built, "quiet", tmp_path, logging_on=False)
+    if not h.mapped:
+        pytest.skip("the FMU binary is pythonfmu's own (no frbmodel loader: no C compiler at build time)")
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    assert h.messages == []  # nothing logged with status OK reaches it
+    h.set("setReal", ["ring.mass"], [-1.0])
+    _, msg = h(ERROR, "exitInitializationMode")  # (fails unless the Error's message arrived)
+    assert "ring.mass" in msg and "valid range (0, inf) kg" in msg, msg
+    judge(h)
+    off = _bearing(built, "silenced", tmp_path, logging_on=False)
+    off.slave.setDebugLogging(False, [])
+    off(OK, "setupExperiment", None, 0.0, None)
+    off(OK, "enterInitializationMode")
+    off.set("setReal", ["ring.mass"], [-1.0])
+    with pytest.raises(FMICallException) as ei:
+        off.slave.exitInitializationMode()
+    assert int(ei.value.status) == ERROR and off.messages == []
+    judge(off)
 
 
 def test_rotor_file_of_another_structure_is_refused(built, tmp_path):

@@ -340,14 +340,19 @@ static int ensure_loaded(const char *resource_uri) {
  * never fmi2Warning or fmi2Error. The frbmodel slaves log every refusal with the status the call must return;
  * pythonfmu hands those messages to the logger callback at the end of the call. The loader therefore gives
  * pythonfmu its own logger (always on), returns the worst of pythonfmu's status and the statuses logged during
- * the call, and passes each message on to the host's logger when the host's logging settings
- * (fmi2Instantiate loggingOn, fmi2SetDebugLogging categories) let it through, as pythonfmu would. The FMU's
- * resources/frb_status_from_log tells the slaves that their logged statuses are returned. */
+ * the call, and passes each message on to the host's logger: a message with a status above fmi2OK (the reason
+ * of a warning, a discarded step, a refused call) always, as the Modelica Reference FMUs log errors whatever
+ * loggingOn says, until the host switches logging off with fmi2SetDebugLogging(fmi2False, 0, NULL); an fmi2OK
+ * message when the host's settings (fmi2Instantiate loggingOn, fmi2SetDebugLogging categories) let it through.
+ * (pythonfmu itself drops every message when loggingOn is fmi2False: a host that instantiates with logging off,
+ * as most do, would see Discard and Error without a reason.) The FMU's resources/frb_status_from_log tells the
+ * slaves that their logged statuses are returned. */
 typedef struct {
     fmi2Component real;          /* pythonfmu's instance */
     fmi2CallbackFunctions host;  /* the host's callbacks */
     fmi2CallbackFunctions mine;  /* given to pythonfmu: relay() as logger, this instance as environment */
     int logging;                 /* the host's loggingOn */
+    int reasons;                 /* pass messages above fmi2OK (off once the host switched all logging off) */
     size_t n_categories;         /* the host's categories (none: all) */
     char **categories;
     fmi2Status worst;            /* worst status logged during the current call */
@@ -360,12 +365,18 @@ static void clear_categories(Instance *in) {
     in->n_categories = 0;
 }
 
-static int category_shown(const Instance *in, fmi2String category) {
-    if (!in->logging) return 0;
-    if (in->n_categories == 0) return 1;
+static int listed(const Instance *in, fmi2String category) {
     for (size_t i = 0; i < in->n_categories; ++i)
         if (!strcmp(in->categories[i], category ? category : "")) return 1;
     return 0;
+}
+
+/* a category the host named follows its on/off; else a reason (status above fmi2OK) unless the host switched all
+   logging off; else an fmi2OK message when the host's logging is on for all categories */
+static int message_shown(const Instance *in, fmi2Status status, fmi2String category) {
+    if (in->n_categories && listed(in, category)) return in->logging;
+    if (status > fmi2OK && status != fmi2Pending && in->reasons) return 1;
+    return in->logging && in->n_categories == 0;
 }
 
 /* pythonfmu passes each message as the format string without arguments: passed on as "%s" so that a '%' in a
@@ -374,7 +385,7 @@ static void relay(fmi2ComponentEnvironment env, fmi2String name, fmi2Status stat
                   fmi2String message, ...) {
     Instance *in = (Instance *)env;
     if (status != fmi2Pending && status > in->worst) in->worst = status;
-    if (in->host.logger && category_shown(in, category))
+    if (in->host.logger && message_shown(in, status, category))
         in->host.logger(in->host.componentEnvironment, name, status, category, "%s", message ? message : "");
 }
 
@@ -404,6 +415,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     if (!in) return NULL;
     if (cb) in->host = *cb;
     in->logging = logging;
+    in->reasons = 1;
     in->mine.logger = relay;
     in->mine.allocateMemory = cb ? cb->allocateMemory : NULL;
     in->mine.freeMemory = cb ? cb->freeMemory : NULL;
@@ -431,6 +443,7 @@ EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
     if (!loaded || !in) return fmi2Error;
     clear_categories(in);
     in->logging = on;
+    if (!(n && cat)) in->reasons = on;  /* all categories: the reasons too; named ones: as listed */
     if (n && cat) {
         in->categories = (char **)calloc(n, sizeof(char *));
         if (!in->categories) return fmi2Error;

@@ -6,6 +6,12 @@ Discard, Error and Fatal) and, with a ``trace`` callable, logs each call with it
 spent in them per FMI function (:attr:`FmuInstance.calls`; two clock reads per call, ~0.1 µs against the 3-6 µs
 of an FMI call through ctypes and pythonfmu), from which ``benchmarks/cosim.py`` splits a macro step's time.
 
+The FMU's log messages come to :meth:`FmuInstance._on_log` (its own logger callback; fmpy's default one prints
+to stdout): they are kept (:attr:`FmuInstance.messages`), passed to ``trace``, and the ones logged during a call
+that failed make the :class:`FmiCallFailed` message, so that a stopped co-simulation says why, not only which
+status came back. The instance is created with loggingOn = fmi2False (fmi2True with ``trace``): the frbmodel
+FMUs (through their loader) log the reason of every status above fmi2OK whatever loggingOn says.
+
 getReal and setReal, the per-step traffic, call the FMU's fmi2GetReal / fmi2SetReal directly with C arrays of the
 value references (and a value buffer) made once per list of value references: fmpy's ``getReal`` / ``setReal``
 build both arrays at every call (measured in the main job's exchange: 7.3 -> 3.1 us for 15 values read, 11.8 ->
@@ -13,6 +19,7 @@ build both arrays at every call (measured in the main job's exchange: 7.3 -> 3.1
 """
 from __future__ import annotations
 
+import collections
 import ctypes
 import time
 from pathlib import Path
@@ -23,11 +30,14 @@ from ..errors import CosimStopped, ParameterError
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
 #: most lists of value references whose C arrays an instance keeps per direction (a master uses a handful)
 MAX_PLANS = 256
+#: log messages an instance keeps (the newest)
+MAX_MESSAGES = 200
 
 
 class FmiCallFailed(CosimStopped):
     """An FMI function returned Discard, Error or Fatal. ``.fmu`` (instance name), ``.function``, ``.status``
-    (fmi2Status value; 2 = Discard, the only one a master may retry after a rollback).
+    (fmi2Status value; 2 = Discard, the only one a master may retry after a rollback), ``.reasons`` (the messages
+    the FMU logged during the call, without the instance-name prefix).
 
     Parameters
     ----------
@@ -37,20 +47,27 @@ class FmiCallFailed(CosimStopped):
         Name of the FMI function (fmpy ``FMU2Slave`` method, e.g. ``"doStep"``).
     status : int
         The returned fmi2Status value.
+    reasons : list of str, optional
+        What the FMU logged during the call; the first one is in the message.
 
     Examples
     --------
-    >>> exc = FmiCallFailed("bearing_t", "doStep", 2)
+    >>> exc = FmiCallFailed("bearing_t", "doStep", 2, ["inner film: eccentricity ratio 1.2 >= 1", "ring ..."])
     >>> print(exc)
-    bearing_t: doStep returned status Discard (see the FMU log above)
+    bearing_t: doStep returned status Discard: inner film: eccentricity ratio 1.2 >= 1 (and 1 more message)
     >>> exc.discarded
     True
+    >>> print(FmiCallFailed("bearing_t", "doStep", 3))
+    bearing_t: doStep returned status Error (the FMU logged no reason)
     """
 
-    def __init__(self, fmu, function, status):
-        super().__init__(f"{fmu}: {function} returned status {STATUS[status] if 0 <= status < 6 else status} "
-                         "(see the FMU log above)")
-        self.fmu, self.function, self.status = fmu, function, status
+    def __init__(self, fmu, function, status, reasons=()):
+        reasons = list(reasons)
+        more = len(reasons) - 1
+        why = (f": {reasons[0]}" + (f" (and {more} more message{'s' if more > 1 else ''})" if more > 0 else "")
+               if reasons else " (the FMU logged no reason)")
+        super().__init__(f"{fmu}: {function} returned status {STATUS[status] if 0 <= status < 6 else status}{why}")
+        self.fmu, self.function, self.status, self.reasons = fmu, function, status, reasons
 
     @property
     def discarded(self):
@@ -77,6 +94,8 @@ class FmuInstance:
     calls : dict
         ``{function: [number of calls, wall time inside them [s]]}`` of every :meth:`call` so far (failed ones
         included).
+    messages : collections.deque
+        ``(status, message)`` of the messages the FMU logged, the newest :data:`MAX_MESSAGES`.
     """
 
     def __init__(self, name, path, unzip_root, trace=None):
@@ -99,7 +118,24 @@ class FmuInstance:
         self._c_step = self.slave.dll.fmi2DoStep
         self._get_plans, self._set_plans = {}, {}
         self._fast = {"getReal": self._get_real, "setReal": self._set_real, "doStep": self._do_step}
-        self.call("instantiate", True)
+        self.messages = collections.deque(maxlen=MAX_MESSAGES)
+        self._logged = 0  # messages logged so far (the reasons of a failed call are the ones logged during it)
+        self._callbacks = _callbacks(self)  # (kept: the FMU calls them until it is freed)
+        self.call("instantiate", True, self._callbacks, trace is not None)
+
+    def _on_log(self, env, instance, status, category, message):
+        """The FMU's logger callback (through fmpy's native proxy, which formats the message)."""
+        text = message.decode("utf-8", "replace") if message else ""
+        self.messages.append((int(status), text))
+        self._logged += 1
+        if self.trace is not None:
+            self.trace(f"{self.name} log [{STATUS[status] if 0 <= status < 6 else status}] {text}")
+
+    def _reasons(self, since):
+        """The messages logged after the first ``since`` ones, without the FMU's "<instance>: " prefix."""
+        new = list(self.messages)[-(self._logged - since):] if self._logged > since else []
+        prefix = f"{self.name}: "
+        return [m[len(prefix):] if m.startswith(prefix) else m for _, m in new]
 
     def call(self, function, *args):
         """``slave.<function>(*args)`` with status check (and trace).
@@ -121,7 +157,7 @@ class FmuInstance:
         FmiCallFailed
             If the function returned Discard, Error or Fatal.
         """
-        t0 = time.perf_counter()
+        t0, logged = time.perf_counter(), self._logged
         try:
             fast = self._fast.get(function)
             out = fast(*args) if fast is not None else getattr(self.slave, function)(*args)
@@ -129,7 +165,7 @@ class FmuInstance:
             self._count(function, t0)
             if self.trace is not None:
                 self.trace(f"{self.name}.{function}{_brief(args)} -> {STATUS[int(exc.status)]}")
-            raise FmiCallFailed(self.name, function, int(exc.status)) from None
+            raise FmiCallFailed(self.name, function, int(exc.status), self._reasons(logged)) from None
         stat = self.calls.get(function)  # (inline: this runs ~20 times per macro step)
         if stat is None:
             stat = self.calls[function] = [0, 0.0]
@@ -249,7 +285,55 @@ class FmuInstance:
                 self.call(function)
             except Exception:  # noqa: BLE001  (a failed FMU may refuse terminate; freeInstance must still run)
                 pass
+        _LISTENERS.pop(id(self), None)
         sys.path[:] = [p for p in sys.path if not p.startswith(str(self.dir))]
+
+
+#: {componentEnvironment value: FmuInstance} of the instances alive, for :func:`_dispatch_log`
+_LISTENERS = {}
+_DISPATCH = []  # the one logger callback object (made at first use, kept for the life of the process)
+
+
+def _dispatch_log(env, instance, status, category, message):
+    """The logger of every FmuInstance: the message goes to the instance whose componentEnvironment it carries.
+    fmpy's native proxy, which formats a message with its variadic arguments, keeps one Python logger for the whole
+    process (the last one given to it): messages of other fmpy users (no such environment) are printed as fmpy
+    prints them."""
+    fmu = _LISTENERS.get(env)
+    if fmu is not None:
+        fmu._on_log(env, instance, status, category, message)
+    else:
+        from fmpy.fmi1 import printLogMessage
+
+        printLogMessage(env, instance, status, category, message)
+
+
+def _callbacks(fmu):
+    """fmi2CallbackFunctions for ``fmu``: :func:`_dispatch_log` behind fmpy's native formatting proxy as the
+    logger, ``id(fmu)`` as componentEnvironment, the C runtime's calloc/free."""
+    from fmpy import calloc, free
+    from fmpy.fmi2 import (
+        fmi2CallbackAllocateMemoryTYPE,
+        fmi2CallbackFreeMemoryTYPE,
+        fmi2CallbackFunctions,
+        fmi2CallbackLoggerTYPE,
+    )
+
+    if not _DISPATCH:
+        _DISPATCH.append(fmi2CallbackLoggerTYPE(_dispatch_log))
+    cb = fmi2CallbackFunctions()
+    cb.logger = _DISPATCH[0]
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    cb.componentEnvironment = id(fmu)
+    _LISTENERS[id(fmu)] = fmu
+    try:
+        from fmpy.logging import addLoggerProxy
+
+        addLoggerProxy(ctypes.byref(cb))  # (sets the proxy's logger to _DISPATCH again, whoever set it last)
+    except Exception:  # noqa: BLE001  (no native proxy on this platform: messages arrive unformatted)
+        pass
+    return cb
 
 
 def _plan(vr):

@@ -449,7 +449,7 @@ class Master:
                         stash[src.name], v = v[n:], v[:n]
                     if not math.isfinite(sum(v)):
                         names = [n for n, var in src.vars.items() if var.valueReference in gets[i][1]]
-                        raise CosimStopped(f"{src.name}: non-finite output among {names} (see the FMU log)")
+                        raise CosimStopped(f"{src.name}: non-finite output among {names}, with status OK")
                     vals += v
                 self._xvals[phase] = vals
                 for dst, dvr, idx in sets:
@@ -490,7 +490,7 @@ class Master:
             self._set_rotor_inputs(t)
             self.rotor.call("doStep", t, h, True)
         except FmiCallFailed as exc:
-            return str(exc).replace(" (see the FMU log above)", ""), exc.discarded, exc.fmu
+            return str(exc), exc.discarded, exc.fmu
         except CosimStopped as exc:
             return str(exc), True, None
         finally:
@@ -522,11 +522,10 @@ class Master:
                 self.exchange()
                 continue
             if failure is not None:
-                msg, retryable, who = failure
+                msg, retryable, _ = failure
                 tried = (f" (after {self.max_halvings} step halvings with rollback)"
                          if retryable and self.rollback else "")
-                raise CosimStopped(f"{msg} in the interval t = {t:.6g} s + {h:.3g} s{tried}" +
-                                   ("; see the FMU log above" if who else ""))
+                raise CosimStopped(f"{msg} in the interval t = {t:.6g} s + {h:.3g} s{tried}")
             t += h
             self.steps_taken += 1
             if not self._primed:
@@ -545,10 +544,9 @@ class Master:
         at_min = h <= self.min_step * (1.0 + 1e-9)
         if failure is not None and (not failure[1] or at_min):
             self._restore_and_free(states, restore=False)
-            msg, retryable, who = failure
+            msg, retryable, _ = failure
             raise CosimStopped(f"{msg} in the interval t = {t:.6g} s + {h:.3g} s" +
-                               (" (adaptive step at its min_step)" if retryable else "") +
-                               ("; see the FMU log above" if who else ""))
+                               (" (adaptive step at its min_step)" if retryable else ""))
         err = math.inf if failure is not None else (
             self.coupling_error(before, self._evals, self._xvals[1], h) if t > 0 else 0.0)
         accepted = err <= 1.0 or at_min
