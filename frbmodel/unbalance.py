@@ -740,7 +740,10 @@ def _eigenvalue_near(system, m, speed_rpm, guess, kw):
 
 def _refine_crossing(system, m, cd, i, j, kw):
     """Root of Im λ_j(Ω)/2π − Ω/2π between grid speeds i and i+1 (Brent), λ_j followed as the eigenvalue
-    nearest to the linear interpolation of the tracked one; None if the bracket does not hold."""
+    nearest to the linear interpolation of the tracked one; None if the bracket does not hold, or if the root
+    Brent returns is not one: the nearest eigenvalue can switch to another mode inside the interval (where two
+    branches veer), a jump of the function across zero that Brent takes for a root, so the root is kept only
+    where the function vanishes (|f − n/60| <= 1e-6 of n/60; Brent's own tolerance leaves ~1e-9)."""
     from scipy.optimize import brentq
 
     s = cd.speeds_rpm
@@ -760,6 +763,8 @@ def _refine_crossing(system, m, cd, i, j, kw):
     if ga * gb > 0:
         return None
     x = brentq(g, s[i], s[i + 1], xtol=1e-9 * s[i + 1], rtol=1e-12)
+    if abs(g(x)) > 1e-6 * x / 60.0:
+        return None  # a jump between two modes, not a crossing (the grid's linear interpolation stands)
     return x, lam(x)
 
 

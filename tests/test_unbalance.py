@@ -279,3 +279,34 @@ def test_campbell_figure_marks_the_critical_speeds():
             expected.append(speeds[k] - g[k] * (speeds[k + 1] - speeds[k]) / (g[k + 1] - g[k]))
     plt.close(fig)
     np.testing.assert_allclose(got, np.sort(expected), rtol=1e-9)  # same interpolation: round-off only
+
+
+def test_a_jump_between_two_modes_is_not_taken_for_a_critical_speed(monkeypatch):
+    """Inside a grid interval the eigenvalue nearest to the interpolated one can switch to another branch (where
+    two veer). Two branches 5 Hz above and 5 Hz below the 1X line, the tracked one passing from the upper to the
+    lower between the grid speeds: f − n/60 jumps from +5 to −5 Hz without crossing zero. Brent's method took the
+    jump for a root (a critical speed that does not exist); it is refused, so the crossing keeps the grid's linear
+    interpolation (``refined`` False). A true crossing (one branch through 1X) is still refined to its closed form."""
+    import types
+
+    import frbmodel.unbalance as unb
+
+    def branch(offset_hz):
+        return lambda n: 1j * 2 * math.pi * (n / 60.0 + offset_hz) - 10.0
+
+    upper, lower = branch(5.0), branch(-5.0)
+
+    def nearest(system, m, x, guess, kw):
+        cands = [upper(x), lower(x)]
+        return min(cands, key=lambda lam: abs(lam - guess))
+
+    monkeypatch.setattr(unb, "_eigenvalue_near", nearest)
+    cd = types.SimpleNamespace(speeds_rpm=np.array([60e3, 61e3]),
+                               eigenvalues=np.array([[upper(60e3)], [lower(61e3)]]))
+    assert unb._refine_crossing(None, None, cd, 0, 0, {}) is None
+    # a branch that does cross: f = n/60 + 5 Hz − (n − 60 krpm) / 100 Hz/rpm → crossing at 60.5 krpm exactly
+    crossing = lambda n: 1j * 2 * math.pi * (n / 60.0 + 5.0 - (n - 60e3) / 100.0) - 10.0  # noqa: E731
+    monkeypatch.setattr(unb, "_eigenvalue_near", lambda system, m, x, guess, kw: crossing(x))
+    cd.eigenvalues = np.array([[crossing(60e3)], [crossing(61e3)]])
+    speed, lam = unb._refine_crossing(None, None, cd, 0, 0, {})
+    assert speed == pytest.approx(60.5e3, rel=1e-9)  # Brent's xtol, 1e-9 of the speed
