@@ -322,6 +322,23 @@ def test_contact_during_run_stops_master_with_message_and_keeps_results(built, t
     assert ei.value.result.time.size >= 1
 
 
+def test_trace_shows_each_fmi_call_and_each_message_the_fmus_log(built):
+    """``trace`` (``frb cosim --trace-fmi``): one line per FMI call with its status and one per logged message —
+    with it, the FMUs are instantiated with logging on, so also the messages of status OK arrive; the failing call's
+    reason is the message logged during it."""
+    tc = frb.turbocharger(36e-6)
+    ov = operating_point_overrides(tc, 1500.0, perturbation=0.05)
+    ov["turbine"]["contact_eps"] = ("Real", 0.5)
+    lines = []
+    with pytest.raises(CosimStopped):
+        cosimulate(built / "turbocharger.ssp", "co36", stop_time=1e-4, step_size=2e-5, progress=False, overrides=ov,
+                   trace=lines.append)
+    assert any(t.startswith("turbine.doStep(") and t.endswith("-> Discard") for t in lines), lines[-5:]
+    assert any(t.startswith("rotor.setReal(") and "-> OK" in t for t in lines)
+    reason = [t for t in lines if t.startswith("turbine log [Discard]")]
+    assert reason and "contact_eps = 0.5" in reason[-1]
+
+
 def test_version_mismatch_is_refused(built, tmp_path):
     fmu = built / "fmus" / "FloatingRingBearing.fmu"
     s, vr, d = _slave(fmu, "ver", tmp_path)

@@ -87,7 +87,9 @@ class FmuInstance:
     unzip_root : path
         Folder under which the FMU is extracted (``<unzip_root>/<name>``).
     trace : callable, optional
-        ``trace(text)`` receives one line per FMI call: ``"<instance>.<function>(<args>) -> <status>"``.
+        ``trace(text)`` receives one line per FMI call, ``"<instance>.<function>(<args>) -> <status>"``, and one per
+        message the FMU logs, ``"<instance> log [<status>] <message>"`` (the instance is then created with
+        loggingOn = fmi2True, so that messages with status OK come too).
 
     Attributes
     ----------
@@ -121,7 +123,11 @@ class FmuInstance:
         self.messages = collections.deque(maxlen=MAX_MESSAGES)
         self._logged = 0  # messages logged so far (the reasons of a failed call are the ones logged during it)
         self._callbacks = _callbacks(self)  # (kept: the FMU calls them until it is freed)
-        self.call("instantiate", True, self._callbacks, trace is not None)
+        try:
+            self.call("instantiate", True, self._callbacks, trace is not None)
+        except BaseException:
+            _LISTENERS.pop(id(self), None)
+            raise
 
     def _on_log(self, env, instance, status, category, message):
         """The FMU's logger callback (through fmpy's native proxy, which formats the message)."""
