@@ -67,6 +67,7 @@ class FrbSlaveMixin:
         self._input_values = np.zeros(0)  # Real input values, in the order of registration
         self._input_pos = {}  # input name -> position in self._input_values
         self._mode = INSTANTIATED
+        self._failure = ""  # why the instance is in the error state (repeated when a later call is refused)
         self._gen = 0  # counts changes of inputs, parameters and state: output caches compare it
         self._comp = None
         self._units = {}  # variable name -> unit of every Real variable (written by to_xml)
@@ -297,7 +298,7 @@ class FrbSlaveMixin:
         initialization mode); after an error or when the evaluation fails or gives a non-finite value, ``failed``
         with the reason logged (fmi2Error / fmi2Discard), never a silent NaN."""
         if self._mode == ERROR:
-            self._refuse(f"output {name} is not available: the instance failed (see the messages above)")
+            self._refuse(f"output {name} is not available: the instance failed ({self._failure})")
             return failed
         if self._comp is None:
             if self._mode != INITIALIZATION:
@@ -348,7 +349,7 @@ class FrbSlaveMixin:
             self._mode = STEP
             self._changed()
             return
-        self._mode, self._comp = ERROR, None
+        self._mode, self._comp, self._failure = ERROR, None, msg
         self._refuse(msg)
         if not self._status_from_log:
             raise RuntimeError(msg)
@@ -402,7 +403,7 @@ class FrbSlaveMixin:
             return {INSTANTIATED: "doStep called before initialization (fmi2ExitInitializationMode)",
                     INITIALIZATION: "doStep called in initialization mode (call fmi2ExitInitializationMode first)",
                     TERMINATED: "doStep called after fmi2Terminate",
-                    ERROR: "doStep called after the instance failed (see the messages above)"}[self._mode]
+                    ERROR: f"doStep called after the instance failed ({self._failure})"}[self._mode]
         if not (math.isfinite(h) and h > 0):
             return f"doStep communicationStepSize = {h!r} s is invalid: valid range (0, inf) s"
         if not math.isfinite(t):
@@ -417,7 +418,8 @@ class FrbSlaveMixin:
     # the component's own state — not pythonfmu's default, which calls every getter (all outputs, all linearization
     # matrices) and cannot bring a slave back after a failed step.
     def _get_fmu_state(self):
-        state = {"_values": dict(self._values), "_input_values": self._input_values.copy(), "_mode": self._mode}
+        state = {"_values": dict(self._values), "_input_values": self._input_values.copy(), "_mode": self._mode,
+                 "_failure": self._failure}
         if self._comp is not None:
             state["_component"] = self._component_state()
         return state
@@ -425,7 +427,7 @@ class FrbSlaveMixin:
     def _set_fmu_state(self, state):
         self._values = dict(state["_values"])
         self._input_values[:] = state["_input_values"]
-        self._mode = state["_mode"]
+        self._mode, self._failure = state["_mode"], state.get("_failure", "")
         if self._comp is not None and state.get("_component") is not None:
             self._set_component_state(state["_component"])
         self._changed()

@@ -3,6 +3,7 @@ an independent master (libcosim), SSP content and bad input."""
 import math
 import re
 import shutil
+from ctypes import byref
 from pathlib import Path
 
 import numpy as np
@@ -337,6 +338,45 @@ def test_trace_shows_each_fmi_call_and_each_message_the_fmus_log(built):
     assert any(t.startswith("rotor.setReal(") and "-> OK" in t for t in lines)
     reason = [t for t in lines if t.startswith("turbine log [Discard]")]
     assert reason and "contact_eps = 0.5" in reason[-1]
+
+
+def test_a_failed_call_reports_the_reasons_logged_during_it(built, tmp_path):
+    """FmuInstance (the master's one FMI helper): the reason of a failed call is the first message above OK logged
+    during that call, with the number of them; a later failure does not repeat an earlier one's; a '%' in a message
+    arrives as written (the loader passes messages as format strings without arguments); another fmpy user giving
+    fmpy's process-wide formatting proxy its own logger does not take the messages away."""
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    from fmpy.logging import addLoggerProxy
+
+    from frbmodel.cosim.fmu import FmiCallFailed, FmuInstance
+
+    other = []
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(lambda *a: other.append(a))
+    f = FmuInstance("turbine", built / "fmus" / "FloatingRingBearing.fmu", tmp_path)
+    addLoggerProxy(byref(cb))  # e.g. fmpy.simulate_fmu(logger=...) in the same process
+    try:
+        f.call("setupExperiment", None, 0.0, None)
+        f.call("enterInitializationMode")
+        f.call("setString", f.vr(["film_model"]), ["50%s"])
+        with pytest.raises(FmiCallFailed) as first:
+            f.call("exitInitializationMode")
+        assert first.value.status == 3 and first.value.n_reasons == 1, str(first.value)
+        assert "film_model = '50%s'" in first.value.reason and "valid values" in first.value.reason
+        with pytest.raises(FmiCallFailed) as second:
+            f.call("doStep", 0.0, 1e-5)
+        assert second.value.reason.startswith("doStep called after the instance failed (invalid parameters")
+        assert second.value.n_reasons == 1 and "50%s" in second.value.reason
+    finally:
+        f.free()
+        # give fmpy's proxy its own printing logger back (ours is freed with this test: a later fmpy user with the
+        # default callbacks would call into freed memory)
+        from fmpy.fmi1 import printLogMessage
+        from fmpy.fmi2 import defaultCallbacks
+
+        defaultCallbacks.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+        addLoggerProxy(byref(defaultCallbacks))
+    assert other == []
 
 
 def test_version_mismatch_is_refused(built, tmp_path):

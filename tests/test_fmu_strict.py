@@ -74,8 +74,8 @@ class Host:
         """``slave.<function>(*args)``; the slave must report ``expected`` (the worst status of the messages it
         logged during the call; pythonfmu's own fmi2Fatal message aside) and an FMU with the status marker must
         also return it. Returns (value or None, the messages of the call joined)."""
-        self._callbacks.logger = _LOGGER  # the proxy forwards to the last logger given to it (frbmodel's master
-        addLoggerProxy(byref(self._callbacks))  # gives it its own): make it this module's again
+        self._callbacks.logger = _LOGGER  # fmpy's proxy forwards to the last logger given to it (another fmpy user,
+        addLoggerProxy(byref(self._callbacks))  # e.g. simulate_fmu, may have given it its own): this module's again
         n = len(self.messages)
         try:
             value, returned = getattr(self.slave, function)(*args), OK
@@ -275,7 +275,6 @@ def test_reasons_reach_a_host_that_instantiated_with_logging_off(built, tmp_path
         pytest.skip("the FMU binary is pythonfmu's own (no frbmodel loader: no C compiler at build time)")
     h(OK, "setupExperiment", None, 0.0, None)
     h(OK, "enterInitializationMode")
-    assert h.messages == []  # nothing logged with status OK reaches it
     h.set("setReal", ["ring.mass"], [-1.0])
     _, msg = h(ERROR, "exitInitializationMode")  # (fails unless the Error's message arrived)
     assert "ring.mass" in msg and "valid range (0, inf) kg" in msg, msg
@@ -288,7 +287,25 @@ def test_reasons_reach_a_host_that_instantiated_with_logging_off(built, tmp_path
     with pytest.raises(FMICallException) as ei:
         off.slave.exitInitializationMode()
     assert int(ei.value.status) == ERROR and off.messages == []
+    off.slave.setDebugLogging(True, [])  # all on again: the refusal of the next call arrives
+    with pytest.raises(FMICallException):
+        off.slave.doStep(0.0, 1e-5)
+    assert [s for s, _ in off.messages] == [ERROR] and "ring.mass" in off.messages[0][1]  # the failure repeated
     judge(off)
+    # a category the host names follows its on/off, the others keep their reasons
+    cat = _bearing(built, "categories", tmp_path, logging_on=False)
+    cat.slave.setDebugLogging(False, ["logStatusError"])
+    cat(OK, "setupExperiment", None, 0.0, None)
+    cat(OK, "enterInitializationMode")
+    cat.set("setReal", ["ring.mass"], [-1.0])
+    with pytest.raises(FMICallException):
+        cat.slave.exitInitializationMode()
+    assert cat.messages == []
+    cat.slave.setDebugLogging(True, ["logAll"])  # pythonfmu's "all categories"
+    with pytest.raises(FMICallException):
+        cat.slave.doStep(0.0, 1e-5)
+    assert [s for s, _ in cat.messages] == [ERROR]
+    judge(cat)
 
 
 def test_rotor_file_of_another_structure_is_refused(built, tmp_path):

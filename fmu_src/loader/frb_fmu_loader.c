@@ -365,9 +365,10 @@ static void clear_categories(Instance *in) {
     in->n_categories = 0;
 }
 
+/* "logAll" (a category pythonfmu declares) names every category */
 static int listed(const Instance *in, fmi2String category) {
     for (size_t i = 0; i < in->n_categories; ++i)
-        if (!strcmp(in->categories[i], category ? category : "")) return 1;
+        if (!strcmp(in->categories[i], "logAll") || !strcmp(in->categories[i], category ? category : "")) return 1;
     return 0;
 }
 
@@ -379,14 +380,34 @@ static int message_shown(const Instance *in, fmi2Status status, fmi2String categ
     return in->logging && in->n_categories == 0;
 }
 
-/* pythonfmu passes each message as the format string without arguments: passed on as "%s" so that a '%' in a
-   message is printed, not interpreted by the host */
+/* pythonfmu passes each message as the format string without arguments. It is passed on as a format string
+   without arguments too, each '%' doubled: a host that formats (as the standard asks) prints the message, and a
+   logger that cannot read variadic arguments (a Python ctypes callback without a formatting proxy) gets the whole
+   text, not a bare "%s" */
 static void relay(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                   fmi2String message, ...) {
     Instance *in = (Instance *)env;
+    const char *text = message ? message : "";
+    size_t n = 0, percents = 0;
+    char *escaped;
     if (status != fmi2Pending && status > in->worst) in->worst = status;
-    if (in->host.logger && message_shown(in, status, category))
-        in->host.logger(in->host.componentEnvironment, name, status, category, "%s", message ? message : "");
+    if (!in->host.logger || !message_shown(in, status, category)) return;
+    for (const char *p = text; *p; ++p, ++n) percents += *p == '%';
+    if (!percents) {
+        in->host.logger(in->host.componentEnvironment, name, status, category, text);
+        return;
+    }
+    escaped = (char *)malloc(n + percents + 1);
+    if (!escaped) {  /* out of memory: the message as an argument (a formatting host still prints it) */
+        in->host.logger(in->host.componentEnvironment, name, status, category, "%s", text);
+        return;
+    }
+    for (char *q = escaped; ; ++text) {
+        if (*text == '%') *q++ = '%';
+        if (!(*q++ = *text)) break;
+    }
+    in->host.logger(in->host.componentEnvironment, name, status, category, escaped);
+    free(escaped);
 }
 
 static void relay_step_finished(fmi2ComponentEnvironment env, fmi2Status status) {
@@ -447,8 +468,12 @@ EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
     if (n && cat) {
         in->categories = (char **)calloc(n, sizeof(char *));
         if (!in->categories) return fmi2Error;
-        for (size_t i = 0; i < n; ++i) in->categories[i] = strdup(cat[i] ? cat[i] : "");
         in->n_categories = n;
+        for (size_t i = 0; i < n; ++i)
+            if (!(in->categories[i] = strdup(cat[i] ? cat[i] : ""))) {
+                clear_categories(in);  /* (free(NULL) is a no-op for the ones not made) */
+                return fmi2Error;
+            }
     }
     return fmi2OK; /* pythonfmu's logger stays on: relay() filters */
 }

@@ -6,11 +6,14 @@ Discard, Error and Fatal) and, with a ``trace`` callable, logs each call with it
 spent in them per FMI function (:attr:`FmuInstance.calls`; two clock reads per call, ~0.1 µs against the 3-6 µs
 of an FMI call through ctypes and pythonfmu), from which ``benchmarks/cosim.py`` splits a macro step's time.
 
-The FMU's log messages come to :meth:`FmuInstance._on_log` (its own logger callback; fmpy's default one prints
-to stdout): they are kept (:attr:`FmuInstance.messages`), passed to ``trace``, and the ones logged during a call
-that failed make the :class:`FmiCallFailed` message, so that a stopped co-simulation says why, not only which
-status came back. The instance is created with loggingOn = fmi2False (fmi2True with ``trace``): the frbmodel
-FMUs (through their loader) log the reason of every status above fmi2OK whatever loggingOn says.
+The FMU's log messages come to the instance's own logger callback (:meth:`FmuInstance._on_log`; fmpy's default
+one prints them to stdout): those with a status above fmi2OK logged during a call that failed make the
+:class:`FmiCallFailed` message, so that a stopped co-simulation says why, not only which status came back; all
+go to ``trace``. The instance is created with loggingOn = fmi2True (pythonfmu's own binary drops every message
+otherwise). The callback is a plain ctypes function, not behind fmpy's formatting proxy, which holds one Python
+logger for the whole process (the last one given to it: any later fmpy user would take the messages away): the
+frbmodel FMUs' loader passes each message as a format string without arguments ('%' doubled, undone here); an
+FMU that passes printf arguments shows its format string.
 
 getReal and setReal, the per-step traffic, call the FMU's fmi2GetReal / fmi2SetReal directly with C arrays of the
 value references (and a value buffer) made once per list of value references: fmpy's ``getReal`` / ``setReal``
@@ -35,9 +38,10 @@ MAX_MESSAGES = 200
 
 
 class FmiCallFailed(CosimStopped):
-    """An FMI function returned Discard, Error or Fatal. ``.fmu`` (instance name), ``.function``, ``.status``
-    (fmi2Status value; 2 = Discard, the only one a master may retry after a rollback), ``.reasons`` (the messages
-    the FMU logged during the call, without the instance-name prefix).
+    """An FMI function returned Discard, Error or Fatal (or fmi2Instantiate returned NULL). ``.fmu`` (instance name),
+    ``.function``, ``.status`` (fmi2Status value; 2 = Discard, the only one a master may retry after a rollback),
+    ``.reason`` (the first message above fmi2OK the FMU logged during the call, without the instance-name prefix;
+    empty if none) and ``.n_reasons`` (how many it logged).
 
     Parameters
     ----------
@@ -47,12 +51,12 @@ class FmiCallFailed(CosimStopped):
         Name of the FMI function (fmpy ``FMU2Slave`` method, e.g. ``"doStep"``).
     status : int
         The returned fmi2Status value.
-    reasons : list of str, optional
-        What the FMU logged during the call; the first one is in the message.
+    reasons : tuple (str, int), optional
+        The first reason logged during the call and the number of reasons.
 
     Examples
     --------
-    >>> exc = FmiCallFailed("bearing_t", "doStep", 2, ["inner film: eccentricity ratio 1.2 >= 1", "ring ..."])
+    >>> exc = FmiCallFailed("bearing_t", "doStep", 2, ("inner film: eccentricity ratio 1.2 >= 1", 2))
     >>> print(exc)
     bearing_t: doStep returned status Discard: inner film: eccentricity ratio 1.2 >= 1 (and 1 more message)
     >>> exc.discarded
@@ -61,13 +65,15 @@ class FmiCallFailed(CosimStopped):
     bearing_t: doStep returned status Error (the FMU logged no reason)
     """
 
-    def __init__(self, fmu, function, status, reasons=()):
-        reasons = list(reasons)
-        more = len(reasons) - 1
-        why = (f": {reasons[0]}" + (f" (and {more} more message{'s' if more > 1 else ''})" if more > 0 else "")
-               if reasons else " (the FMU logged no reason)")
-        super().__init__(f"{fmu}: {function} returned status {STATUS[status] if 0 <= status < 6 else status}{why}")
-        self.fmu, self.function, self.status, self.reasons = fmu, function, status, reasons
+    def __init__(self, fmu, function, status, reasons=("", 0)):
+        reason, n = reasons
+        more = n - 1
+        why = (f": {reason}" + (f" (and {more} more message{'s' if more > 1 else ''})" if more > 0 else "")
+               if n else " (the FMU logged no reason)")
+        what = "returned NULL" if function == "instantiate" else \
+            f"returned status {STATUS[status] if 0 <= status < 6 else status}"
+        super().__init__(f"{fmu}: {function} {what}{why}")
+        self.fmu, self.function, self.status, self.reason, self.n_reasons = fmu, function, status, reason, n
 
     @property
     def discarded(self):
@@ -121,27 +127,34 @@ class FmuInstance:
         self._get_plans, self._set_plans = {}, {}
         self._fast = {"getReal": self._get_real, "setReal": self._set_real, "doStep": self._do_step}
         self.messages = collections.deque(maxlen=MAX_MESSAGES)
-        self._logged = 0  # messages logged so far (the reasons of a failed call are the ones logged during it)
-        self._callbacks = _callbacks(self)  # (kept: the FMU calls them until it is freed)
+        # reasons (messages above fmi2OK): how many so far, the first one of the current call and the count at its
+        # start (set by call(): the reasons of a failed call are the ones logged during it)
+        self._n_reasons, self._first_reason, self._reasons_before = 0, "", 0
+        self._callbacks = _callbacks(self._on_log)  # (kept: the FMU calls them until it is freed)
         try:
-            self.call("instantiate", True, self._callbacks, trace is not None)
-        except BaseException:
-            _LISTENERS.pop(id(self), None)
+            self.call("instantiate", True, self._callbacks, True)
+        except FmiCallFailed:
             raise
+        except Exception as exc:  # noqa: BLE001  (fmpy: "Failed to instantiate model", the FMU returned NULL)
+            raise FmiCallFailed(self.name, "instantiate", 4, self._call_reasons()) from exc
 
     def _on_log(self, env, instance, status, category, message):
-        """The FMU's logger callback (through fmpy's native proxy, which formats the message)."""
-        text = message.decode("utf-8", "replace") if message else ""
+        """The FMU's logger callback: keep the message, count a reason, pass it to ``trace``."""
+        text = message.decode("utf-8", "replace").replace("%%", "%") if message else ""
+        prefix = f"{self.name}: "
+        text = text[len(prefix):] if text.startswith(prefix) else text
         self.messages.append((int(status), text))
-        self._logged += 1
+        if 0 < status < 5:  # Warning, Discard, Error, Fatal (not Pending)
+            if self._n_reasons == self._reasons_before:
+                self._first_reason = text
+            self._n_reasons += 1
         if self.trace is not None:
             self.trace(f"{self.name} log [{STATUS[status] if 0 <= status < 6 else status}] {text}")
 
-    def _reasons(self, since):
-        """The messages logged after the first ``since`` ones, without the FMU's "<instance>: " prefix."""
-        new = list(self.messages)[-(self._logged - since):] if self._logged > since else []
-        prefix = f"{self.name}: "
-        return [m[len(prefix):] if m.startswith(prefix) else m for _, m in new]
+    def _call_reasons(self):
+        """(first reason, number of reasons) logged since the current call started."""
+        n = self._n_reasons - self._reasons_before
+        return (self._first_reason, n) if n else ("", 0)
 
     def call(self, function, *args):
         """``slave.<function>(*args)`` with status check (and trace).
@@ -163,7 +176,8 @@ class FmuInstance:
         FmiCallFailed
             If the function returned Discard, Error or Fatal.
         """
-        t0, logged = time.perf_counter(), self._logged
+        t0 = time.perf_counter()
+        self._reasons_before = self._n_reasons
         try:
             fast = self._fast.get(function)
             out = fast(*args) if fast is not None else getattr(self.slave, function)(*args)
@@ -171,7 +185,7 @@ class FmuInstance:
             self._count(function, t0)
             if self.trace is not None:
                 self.trace(f"{self.name}.{function}{_brief(args)} -> {STATUS[int(exc.status)]}")
-            raise FmiCallFailed(self.name, function, int(exc.status), self._reasons(logged)) from None
+            raise FmiCallFailed(self.name, function, int(exc.status), self._call_reasons()) from None
         stat = self.calls.get(function)  # (inline: this runs ~20 times per macro step)
         if stat is None:
             stat = self.calls[function] = [0, 0.0]
@@ -291,32 +305,12 @@ class FmuInstance:
                 self.call(function)
             except Exception:  # noqa: BLE001  (a failed FMU may refuse terminate; freeInstance must still run)
                 pass
-        _LISTENERS.pop(id(self), None)
         sys.path[:] = [p for p in sys.path if not p.startswith(str(self.dir))]
 
 
-#: {componentEnvironment value: FmuInstance} of the instances alive, for :func:`_dispatch_log`
-_LISTENERS = {}
-_DISPATCH = []  # the one logger callback object (made at first use, kept for the life of the process)
-
-
-def _dispatch_log(env, instance, status, category, message):
-    """The logger of every FmuInstance: the message goes to the instance whose componentEnvironment it carries.
-    fmpy's native proxy, which formats a message with its variadic arguments, keeps one Python logger for the whole
-    process (the last one given to it): messages of other fmpy users (no such environment) are printed as fmpy
-    prints them."""
-    fmu = _LISTENERS.get(env)
-    if fmu is not None:
-        fmu._on_log(env, instance, status, category, message)
-    else:
-        from fmpy.fmi1 import printLogMessage
-
-        printLogMessage(env, instance, status, category, message)
-
-
-def _callbacks(fmu):
-    """fmi2CallbackFunctions for ``fmu``: :func:`_dispatch_log` behind fmpy's native formatting proxy as the
-    logger, ``id(fmu)`` as componentEnvironment, the C runtime's calloc/free."""
+def _callbacks(on_log):
+    """fmi2CallbackFunctions with ``on_log(env, instance, status, category, message)`` as the logger (a ctypes
+    callback, see the module description) and the C runtime's calloc/free."""
     from fmpy import calloc, free
     from fmpy.fmi2 import (
         fmi2CallbackAllocateMemoryTYPE,
@@ -325,20 +319,10 @@ def _callbacks(fmu):
         fmi2CallbackLoggerTYPE,
     )
 
-    if not _DISPATCH:
-        _DISPATCH.append(fmi2CallbackLoggerTYPE(_dispatch_log))
     cb = fmi2CallbackFunctions()
-    cb.logger = _DISPATCH[0]
+    cb.logger = fmi2CallbackLoggerTYPE(on_log)
     cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    cb.componentEnvironment = id(fmu)
-    _LISTENERS[id(fmu)] = fmu
-    try:
-        from fmpy.logging import addLoggerProxy
-
-        addLoggerProxy(ctypes.byref(cb))  # (sets the proxy's logger to _DISPATCH again, whoever set it last)
-    except Exception:  # noqa: BLE001  (no native proxy on this platform: messages arrive unformatted)
-        pass
     return cb
 
 

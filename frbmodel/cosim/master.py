@@ -257,8 +257,9 @@ class Master:
         """Extract and instantiate every FMU, identify rotor and bearings, plan the exchange."""
         self._tmp = tempfile.TemporaryDirectory(prefix="frb_cosim_")
         self._sys_path = list(sys.path)
-        self.fmus = {name: FmuInstance(name, path, self._tmp.name, self.trace)
-                     for name, path in self.ssp.components.items()}
+        self.fmus = {}
+        for name, path in self.ssp.components.items():  # (one at a time: close() frees those made before a failure)
+            self.fmus[name] = FmuInstance(name, path, self._tmp.name, self.trace)
         rotors = [f for f in self.fmus.values() if f.model_identifier == ROTOR_FMU]
         if len(rotors) != 1:
             raise ParameterError(f"{self.ssp_path}: the system needs exactly one {ROTOR_FMU} component, found "
