@@ -506,7 +506,24 @@ FORWARD(SetReal, (fmi2Component c, VRs vr, size_t n, const fmi2Real v[]), (R, vr
 FORWARD(SetInteger, (fmi2Component c, VRs vr, size_t n, const fmi2Integer v[]), (R, vr, n, v))
 FORWARD(SetBoolean, (fmi2Component c, VRs vr, size_t n, const fmi2Boolean v[]), (R, vr, n, v))
 FORWARD(SetString, (fmi2Component c, VRs vr, size_t n, const fmi2String v[]), (R, vr, n, v))
-FORWARD(GetFMUstate, (fmi2Component c, fmi2FMUstate *s), (R, s))
+
+/* FMI 2.0: on entry to fmi2GetFMUstate a non-NULL *s is a state returned before and not freed since, which the FMU
+   may reuse. pythonfmu overwrites *s and leaks that state (a host that reuses its state, one per instance, would
+   leak one per call): it is freed here first. */
+EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) {
+    Instance *in = (Instance *)c;
+    fmi2Status returned;
+    if (!loaded || !in || !real.GetFMUstate || !s) return fmi2Error;
+    adopt_thread();
+    in->worst = fmi2OK;
+    if (*s) {
+        returned = real.FreeFMUstate ? real.FreeFMUstate(R, s) : fmi2Error;
+        if (returned > fmi2Warning) return worse(returned, in->worst);
+        *s = NULL;
+    }
+    returned = real.GetFMUstate(R, s);
+    return worse(returned, in->worst);
+}
 FORWARD(SetFMUstate, (fmi2Component c, fmi2FMUstate s), (R, s))
 FORWARD(FreeFMUstate, (fmi2Component c, fmi2FMUstate *s), (R, s))
 FORWARD(SerializedFMUstateSize, (fmi2Component c, fmi2FMUstate s, size_t *n), (R, s, n))

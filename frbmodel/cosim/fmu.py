@@ -123,9 +123,16 @@ class FmuInstance:
         # the C functions as fmpy configured them (argument and return types), and the prepared arrays per list of
         # value references: {tuple of value references: (C array of them, count, C value buffer)}
         self._c_get, self._c_set = self.slave.dll.fmi2GetReal, self.slave.dll.fmi2SetReal
-        self._c_step = self.slave.dll.fmi2DoStep
+        self._c_step, self._c_get_state = self.slave.dll.fmi2DoStep, self.slave.dll.fmi2GetFMUstate
         self._get_plans, self._set_plans = {}, {}
-        self._fast = {"getReal": self._get_real, "setReal": self._set_real, "doStep": self._do_step}
+        self._fast = {"getReal": self._get_real, "setReal": self._set_real, "doStep": self._do_step,
+                      "getFMUstate": self._get_state}
+        # FMUs with the frbmodel loader reuse a state handle given back to fmi2GetFMUstate (FMI 2.0; pythonfmu alone
+        # would leak the old state): save_state then keeps one handle, and no freeFMUstate per saved state
+        from .loader import STATUS_MARKER
+
+        self.reuses_state = self.can_state and (Path(self.dir) / STATUS_MARKER).is_file()
+        self._state = None
         self.messages = collections.deque(maxlen=MAX_MESSAGES)
         # reasons (messages above fmi2OK): how many so far, the first one of the current call and the count at its
         # start (set by call(): the reasons of a failed call are the ones logged during it)
@@ -228,6 +235,36 @@ class FmuInstance:
         if status > 1:
             raise _fmi_call_exception()(function="fmi2DoStep", status=status)
 
+    def _get_state(self, state=None):
+        """fmpy's ``getFMUstate()`` (a new state), or with ``state`` fmi2GetFMUstate into that handle (reused)."""
+        if state is None:
+            return self.slave.getFMUstate()
+        status = self._c_get_state(self.slave.component, ctypes.byref(state))
+        if status > 1:
+            raise _fmi_call_exception()(function="fmi2GetFMUstate", status=status)
+        return state
+
+    def save_state(self):
+        """The FMU's state now (fmi2GetFMUstate): into the instance's one handle where the FMU reuses handles
+        (:attr:`reuses_state`), else a new one. Give it to :meth:`drop_state` when no longer needed.
+
+        Returns
+        -------
+        fmi2FMUstate
+        """
+        if not self.reuses_state:
+            return self.call("getFMUstate")
+        if self._state is None:
+            self._state = self.call("getFMUstate")
+        else:
+            self.call("getFMUstate", self._state)
+        return self._state
+
+    def drop_state(self, state):
+        """Free a state of :meth:`save_state` (the reused handle is kept until :meth:`free`)."""
+        if state is not self._state:
+            self.call("freeFMUstate", state)
+
     def _count(self, function, t0):
         stat = self.calls.get(function)
         if stat is None:
@@ -300,6 +337,12 @@ class FmuInstance:
         processes spawned later from this one (Dask workers) would import, without a numba cache."""
         import sys
 
+        if self._state is not None:
+            try:
+                self.call("freeFMUstate", self._state)
+            except Exception:  # noqa: BLE001  (a failed FMU may refuse it; freeInstance must still run)
+                pass
+            self._state = None
         for function in ("terminate", "freeInstance"):
             try:
                 self.call(function)

@@ -607,7 +607,7 @@ class Master:
 
     def _get_states(self):
         t0 = time.perf_counter()
-        states = {n: f.call("getFMUstate") for n, f in self.fmus.items() if f.can_state}
+        states = {n: f.save_state() for n, f in self.fmus.items() if f.can_state}
         self.fmi_time_s += time.perf_counter() - t0
         return states
 
@@ -615,7 +615,7 @@ class Master:
         for n, st in states.items():
             if restore:
                 self.fmus[n].call("setFMUstate", st)
-            self.fmus[n].call("freeFMUstate", st)
+            self.fmus[n].drop_state(st)
 
     # ------------------------------------------------------------------ record
     def sample(self, t):
