@@ -34,16 +34,25 @@ def parse_speeds(text: str) -> np.ndarray:
     >>> parse_speeds("10000:30000:3").tolist(), parse_speeds("5e4,1e5").tolist()
     ([10000.0, 20000.0, 30000.0], [50000.0, 100000.0])
     """
+    from .errors import MAX_SPEED_RPM
+
     try:
         if ":" in text:
             a, b, n = text.split(":")
             n = int(n)
             if n < 1:
                 raise ValueError
-            return np.linspace(float(a), float(b), n)
-        return np.array([float(x) for x in text.split(",")])
+            speeds = np.linspace(float(a), float(b), n)
+        else:
+            speeds = np.array([float(x) for x in text.split(",")])
     except ValueError:
-        raise ParameterError(f"--speeds = {text!r} is invalid: use START:STOP:COUNT (rpm) or a comma list") from None
+        raise ParameterError(f"--speeds = {text!r} is invalid: use START:STOP:COUNT (rpm, COUNT >= 1) or a comma "
+                             "list") from None
+    bad = speeds[~(np.abs(speeds) <= MAX_SPEED_RPM)]  # (also NaN)
+    if bad.size:
+        raise ParameterError(f"--speeds = {text!r} contains {float(bad[0])!r} rpm: valid range |speed| <= "
+                             f"{MAX_SPEED_RPM:.0e} rpm (the model is verified for 1 ... 250 krpm)")
+    return speeds
 
 
 def load_from_args(args):
@@ -110,10 +119,14 @@ def cmd_campbell(args):
 
     speeds = parse_speeds(args.speeds)
     fmax = None if args.fmax is None else check_positive("--fmax", args.fmax, "Hz")
+    if args.parameter_set is not None and not args.from_fmu:
+        raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
+                             "set); without it the system is --system / --outer-clearance")
     out = writable_dir(args.out)
     if args.from_fmu:
         from .cosim.linearize import campbell_from_fmu
 
+        args.parameter_set = args.parameter_set or "co36"
         _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky"))
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
         tc, kw = None, {}
@@ -351,13 +364,14 @@ def write_composites(run, system, out, xscale="linear", title="run-up", orders=(
 
 def cmd_runup(args):
     """``frb runup``: monolithic nonlinear run-up or run-down, streamed to a folder, with figures; exit code."""
-    from .runup import runup
+    from .runup import check_output_rate, runup
 
     tc = load_from_args(args)
     prof = _profile(args)
+    duration = float(prof.t[-1]) if args.duration is None else args.duration
+    check_output_rate(args.rate, duration)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
-    duration = float(prof.t[-1]) if args.duration is None else args.duration
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
     rtol = check_positive("--rtol", args.rtol)
     atol = check_positive("--atol", args.atol, "m")
@@ -399,6 +413,7 @@ def cmd_bifurcation(args):
         raise ParameterError(f"--max-points = {args.max_points} is invalid: valid range >= 2")
     if args.segments < 1:
         raise ParameterError(f"--segments = {args.segments} is invalid: valid range >= 1 (1: single shooting)")
+    runs = _load_runs(args.runs)  # (before hours of continuation: a wrong folder is refused now)
     out = writable_dir(args.out)
     hps = hopf_points(tc, (lo, hi), restabilizing=True)
     print(f"Hopf points of the full model, {lo:.0f} ... {hi:.0f} rpm (where a mode of the equilibrium loses or "
@@ -427,7 +442,7 @@ def cmd_bifurcation(args):
               file=sys.stderr)
         bd = BifurcationDiagram(points, [], {"status": "interrupted", "branches": [len(points)]})
     bd.meta.setdefault("status", "finished")
-    _save_diagram(args, tc, bd, out, lo, hi)
+    _save_diagram(runs, tc, bd, out, lo, hi)
     partial.unlink()
     tab = bd.bifurcation_table()
     print("bifurcation points:" if len(tab) else "no bifurcation points on the branches")
@@ -441,30 +456,32 @@ def cmd_bifurcation(args):
 BIFURCATION_CAMPBELL_SPEEDS = 120
 
 
-def _save_diagram(args, tc, bd, out, lo, hi):
-    """Write the diagram with the run envelopes (--runs), the first run's spectrogram and the method-J Campbell
-    diagram's unstable modes and film whirl lines over the speed range."""
+def _load_runs(text):
+    """The run-up results of ``--runs`` (comma-separated folders), loaded; a ParameterError names a folder without
+    one."""
+    from .recorder import RunupResult
+
+    return [RunupResult.load(d) for d in (text or "").split(",") if d]
+
+
+def _save_diagram(runs, tc, bd, out, lo, hi):
+    """Write the diagram with the envelopes of the run-up results ``runs`` (--runs), the first run's spectrogram and
+    the method-J Campbell diagram's unstable modes and film whirl lines over the speed range."""
     from .campbell import campbell
 
-    folders = [d for d in (args.runs or "").split(",") if d]
-    envelopes = [_run_envelope(d) for d in folders]
+    envelopes = [_run_envelope(r) for r in runs]
     sp = None
-    if folders:  # the first run's spectrogram behind the branch frequencies
-        from .recorder import RunupResult
+    if runs:  # the first run's spectrogram behind the branch frequencies
         from .spectral import spectrogram
 
-        run = RunupResult.load(folders[0])
-        sp = spectrogram(run, run.schema.discs[0])
+        sp = spectrogram(runs[0], runs[0].schema.discs[0])
         lo, hi = min(lo, sp.speeds_rpm.min()), max(hi, sp.speeds_rpm.max())
     cd = campbell(tc, "J", np.linspace(lo, hi, BIFURCATION_CAMPBELL_SPEEDS))
     bd.save(out, envelopes=envelopes, spectrogram=sp, campbell=cd)
 
 
-def _run_envelope(folder, segment_s=0.005):
-    """(label, speeds [rpm], turbine-wheel orbit radius [µm]) per segment of a run-up / run-down folder."""
-    from .recorder import RunupResult
-
-    run = RunupResult.load(folder)
+def _run_envelope(run, segment_s=0.005):
+    """(label, speeds [rpm], turbine-wheel orbit radius [µm]) per segment of a run-up / run-down result."""
     name = run.schema.discs[0]
     n = max(2, int(round(segment_s / float(run.time[1] - run.time[0]))))
     speeds, radius = [], []
@@ -472,7 +489,7 @@ def _run_envelope(folder, segment_s=0.005):
         xy = run.displacement[name][k:k + n]
         speeds.append(float(np.mean(run.speed_rpm[k:k + n])))
         radius.append(float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T))) * 1e6)
-    return (f"{run.meta.get('profile', folder)}", np.array(speeds), np.array(radius))
+    return (f"{run.meta.get('profile', run.meta.get('out_dir', 'run'))}", np.array(speeds), np.array(radius))
 
 
 def write_up_down_halves(run, system, out):
@@ -610,6 +627,9 @@ def cmd_compare(args):
     from .compare import compare
 
     tc = load_from_args(args)
+    check_positive("--duration", args.duration, "s")
+    if args.fmax is not None:
+        check_positive("--fmax", args.fmax, "Hz")
     writable_dir(args.out)
     cl = [check_positive("--clearances", x, "m") for x in args.clearances.split(",")]
     a, b = _speed_pair(args.speeds)
@@ -691,7 +711,8 @@ def replot_bifurcation(args, out):
     if "system" not in bd.meta:
         raise ParameterError(f"{out / 'branch.nc'}: no system recorded, cannot draw the Campbell lines")
     lo, hi = bd.meta.get("speed_range_rpm", [min(p.speed_rpm for p in bd.points), max(p.speed_rpm for p in bd.points)])
-    _save_diagram(args, Turbocharger.from_dict(bd.meta["system"]), bd, out, lo, hi)
+    runs = _load_runs(getattr(args, "runs", None))
+    _save_diagram(runs, Turbocharger.from_dict(bd.meta["system"]), bd, out, lo, hi)
     print(f"results in {out.resolve()} (bifurcation.png/.html)")
     return 0
 
@@ -896,6 +917,8 @@ def cmd_build_fmus(args):
     """``frb build-fmus``: build the bearing and rotor FMUs and the SSP into a folder."""
     from .cosim.build import build_fmus
 
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise ParameterError(f"--out = {args.out!r} is not a writable folder: it is a file")
     build_fmus(args.out, args.src, rotor_file=args.rotor_file)
     print(f"results in {Path(args.out).resolve()}")
 
@@ -1067,7 +1090,7 @@ def _add_campbell(sub):
     _spring_args(c)
     c.add_argument("--from-fmu", metavar="SSP", default=None,
                    help="assemble the linear system from the FMUs of this SSP (methods F, G, I, J)")
-    c.add_argument("--parameter-set", default="co36", help="SSP parameter set for --from-fmu")
+    c.add_argument("--parameter-set", default=None, help="SSP parameter set for --from-fmu (default co36)")
     _system_args(c)
     c.set_defaults(func=cmd_campbell)
 

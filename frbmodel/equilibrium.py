@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .bearing import ring_speed_ratio, static_ring_torque
-from .errors import ConvergenceError, ParameterError, check_real, check_system
+from .errors import ConvergenceError, ParameterError, check_real, check_speed, check_system
 from .film import check_model, film_coefficients, film_force, static_position_kernel
 from .methods import get_method
 from .rotor import GRAVITY
@@ -336,6 +336,7 @@ def equilibrium(system, method="J", speed_rpm=150e3) -> EquilibriumResult:
     speed_rpm = check_real("speed_rpm", speed_rpm, "rpm")
     if not speed_rpm > 0.0:
         raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for a film equilibrium: valid range > 0")
+    check_speed("speed_rpm", speed_rpm)
     m = get_method(method)
     t0 = time.perf_counter()
     loads = system.bearing_loads

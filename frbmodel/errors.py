@@ -122,6 +122,48 @@ def check_positive(name, value, unit="", allow_zero=False):
     return v
 
 
+#: largest rotor speed accepted [rpm] by every analysis (linear and nonlinear); the model is verified over
+#: 1 ... 250 krpm (README)
+MAX_SPEED_RPM = 1e6
+
+
+def check_speed(name, speed_rpm):
+    """Return ``float(speed_rpm)`` or raise :class:`ParameterError`: rotor speeds must be finite, > 0 and at most
+    :data:`MAX_SPEED_RPM` rpm.
+
+    Parameters
+    ----------
+    name : str
+        The quantity's name, used in the message (e.g. ``"start speed"``).
+    speed_rpm : float
+        Rotor speed [rpm].
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If the speed is not a finite number in 0 < speed <= :data:`MAX_SPEED_RPM`.
+
+    Examples
+    --------
+    >>> check_speed("start speed", 20e3)
+    20000.0
+    >>> try:
+    ...     check_speed("end speed", 2e6)
+    ... except ParameterError as exc:
+    ...     print(exc)
+    end speed = 2000000.0 rpm is invalid: valid range 0 < speed <= 1e+06 rpm (the model is verified for 1 ... 250 krpm)
+    """
+    v = check_positive(name, speed_rpm, "rpm")
+    if v > MAX_SPEED_RPM:
+        raise ParameterError(f"{name} = {speed_rpm!r} rpm is invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm "
+                             "(the model is verified for 1 ... 250 krpm)")
+    return v
+
+
 def check_finite(name, value, unit=""):
     """Return ``float(value)`` or raise :class:`ParameterError` if it is not a finite number.
 

@@ -393,10 +393,12 @@ class Turbocharger:
         """
         path = Path(path)
         d = self.to_dict()
-        if path.suffix.lower() == ".json":
-            path.write_text(json.dumps(d, indent=2))
-        elif path.suffix.lower() == ".toml":
-            path.write_text(tomli_w.dumps(_toml_ready(d)))
+        if path.suffix.lower() in (".json", ".toml"):
+            text = json.dumps(d, indent=2) if path.suffix.lower() == ".json" else tomli_w.dumps(_toml_ready(d))
+            try:
+                path.write_text(text)
+            except OSError as exc:  # no such folder, a folder of that name, no permission
+                raise ParameterError(f"system file {str(path)!r} cannot be written: {exc.strerror or exc}") from None
         else:
             raise ParameterError(f"system file suffix = {path.suffix!r} is unknown; use .toml or .json")
         return path

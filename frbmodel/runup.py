@@ -26,7 +26,7 @@ from .dynamics import monolithic_jac as _jac
 from .dynamics import monolithic_rhs as _rhs
 from .dynamics import rotor_polar_inertia
 from .equilibrium import bearing_equilibrium
-from .errors import ParameterError, RunupStopped, check_finite, check_positive
+from .errors import MAX_SPEED_RPM, ParameterError, RunupStopped, check_finite, check_positive, check_speed
 from .film import check_model
 from .interrupt import deferred_signals
 from .losses import bearing_loss_kernel, film_arrays
@@ -46,51 +46,38 @@ __all__ = ["CHUNK_SAMPLES", "DEFAULT_ATOL_M", "DEFAULT_RTOL", "INTEGRATORS", "MA
 # --------------------------------------------------------------------------------------------------
 # problem set-up
 # --------------------------------------------------------------------------------------------------
-#: largest rotor speed accepted [rpm]; the model is verified over 1 ... 250 krpm (README)
-MAX_SPEED_RPM = 1e6
 
 
-def check_speed(name, speed_rpm):
-    """Return ``float(speed_rpm)`` or raise :class:`ParameterError`: rotor speeds must be finite, > 0 and at most
-    :data:`MAX_SPEED_RPM` rpm.
-
-    Parameters
-    ----------
-    name : str
-        The quantity's name, used in the message (e.g. ``"start speed"``).
-    speed_rpm : float
-        Rotor speed [rpm].
-
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    ParameterError
-        If the speed is not a finite number in 0 < speed <= :data:`MAX_SPEED_RPM`.
+def check_output_rate(output_rate_hz, duration):
+    """Return ``float(output_rate_hz)`` [Hz] or raise :class:`ParameterError`: finite, > 0, and at most
+    :data:`MAX_SAMPLES` samples over ``duration`` [s] (a run-up's result is held in memory, ~210 bytes a sample for
+    the Table 2 system).
 
     Examples
     --------
-    >>> check_speed("start speed", 20e3)
+    >>> check_output_rate(20e3, 1.0)
     20000.0
     >>> try:
-    ...     check_speed("end speed", 2e6)
+    ...     check_output_rate(1e12, 0.01)
     ... except ParameterError as exc:
-    ...     print(exc)
-    end speed = 2000000.0 rpm is invalid: valid range 0 < speed <= 1e+06 rpm (the model is verified for 1 ... 250 krpm)
+    ...     print(exc)  # doctest: +ELLIPSIS
+    output_rate_hz = 1e+12 Hz is invalid for duration = 0.01 s: 1e+10 samples, valid range <= 1e+07 samples ...
     """
-    v = check_positive(name, speed_rpm, "rpm")
-    if v > MAX_SPEED_RPM:
-        raise ParameterError(f"{name} = {speed_rpm!r} rpm is invalid: valid range 0 < speed <= {MAX_SPEED_RPM:.0e} rpm "
-                             "(the model is verified for 1 ... 250 krpm)")
-    return v
+    rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
+    duration = check_positive("duration", duration, "s")
+    if duration * rate > MAX_SAMPLES:
+        raise ParameterError(f"output_rate_hz = {rate:g} Hz is invalid for duration = {duration:g} s: "
+                             f"{duration * rate:.3g} samples, valid range <= {MAX_SAMPLES:.0e} samples "
+                             f"(rate <= {MAX_SAMPLES / duration:.3g} Hz)")
+    return rate
 
 
 #: grid steps on the shortest segment of a piecewise-linear speed profile with kinks: Ω̇ (piecewise constant) is
 #: tabulated at the grid points and interpolated linearly, so at a kink it passes from one slope to the next over
 #: one step either side, <= 2 % of any segment
 SEGMENT_STEPS = 100
+#: most output samples of a run-up (held in memory: 1e7 samples of the Table 2 system are ~2 GB)
+MAX_SAMPLES = 10_000_000
 #: most grid points of a tabulated speed profile (three float arrays of 16 MB each)
 MAX_PROFILE_POINTS = 2_000_001
 #: a knot lies on a uniform grid when it is within this fraction of a grid step of a grid point
@@ -1380,7 +1367,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     """
     model = check_model(film_model or system.film_model)
     duration = check_positive("duration", duration, "s")
-    output_rate_hz = check_positive("output_rate_hz", output_rate_hz, "Hz")
+    output_rate_hz = check_output_rate(output_rate_hz, duration)
     rtol = check_positive("rtol", rtol)
     if profile is None:
         profile = SpeedProfile.ramp(speed_rpm[0], speed_rpm[1], duration)

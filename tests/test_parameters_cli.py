@@ -246,3 +246,48 @@ def test_cli_bad_system_file_exits_2_without_traceback(tmp_path, capsys):
     assert main(["equilibrium", "--method", "J", "--speed-rpm", "30000", "--system", str(p)]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and "my.toml" in err and "unknown key 'gravty' at the top level" in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["campbell", "--speeds", "1000:2e6:3"], ["contains 1000500.0 rpm", "valid range |speed| <= 1e+06 rpm"]),
+    (["equilibrium", "--speed-rpm", "1e300"], ["speed_rpm = 1e+300 rpm", "valid range 0 < speed <= 1e+06 rpm"]),
+    (["unbalance", "--speeds", "1000:2e6:3"], ["valid range |speed| <= 1e+06 rpm"]),
+    (["losses", "--speeds", "10000:2e6:2"], ["contains 2000000.0 rpm", "<= 1e+06 rpm"]),
+    (["system", "--out", "nodir/x.toml"], ["'nodir/x.toml' cannot be written: No such file or directory"]),
+    (["system", "--out", "adir.toml"], ["'adir.toml' cannot be written: Is a directory"]),
+    (["build-fmus", "--out", "afile"], ["--out = 'afile' is not a writable folder: it is a file"]),
+    (["runup", "--speeds", "20000:21000", "--duration", "0.01", "--rate", "1e12", "--no-figure"],
+     ["output_rate_hz = 1e+12 Hz", "valid range <= 1e+07 samples"]),
+    (["campbell", "--parameter-set", "co40", "--speeds", "1000:2000:2"], ["applies only with --from-fmu"]),
+    (["compare", "--fmax", "nan", "--duration", "0.01"], ["--fmax = nan Hz is invalid"]),
+    (["compare", "--duration", "0"], ["--duration = 0.0 s is invalid"]),
+    (["bifurcation", "--speeds", "1000:3000", "--max-points", "2", "--runs", "nope"], ["nope: no run-up result there"]),
+])
+def test_cli_refuses_out_of_range_speeds_bad_outputs_and_late_checked_options(tmp_path, monkeypatch, capsys, argv,
+                                                                              words):
+    """Cases found by trying the CLI as a new user (2026-11-28): speeds above 1e6 rpm were accepted by the linear
+    analyses (exit 0 with results at 2 Mrpm); an --out that cannot be written was a traceback; a sample count that
+    cannot fit in memory was a MemoryError; --parameter-set without --from-fmu was ignored; --fmax, --duration and
+    --runs were checked only after the computation. Each is refused with exit 2 before any work and nothing is
+    written (no output folder)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("")
+    (tmp_path / "adir.toml").mkdir()
+    out = tmp_path / "out"
+    if argv[0] not in ("system", "build-fmus", "equilibrium", "losses"):
+        argv = argv + ["--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and all(w in err for w in words), err
+    assert not out.exists()
+
+
+def test_api_refuses_speeds_above_the_model_limit():
+    """The same limit as the run-ups' (1e6 rpm) in the linear analyses' API: campbell, equilibrium (and through it
+    the losses), before any eigenvalue is computed."""
+    tc = frb.turbocharger()
+    with pytest.raises(frb.ParameterError, match=r"2000000.0 rpm: valid range \|speed\| <= 1e\+06 rpm"):
+        frb.campbell(tc, "A", [1e3, 2e6])
+    with pytest.raises(frb.ParameterError, match=r"valid range 0 < speed <= 1e\+06 rpm"):
+        frb.equilibrium(tc, "J", 2e6)
+    assert frb.equilibrium(tc, "J", 250e3).bearings[0].ring_speed > 0  # the verified range still works

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, check_speed
 from .master import CosimStopped, Master, operating_point_overrides, system_from_parameters
 
 
@@ -59,6 +59,7 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
     if m.letter not in "FGIJ":
         raise ParameterError(f"method = {method!r}: the FMU linearization covers the film methods with ring DoFs "
                              "(F, G, I, J)")
+    check_speed("speed_rpm", speed_rpm)
     master = Master(ssp, parameter_set)
     system = master.system
     ov = operating_point_overrides(system, speed_rpm, method=m.letter)
