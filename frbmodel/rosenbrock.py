@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 from .dynamics import interp_uniform, monolithic_rhs
+from .errors import MAX_SPEED_RPM
 from .linalg import lu_factor, lu_solve
 
 #: typical displacement [m] (about a film clearance) that sets the difference steps of the film columns: step
@@ -27,7 +28,11 @@ from .linalg import lu_factor, lu_solve
 #: column at 1e-12 m/s steps, 2e-6 at 1e-9 m/s)
 FD_TYPICAL_M = 1e-5
 #: failure reasons by status code of :func:`rodas_chunk`
-STATUS = {1: "step budget exhausted", 2: "step size underflow", 3: "singular iteration matrix"}
+STATUS = {1: "step budget exhausted", 2: "step size underflow", 3: "singular iteration matrix",
+          4: f"torque-driven rotor speed left 0 < speed <= {MAX_SPEED_RPM:.0e} rpm"}
+#: largest rotor speed [rad/s] of a torque-driven run, checked at every step (not only at the output samples: a
+#: huge drive torque drives the speed far beyond it between two samples, in millions of ever shorter steps)
+OMEGA_MAX = MAX_SPEED_RPM * math.pi / 30.0
 
 # RODAS (Hairer & Wanner), gamma = 1/4
 GAMMA = 0.25
@@ -189,7 +194,8 @@ def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, arg
     """Integrate from t_eval[0] through the times t_eval with RODAS (see the module docstring).
 
     Returns (states at t_eval (k, n), number of rows filled, next step size [s], steps, rejected steps, status:
-    0 done, 1 step budget exhausted, 2 step size underflow, 3 singular matrix)."""
+    0 done, 1 step budget exhausted, 2 step size underflow, 3 singular matrix, 4 a torque-driven speed out of
+    range, :data:`OMEGA_MAX`)."""
     n = y0.size
     n_r = args[2]
     out = np.empty((t_eval.size, n))
@@ -241,6 +247,9 @@ def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, arg
         t += h
         for i in range(n):
             y[i] = ynew[i]
+        if n > 2 * n_r + 11 and not 0.0 < y[n - 1] <= OMEGA_MAX:  # torque-driven: the speed is the last state
+            status = 4
+            break
         need_jac = True
         h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.25))
     return out, k_out, h, steps, rejected, status

@@ -142,3 +142,16 @@ def test_rotor_component_refuses_bad_speed_inputs():
         RotorComponent(tc, speed_source="input").step(1e-5, F, K, C, speed_in=math.inf)
     with pytest.raises(frb.ParameterError, match="drive torque"):
         SpeedProfile.torque(math.nan, 2000, 1.0)
+
+
+def test_a_huge_drive_torque_stops_the_compiled_run_at_once():
+    """A drive torque of 1e9 N m takes the rotor past the 1e6 rpm limit within the first steps. The compiled solver
+    checked the speed only at output samples, so the run went on for millions of ever shorter steps (10 minutes for
+    1 ms, deaf to SIGTERM between samples); it now stops at the first step beyond the limit. With a step budget of
+    2000 per sample the former code ended with "step budget exhausted" instead."""
+    tc = frb.turbocharger(36e-6)
+    prof = SpeedProfile.torque(1e9, 20e3, 1e-3)
+    with pytest.raises(frb.RunStopped) as ei:
+        runup(tc, profile=prof, duration=1e-3, nsteps=2000, integrator="rodas")
+    assert "torque-driven rotor speed left 0 < speed <= 1e+06 rpm" in str(ei.value), str(ei.value)
+    assert ei.value.result.meta["solver_steps"] < 100
