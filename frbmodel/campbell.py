@@ -16,7 +16,14 @@ from pathlib import Path
 import numpy as np
 
 from .equilibrium import bearing_equilibrium
-from .errors import MAX_SPEED_RPM, ConvergenceError, FilmContactError, ParameterError, check_real_array, check_system
+from .errors import (
+    ConvergenceError,
+    FilmContactError,
+    ParameterError,
+    check_real_array,
+    check_speeds_in_range,
+    check_system,
+)
 from .linear import linear_system
 from .methods import get_method
 from .modal import (
@@ -612,9 +619,7 @@ def check_speeds(speeds_rpm, needs_films, letter):
     if needs_films and np.any(speeds <= 0):
         raise ParameterError(f"speeds_rpm contains {float(speeds[speeds <= 0][0])!r} rpm, invalid for method "
                              f"{letter}: linearized films need speeds > 0")
-    if np.any(np.abs(speeds) > MAX_SPEED_RPM):
-        raise ParameterError(f"speeds_rpm contains {float(speeds[np.abs(speeds) > MAX_SPEED_RPM][0])!r} rpm: valid "
-                             f"range |speed| <= {MAX_SPEED_RPM:.0e} rpm (the model is verified for 1 ... 250 krpm)")
+    check_speeds_in_range("speeds_rpm", speeds)
     return speeds
 
 

@@ -34,7 +34,7 @@ def parse_speeds(text: str) -> np.ndarray:
     >>> parse_speeds("10000:30000:3").tolist(), parse_speeds("5e4,1e5").tolist()
     ([10000.0, 20000.0, 30000.0], [50000.0, 100000.0])
     """
-    from .errors import MAX_SPEED_RPM
+    from .errors import check_speeds_in_range
 
     try:
         if ":" in text:
@@ -48,10 +48,7 @@ def parse_speeds(text: str) -> np.ndarray:
     except ValueError:
         raise ParameterError(f"--speeds = {text!r} is invalid: use START:STOP:COUNT (rpm, COUNT >= 1) or a comma "
                              "list") from None
-    bad = speeds[~(np.abs(speeds) <= MAX_SPEED_RPM)]  # (also NaN)
-    if bad.size:
-        raise ParameterError(f"--speeds = {text!r} contains {float(bad[0])!r} rpm: valid range |speed| <= "
-                             f"{MAX_SPEED_RPM:.0e} rpm (the model is verified for 1 ... 250 krpm)")
+    check_speeds_in_range(f"--speeds = {text!r}", speeds)
     return speeds
 
 
@@ -457,11 +454,11 @@ BIFURCATION_CAMPBELL_SPEEDS = 120
 
 
 def _load_runs(text):
-    """The run-up results of ``--runs`` (comma-separated folders), loaded; a ParameterError names a folder without
-    one."""
+    """``[(folder, run-up result)]`` of ``--runs`` (comma-separated folders), loaded; a ParameterError names a
+    folder without one."""
     from .recorder import RunupResult
 
-    return [RunupResult.load(d) for d in (text or "").split(",") if d]
+    return [(d, RunupResult.load(d)) for d in (text or "").split(",") if d]
 
 
 def _save_diagram(runs, tc, bd, out, lo, hi):
@@ -469,19 +466,21 @@ def _save_diagram(runs, tc, bd, out, lo, hi):
     the method-J Campbell diagram's unstable modes and film whirl lines over the speed range."""
     from .campbell import campbell
 
-    envelopes = [_run_envelope(r) for r in runs]
+    envelopes = [_run_envelope(folder, r) for folder, r in runs]
     sp = None
     if runs:  # the first run's spectrogram behind the branch frequencies
         from .spectral import spectrogram
 
-        sp = spectrogram(runs[0], runs[0].schema.discs[0])
+        run = runs[0][1]
+        sp = spectrogram(run, run.schema.discs[0])
         lo, hi = min(lo, sp.speeds_rpm.min()), max(hi, sp.speeds_rpm.max())
     cd = campbell(tc, "J", np.linspace(lo, hi, BIFURCATION_CAMPBELL_SPEEDS))
     bd.save(out, envelopes=envelopes, spectrogram=sp, campbell=cd)
 
 
-def _run_envelope(run, segment_s=0.005):
-    """(label, speeds [rpm], turbine-wheel orbit radius [µm]) per segment of a run-up / run-down result."""
+def _run_envelope(folder, run, segment_s=0.005):
+    """(label, speeds [rpm], turbine-wheel orbit radius [µm]) per segment of the run-up / run-down ``run`` (read
+    from ``folder``)."""
     name = run.schema.discs[0]
     n = max(2, int(round(segment_s / float(run.time[1] - run.time[0]))))
     speeds, radius = [], []
@@ -489,7 +488,7 @@ def _run_envelope(run, segment_s=0.005):
         xy = run.displacement[name][k:k + n]
         speeds.append(float(np.mean(run.speed_rpm[k:k + n])))
         radius.append(float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T))) * 1e6)
-    return (f"{run.meta.get('profile', run.meta.get('out_dir', 'run'))}", np.array(speeds), np.array(radius))
+    return (f"{run.meta.get('profile', folder)}", np.array(speeds), np.array(radius))
 
 
 def write_up_down_halves(run, system, out):

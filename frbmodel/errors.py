@@ -5,6 +5,8 @@ the input without reading the code.
 """
 import math
 
+import numpy as np
+
 
 class FRBError(Exception):
     """Base class of all frbmodel errors.
@@ -125,6 +127,24 @@ def check_positive(name, value, unit="", allow_zero=False):
 #: largest rotor speed accepted [rpm] by every analysis (linear and nonlinear); the model is verified over
 #: 1 ... 250 krpm (README)
 MAX_SPEED_RPM = 1e6
+
+
+def check_speeds_in_range(name, speeds_rpm):
+    """Raise :class:`ParameterError` naming ``name`` and the first speed [rpm] of the array ``speeds_rpm`` that is
+    not a number with |speed| <= :data:`MAX_SPEED_RPM` (the sign and zero are the caller's to check).
+
+    Examples
+    --------
+    >>> try:
+    ...     check_speeds_in_range("speeds_rpm", np.array([1e3, 2e6]))
+    ... except ParameterError as exc:
+    ...     print(exc)
+    speeds_rpm contains 2000000.0 rpm: valid range |speed| <= 1e+06 rpm (the model is verified for 1 ... 250 krpm)
+    """
+    bad = speeds_rpm[~(np.abs(speeds_rpm) <= MAX_SPEED_RPM)]  # (also NaN)
+    if bad.size:
+        raise ParameterError(f"{name} contains {float(bad[0])!r} rpm: valid range |speed| <= {MAX_SPEED_RPM:.0e} rpm "
+                             "(the model is verified for 1 ... 250 krpm)")
 
 
 def check_speed(name, speed_rpm):

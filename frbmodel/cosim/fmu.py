@@ -22,7 +22,6 @@ build both arrays at every call (measured in the main job's exchange: 7.3 -> 3.1
 """
 from __future__ import annotations
 
-import collections
 import ctypes
 import time
 from pathlib import Path
@@ -33,8 +32,6 @@ from ..errors import CosimStopped, ParameterError
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
 #: most lists of value references whose C arrays an instance keeps per direction (a master uses a handful)
 MAX_PLANS = 256
-#: log messages an instance keeps (the newest)
-MAX_MESSAGES = 200
 
 
 class FmiCallFailed(CosimStopped):
@@ -102,8 +99,6 @@ class FmuInstance:
     calls : dict
         ``{function: [number of calls, wall time inside them [s]]}`` of every :meth:`call` so far (failed ones
         included).
-    messages : collections.deque
-        ``(status, message)`` of the messages the FMU logged, the newest :data:`MAX_MESSAGES`.
     """
 
     def __init__(self, name, path, unzip_root, trace=None):
@@ -133,7 +128,6 @@ class FmuInstance:
 
         self.reuses_state = self.can_state and (Path(self.dir) / STATUS_MARKER).is_file()
         self._state = None
-        self.messages = collections.deque(maxlen=MAX_MESSAGES)
         # reasons (messages above fmi2OK): how many so far, the first one of the current call and the count at its
         # start (set by call(): the reasons of a failed call are the ones logged during it)
         self._n_reasons, self._first_reason, self._reasons_before = 0, "", 0
@@ -146,11 +140,10 @@ class FmuInstance:
             raise FmiCallFailed(self.name, "instantiate", 4, self._call_reasons()) from exc
 
     def _on_log(self, env, instance, status, category, message):
-        """The FMU's logger callback: keep the message, count a reason, pass it to ``trace``."""
+        """The FMU's logger callback: count a reason (and keep the first of the call), pass it to ``trace``."""
         text = message.decode("utf-8", "replace").replace("%%", "%") if message else ""
         prefix = f"{self.name}: "
         text = text[len(prefix):] if text.startswith(prefix) else text
-        self.messages.append((int(status), text))
         if 0 < status < 5:  # Warning, Discard, Error, Fatal (not Pending)
             if self._n_reasons == self._reasons_before:
                 self._first_reason = text
