@@ -51,9 +51,12 @@ def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_
 
 
 @njit(cache=True)
-def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, omega_rotor, eps_cap, dring):
+def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, omega_rotor, eps_cap, dring,
+                    housing_ax=0.0, housing_ay=0.0):
     """Ring equations of physics.md §7.2 for one bearing (compiled; the one implementation: the monolithic run-up
-    and the bearing FMU both call it).
+    and the bearing FMU both call it), written relative to the bearing housing: a housing that accelerates by
+    (``housing_ax``, ``housing_ay``) loads the ring with −m (a_x, a_y) (docs/theory/housing.md; zero: bit for bit
+    the fixed-housing equations).
 
     Parameters
     ----------
@@ -73,6 +76,8 @@ def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, o
         Eccentricity cap of the film forces (see :func:`frbmodel.film.film_force_kernel`).
     dring : ndarray (5,)
         Output: d(ring)/dt.
+    housing_ax, housing_ay : float
+        Translational acceleration of the housing [m/s²] (the ring's position and velocity are relative to it).
 
     Returns
     -------
@@ -92,8 +97,8 @@ def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, o
                                      ring[3], wfr, eps_cap)
     dring[0] = ring[2]
     dring[1] = ring[3]
-    dring[2] = (-fix + fox) / ring_m
-    dring[3] = (-fiy + foy - ring_m * grav) / ring_m
+    dring[2] = (-fix + fox - ring_m * housing_ax) / ring_m
+    dring[3] = (-fiy + foy - ring_m * (grav + housing_ay)) / ring_m
     # torques with positions capped like the forces (trial states of implicit integrators may pass the wall)
     si = min(1.0, eps_cap / ei) if ei > 0 else 1.0
     so = min(1.0, eps_cap / eo) if eo > 0 else 1.0

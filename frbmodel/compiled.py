@@ -105,11 +105,13 @@ def rhs_packed(t, y, out, p):
     k += 3 * nu
     tg, wg, wdg = p[k:k + nt], p[k + nt:k + 2 * nt], p[k + 2 * nt:k + 3 * nt]
     diag = np.empty(4)
+    at_rest, no_mass = np.zeros(2), np.zeros((2, n_r))  # a fixed housing (the Radau path has no housing motion)
     if p[3] > 0:
         return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, p[6], unb_node, unb_me,
-                              unb_phase, tg, wg, wdg, p[4], p[5], diag, p[7], p[k + 3 * nt:k + 4 * nt])
+                              unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass, p[7],
+                              p[k + 3 * nt:k + 4 * nt])
     return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, p[6], unb_node, unb_me,
-                          unb_phase, tg, wg, wdg, p[4], p[5], diag)
+                          unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass)
 
 
 @cfunc(_SIG, cache=True)

@@ -191,9 +191,10 @@ def spin_acceleration(drive_torque, journal_torques, polar_inertia):
 
 
 @njit(cache=True)
-def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj):
-    """Add the journal forces of both bearings to ``f`` and write the rings' derivatives into ``out``; with a
-    ``tj`` of size 2, also the film torques on the journals [N m] (zero on springs)."""
+def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj, ax, ay):
+    """Add the journal forces of both bearings to ``f`` and write the rings' derivatives into ``out`` (housing
+    acceleration ``ax``, ``ay`` [m/s²]); with a ``tj`` of size 2, also the film torques on the journals [N m] (zero
+    on springs)."""
     base = 2 * n_r
     ring = np.empty(5)
     dring = np.empty(5)
@@ -213,7 +214,7 @@ def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, spr
             ring[k] = y[r0 + k]
         ring[4] = y[base + 8 + b]
         fix, fiy, ei, eo = ring_rhs_kernel(geom[b], polys[b], ring_m[b], ring_i[b], grav, y[j], y[j + 1], y[n_r + j],
-                                           y[n_r + j + 1], ring, w, eps_cap, dring)
+                                           y[n_r + j + 1], ring, w, eps_cap, dring, ax, ay)
         diag[2 * b] = ei
         diag[2 * b + 1] = eo
         f[j] += fix
@@ -228,9 +229,14 @@ def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, spr
 
 @njit(cache=True)
 def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
-                   tg, wg, wdg, springs, eps_cap, diag, polar_inertia=0.0, drive_torque=None):
+                   tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia=0.0,
+                   drive_torque=None):
     """dy/dt of the monolithic model for the state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds,
     rotation angle (, rotor speed)], written into ``out`` and returned.
+
+    Journal, ring and rotor displacements are relative to the rigid bearing housing, which may translate with the
+    acceleration ``housing_acc``: every mass then carries the inertial load −m a_h (docs/theory/housing.md);
+    ``housing_acc = (0, 0)`` is the fixed housing, bit for bit.
 
     Parameters
     ----------
@@ -267,6 +273,12 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
         Eccentricity ratio [-] at which film positions are capped.
     diag : ndarray (4,)
         Receives the film eccentricity ratios [-] (turbine inner, outer, compressor inner, outer).
+    housing_acc : ndarray (2,)
+        Translational acceleration (a_x, a_y) of the bearing housing [m/s²] (held over an integration call; the
+        turbocharger FMU's input).
+    housing_mass : ndarray (2, n_r)
+        M T_x and M T_y: the rotor mass matrix times the rigid translations along x and y [kg, kg m]
+        (:meth:`frbmodel.rotor.Rotor.translation_load` of a unit acceleration); unused while ``housing_acc`` is 0.
     polar_inertia : float
         Rotor polar moment of inertia J_p [kg m²] (torque-driven only).
     drive_torque : ndarray (nt,), optional
@@ -279,18 +291,22 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
         ``out``, holding dy/dt (SI units: the time derivative of each state's unit).
     """
     fb = np.zeros(n_r)
+    ax, ay = housing_acc[0], housing_acc[1]
     if drive_torque is None:
         tj = np.empty(0)
         w = interp_uniform(t, tg, wg)
-        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj)
+        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj, ax, ay)
         wd = interp_uniform(t, tg, wdg)
     else:
         tj = np.empty(2)
         w = y[2 * n_r + 11]
-        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj)
+        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj, ax, ay)
         wd = spin_acceleration(interp_uniform(t, tg, drive_torque), tj, polar_inertia)
         out[2 * n_r + 11] = wd
     f = f_grav.copy()
+    if ax != 0.0 or ay != 0.0:  # the housing frame's inertial load −M T a_h (skipped at rest: bit for bit as before)
+        for i in range(n_r):
+            f[i] -= housing_mass[0, i] * ax + housing_mass[1, i] * ay
     add_unbalance_forces(f, y[2 * n_r + 10], w, wd, unb_node, unb_me, unb_phase)
     f += fb  # the bearing loads after the unbalance, as before the torque-driven option (same rounding)
     q = y[:n_r]
@@ -303,7 +319,8 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
 
 @njit(cache=True)
 def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
-                   unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, polar_inertia=0.0, drive_torque=None):
+                   unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia=0.0,
+                   drive_torque=None):
     """Forward-difference Jacobian of :func:`monolithic_rhs` into ``jac`` (all in compiled code: one RHS call per
     state; step 1.5e-8 · max(|y_k|, scale_k)).
 
@@ -321,8 +338,8 @@ def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys
         Typical magnitude of each state (its unit), the floor of the difference step.
     eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav
         As in :func:`monolithic_rhs`.
-    unb_node, unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, polar_inertia, drive_torque
-        As in :func:`monolithic_rhs`.
+    unb_node, unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia
+        As in :func:`monolithic_rhs`; ``drive_torque`` too.
 
     Returns
     -------
@@ -331,13 +348,14 @@ def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys
     """
     n = y.size
     monolithic_rhs(t, y, f0, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
-                   tg, wg, wdg, springs, eps_cap, diag, polar_inertia, drive_torque)
+                   tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia, drive_torque)
     yp = y.copy()
     for k in range(n):
         h = 1.5e-8 * max(abs(y[k]), scale[k])
         yp[k] = y[k] + h
         monolithic_rhs(t, yp, work, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
-                       unb_phase, tg, wg, wdg, springs, eps_cap, diag, polar_inertia, drive_torque)
+                       unb_phase, tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia,
+                       drive_torque)
         for i in range(n):
             jac[i, k] = (work[i] - f0[i]) / h
         yp[k] = y[k]

@@ -362,6 +362,34 @@ class Recorder:
             np.savetxt(fh, self.rows[self.flushed:self.n], delimiter=",", fmt="%.10g")
         self.flushed = self.n
 
+    def truncate(self, t):
+        """Forget the rows after time ``t`` [s] (a co-simulation master restored an earlier state and will step
+        again from there); rows already on disk are rewritten.
+
+        Parameters
+        ----------
+        t : float
+            Keep the rows with time <= ``t``.
+
+        Examples
+        --------
+        >>> rec = Recorder(RunupSchema(("b",), ()), capacity=3)
+        >>> for t in (0.0, 0.1, 0.2):
+        ...     rec.append(rec.schema.row(t, 1000.0, [50.0], [[0, 0]], [[0, 0]], [[0.1, 0.2]], []))
+        >>> rec.truncate(0.1)
+        >>> rec.result().time.tolist()
+        [0.0, 0.1]
+        """
+        keep = int(np.searchsorted(self.rows[:self.n, 0], t, side="right"))
+        if keep >= self.n:
+            return
+        self.n = keep
+        if self.dir is not None and self.flushed > keep:
+            with open(self.csv, "w") as fh:
+                fh.write(",".join(self.columns) + "\n")
+            self.flushed = 0
+            self.flush()
+
     def _write_meta(self, status, message):
         self.meta.update({"status": status, "message": message})
         tmp = self.json.with_suffix(".json.tmp")

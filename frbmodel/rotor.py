@@ -414,8 +414,35 @@ class Rotor:
         >>> round(float(r.gravity_load(10.0)[1::4].sum()), 6) == round(-10.0 * r.mass, 6)
         True
         """
+        return self.translation_load(0.0, -g)
+
+    def translation_load(self, ax: float, ay: float) -> np.ndarray:
+        """Consistent nodal load M T a of a uniform translational acceleration field a = (``ax``, ``ay``): a_x on
+        every v DoF, a_y on every w DoF, nothing on the rotations (T holds the rigid translations).
+
+        Gravity is ``translation_load(0, -g)``; a housing that accelerates by a_h loads the rotor, in the housing
+        frame, with ``-translation_load(*a_h)`` (docs/theory/housing.md).
+
+        Parameters
+        ----------
+        ax, ay : float
+            Acceleration along x and y [m/s²].
+
+        Returns
+        -------
+        ndarray (n_dof,)
+            [N, N m].
+
+        Examples
+        --------
+        >>> r = Rotor([ShaftElement(0.1, 0.01)])
+        >>> f = r.translation_load(2.0, 0.0)
+        >>> bool(np.isclose(f[0::4].sum(), 2.0 * r.mass, rtol=1e-12)), float(abs(f[1::4]).max())
+        (True, 0.0)
+        """
         a = np.zeros(self.n_dof)
-        a[1::4] = -g
+        a[0::4] = ax
+        a[1::4] = ay
         return self.M @ a
 
     def static_deflection(self, support_nodes, support_positions=None, g: float = GRAVITY) -> np.ndarray:

@@ -685,6 +685,12 @@ class Problem:
         return self.profile.torque_driven
 
     @property
+    def housing_acc(self):
+        """The housing acceleration (a_x, a_y) [m/s²] the right-hand side reads (an array in :attr:`args`; zero in a
+        run-up, set by a stepped component before each call of the integrator)."""
+        return self.args[18]
+
+    @property
     def n_states(self):
         """Length of the state vector: 2 n_r + 11 (+ 1 for a torque-driven rotor)."""
         return 2 * self.n_rotor + 11 + (1 if self.torque_driven else 0)
@@ -761,6 +767,12 @@ class Problem:
         return float(np.interp(t, self.profile.t, self.profile.omega))
 
 
+def housing_mass(rotor):
+    """M T_x and M T_y (2, n_r) of the rotor [kg, kg m]: the load of a unit housing acceleration along x and y is
+    minus these rows (:meth:`frbmodel.rotor.Rotor.translation_load`; :func:`frbmodel.dynamics.monolithic_rhs`)."""
+    return np.vstack([rotor.translation_load(1.0, 0.0), rotor.translation_load(0.0, 1.0)])
+
+
 def build_problem(system, profile, film_model, unbalance=(), linear_springs=None):
     """Problem set-up: matrices, film geometry and correction polynomials, rings, unbalance, speed table.
 
@@ -809,13 +821,14 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     args = (rotor.acceleration_matrices, rotor.gravity_load(system.gravity), rotor.n_dof,
             np.array([b.node for b in system.bearings], dtype=np.int64), geom, polys,
             np.array([b.ring_mass for b in system.bearings]), np.array([b.ring_inertia for b in system.bearings]),
-            system.gravity, unb_node, unb_me, unb_phase, tg, profile.omega, profile.omega_dot, springs, EPS_CAP, diag)
+            system.gravity, unb_node, unb_me, unb_phase, tg, profile.omega, profile.omega_dot, springs, EPS_CAP, diag,
+            np.zeros(2), housing_mass(rotor))
     jp = rotor_polar_inertia(rotor)
-    if profile.torque_driven:
-        if not jp > 0:
-            raise ParameterError(f"rotor polar inertia = {jp!r} kg m^2 is invalid for a torque-driven rotor: valid "
-                                 "range > 0")
-        args = args + (jp, np.asarray(profile.drive_torque, dtype=float))
+    if profile.torque_driven and not jp > 0:
+        raise ParameterError(f"rotor polar inertia = {jp!r} kg m^2 is invalid for a torque-driven rotor: valid "
+                             "range > 0")
+    # polar inertia and drive torque last (None: a prescribed speed), so the arguments have one layout
+    args = args + (jp, np.asarray(profile.drive_torque, dtype=float) if profile.torque_driven else None)
     return Problem(system, profile, film_model, args, rotor.n_dof, springs, diag, jp, geom, polys)
 
 
@@ -903,14 +916,16 @@ def _speed_bound(problem):
     return w_max
 
 
-#: default integrator tolerances of the run-up: converged for the onsets the figures and tables report (README
-#: "Tolerance convergence": tightening both tenfold moves the onsets that grow out of the equilibrium by < 1 %;
-#: the former 1e-6 / 1e-9 m moved the first whirl onset by 7-11 %)
+#: default integrator tolerances of the run-up. The absolute tolerance decides (measured on the main job, c_o = 36
+#: µm): with 1e-10 m the turbine journal of the first 0.1 s is 2.5e-3 c_o off the converged trajectory (rtol 1e-10,
+#: atol 1e-13 m), and the components inside the large whirl at 200 krpm moved by up to 80 Hz with a tighter
+#: tolerance (issue #24); with 1e-11 m that trajectory is within 7e-5 c_o of the converged one.
+#: (Before that: 1e-6 / 1e-9 m moved the first whirl onset by 7-11 %.)
 DEFAULT_RTOL = 1e-7
-DEFAULT_ATOL_M = 1e-10
+DEFAULT_ATOL_M = 1e-11
 
 
-def atol_vector(problem, atol=DEFAULT_ATOL_M):
+def atol_vector(problem, atol=DEFAULT_ATOL_M, speed_scale=None):
     """LSODA absolute tolerances per state: ``atol`` [m] on displacements, scaled by a 0.03 m arm for rotations,
     by the largest rotor speed for velocities; ring speeds and the rotor speed of a torque-driven rotor
     1e-6 × (atol / 1e-9 m) × that speed [rad/s], the rotation angle 1e-6 × (atol / 1e-9 m) rad.
@@ -922,6 +937,9 @@ def atol_vector(problem, atol=DEFAULT_ATOL_M):
         The run-up problem.
     atol : float
         Absolute tolerance on displacements [m].
+    speed_scale : float, optional
+        The largest rotor speed [rad/s] that scales the velocity and speed tolerances; default: the run's
+        (:func:`_speed_bound`). A stepped component whose speed comes from an input gives its own.
 
     Returns
     -------
@@ -939,7 +957,7 @@ def atol_vector(problem, atol=DEFAULT_ATOL_M):
     ([1e-10, 1e-10], 1.0)
     """
     n_r = problem.n_rotor
-    w_max = _speed_bound(problem)
+    w_max = _speed_bound(problem) if speed_scale is None else float(speed_scale)
     pos_tol = float(atol)
     atol_scale = pos_tol / 1e-9
     atol = np.empty(problem.n_states)
@@ -957,7 +975,7 @@ def atol_vector(problem, atol=DEFAULT_ATOL_M):
     return atol, np.maximum(atol * 1e3, 1e-12)
 
 
-def typical_sizes(problem, displacement_m=1e-5):
+def typical_sizes(problem, displacement_m=1e-5, speed_scale=None):
     """Typical size of each state, the floor of the compiled Rosenbrock integrator's difference steps
     (:func:`frbmodel.rosenbrock.jacobian`): ``displacement_m`` (about a film clearance) on displacements and, scaled
     from it as in :func:`atol_vector`, on rotations and velocities; the largest rotor speed on the ring speeds and
@@ -969,14 +987,16 @@ def typical_sizes(problem, displacement_m=1e-5):
         The run-up problem.
     displacement_m : float
         Typical displacement [m].
+    speed_scale : float, optional
+        The largest rotor speed [rad/s], as for :func:`atol_vector`.
 
     Returns
     -------
     ndarray (problem.n_states,)
         Typical size per state (in each state's unit).
     """
-    size = atol_vector(problem, displacement_m)[0]
-    w_max = _speed_bound(problem)
+    size = atol_vector(problem, displacement_m, speed_scale)[0]
+    w_max = _speed_bound(problem) if speed_scale is None else float(speed_scale)
     size[[problem.ring_speed_index(0), problem.ring_speed_index(1)]] = w_max
     size[2 * problem.n_rotor + 10] = 1.0
     if problem.torque_driven:
@@ -1047,7 +1067,7 @@ def sample_row(problem, schema, t, y, buf):
 
 
 @njit(cache=True)
-def _film_samples(ts, ys, ws, args, diag, geom, polys, journal_at, ring_at, ring_speed_at, n_r, eps_cap, eps, torque,
+def film_samples(ts, ys, ws, args, diag, geom, polys, journal_at, ring_at, ring_speed_at, n_r, eps_cap, eps, torque,
                   power):
     """For each state ys[k] at time ts[k] [s] and rotor speed ws[k] [rad/s]: the films' eccentricity ratios as the
     RHS fills ``diag`` (one :func:`frbmodel.dynamics.monolithic_rhs` call with ``args``) into eps[k], and, per
@@ -1113,7 +1133,7 @@ def sample_rows(problem, schema, ts, ys):
         w = np.interp(ts, problem.profile.t, problem.profile.omega)
     eps, torque, power = np.zeros((n, 2 * nb)), np.full((n, nb), np.nan), np.full((n, nb), np.nan)
     if problem.springs == 0 and n:
-        _film_samples(ts, ys, w, problem.args, problem.diag, problem.geom, problem.polys, journal_at, ring_at,
+        film_samples(ts, ys, w, problem.args, problem.diag, problem.geom, problem.polys, journal_at, ring_at,
                       ring_speed_at, n_r, EPS_CAP, eps, torque, power)
     pairs = np.stack([journal_at, journal_at + 1], axis=1)
     rings = np.stack([ring_at, ring_at + 1], axis=1)
@@ -1122,8 +1142,9 @@ def sample_rows(problem, schema, ts, ys):
                        journal_torque=torque, power_loss=power)
 
 
-def _contact_message(schema, row, contact_eps):
-    """Message when a film's ε in ``row`` exceeds ``contact_eps`` (the member reaches its wall), else None."""
+def contact_message(schema, row, contact_eps, kept="results up to there are kept"):
+    """Message when a film's ε in ``row`` exceeds ``contact_eps`` (the member reaches its wall), else None; it ends
+    with ``kept`` (what happens to the results)."""
     ecc = row[schema.eps_slice()]
     worst = int(np.argmax(ecc))
     if not ecc[worst] > contact_eps:
@@ -1132,7 +1153,7 @@ def _contact_message(schema, row, contact_eps):
     member = "journal" if film == "inner" else "ring"
     return (f"{bearing} bearing, {film} film: eccentricity ratio {ecc[worst]:.4f} exceeds contact_eps = "
             f"{contact_eps} (the {member} reaches its wall) at t = {row[0]:.6g} s, rotor speed {row[1]:.0f} rpm; "
-            "results up to there are kept")
+            f"{kept}")
 
 
 def _speed_message(row):
@@ -1244,12 +1265,12 @@ def _rodas_samples(problem, y0, t_out, opts, counts):
 
 
 def _first_stop(problem, schema, rows, contact_eps):
-    """(i, message) for the first of ``rows`` at which the run stops (wall contact, :func:`_contact_message`,
+    """(i, message) for the first of ``rows`` at which the run stops (wall contact, :func:`contact_message`,
     checked first; a torque-driven speed out of range, :func:`_speed_message`), or (None, "")."""
     stop = np.zeros(rows.shape[0], dtype=bool)
     if problem.springs == 0:
         ecc = rows[:, schema.eps_slice()]
-        worst = ecc[np.arange(rows.shape[0]), np.argmax(ecc, axis=1)]  # the film _contact_message looks at
+        worst = ecc[np.arange(rows.shape[0]), np.argmax(ecc, axis=1)]  # the film contact_message looks at
         stop |= worst > contact_eps
     if problem.torque_driven:
         stop |= ~((rows[:, 1] > 0.0) & (rows[:, 1] <= MAX_SPEED_RPM))
@@ -1257,7 +1278,7 @@ def _first_stop(problem, schema, rows, contact_eps):
     if not hit.size:
         return None, ""
     row = rows[int(hit[0])]
-    message = _contact_message(schema, row, contact_eps) if problem.springs == 0 else None
+    message = contact_message(schema, row, contact_eps) if problem.springs == 0 else None
     return int(hit[0]), message or _speed_message(row)
 
 

@@ -164,7 +164,7 @@ def test_monolithic_rhs_rotor_rows_on_springs(table2):
     out = np.zeros_like(y)
     monolithic_rhs(t, y, out, rotor.acceleration_matrices, rotor.gravity_load(tc.gravity), n, jn, geom, polys,
                    np.ones(2), np.ones(2), tc.gravity, np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), tg, wg,
-                   wdg, k_s, 0.999, np.zeros(4))
+                   wdg, k_s, 0.999, np.zeros(4), np.zeros(2), np.zeros((2, n)))
     f = np.zeros(n)
     f[1::4] = -tc.gravity
     f = M @ f  # consistent gravity load (physics.md §7.1)
