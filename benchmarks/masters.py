@@ -151,7 +151,7 @@ def libcosim_start(folder, params, connected):
 
 #: coupling inputs whose value in the first step is reported (start value in the SSV, overwritten by connections)
 START_PROBE = (("turbine", "journal.x"), ("turbine", "rotor_speed"), ("rotor", "turbine_bearing.force.y"),
-               ("rotor", "turbine_bearing.journal_ref.x"), ("rotor", "turbine_bearing.stiffness[1,1]"))
+               ("rotor", "turbine_bearing.journal_ref.x"), ("rotor", "turbine_bearing.stiffness.xx"))
 
 
 def compare_start(params, connected, read):

@@ -6,25 +6,31 @@ import math
 
 import numpy as np
 from _fmu_common import FrbSlaveMixin
-from pythonfmu import Fmi2Slave
+from pythonfmu import DefaultExperiment, Fmi2Slave
+
+#: the journal inputs (x, y, vx, vy) and the rotor speed: every output of the communication point depends on them
+JOURNAL_IN = ("journal.x", "journal.y", "journal.vx", "journal.vy")
 
 
 class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
     """FMI 2.0 co-simulation slave of one floating-ring bearing (one instance per bearing).
 
     Parameters (all ``fixed``): films, ring mass and inertia, initial ring state, gravity, substep,
-    ``contact_eps``, ``film_model``, ``ring_speed_model``, ``linearization``. Inputs: journal state, rotor speed.
+    ``contact_eps``, ``film_model``, ``ring_speed_model``. Inputs: journal state, rotor speed.
     Outputs: force on the journal and its interface Jacobian, staggered-coupling values, the film torque on the
     journal ``journal_torque`` [N m] and the friction power of both films ``power_loss`` [W] (direct feedthrough,
-    evaluated with the force at the same journal and ring state), ring state, eccentricities, optional
-    linearization. FMI behaviour and statuses: :class:`_fmu_common.FrbSlaveMixin` (a ring integrator that does not
-    converge or blows up in a step is an fmi2Discard with the state restored, like a film reaching its wall).
+    evaluated with the force at the same journal and ring state), ring state, eccentricities; the linearization
+    outputs in a build with them (``frb build-fmus --linearization``). FMI behaviour and statuses:
+    :class:`_fmu_common.FrbSlaveMixin` (a ring integrator that does not converge or blows up in a step is an
+    fmi2Discard with the state restored, like a film reaching its wall).
     """
 
     author = "frbmodel"
     description = ("Floating-ring bearing: inner film, free-spinning ring, outer film (short-bearing pi-film, "
                    "half-Sommerfeld). Outputs the force on the journal and its interface Jacobian, the film torque "
                    "on the journal and the power loss.")
+    #: the macro step validated against the monolithic run-up (frbmodel.cosim.master.VALIDATED_STEP_S)
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-5)
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -39,13 +45,13 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
                         ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
             self._input(f"journal.{q}", f"{d} [{u}]", unit=u)
-        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s")
+        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s", low=0.0)
         self._journal_idx = np.array([self._input_pos[f"journal.{q}"] for q in ("x", "y", "vx", "vy")])
         self._speed_idx = self._input_pos["rotor_speed"]
         self._outputs()
         self._linearization_outputs(["m", "m", "m/s", "m/s"], ["m", "m", "m/s", "m/s"], ["N", "N"],
                                     ("states: ring x, y, vx, vy", "inputs: journal x, y, vx, vy",
-                                     "outputs: force x, y on the journal"))
+                                     "outputs: force x, y on the journal"), depends=JOURNAL_IN + ("rotor_speed",))
 
     def _parameters(self):
         """Parameters (all ``fixed``) with units and valid ranges; defaults: the turbine bearing of the paper's
@@ -77,7 +83,6 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._param("film_model", tc.film_model, "film model: short | short_corrected", "str", choices=FILM_MODELS)
         self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str",
                     choices=("free", "rsr_eq6", "rsr_eq7"))
-        self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
 
     def _outputs(self):
         """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units). Those
@@ -87,22 +92,27 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
         where = {n: k for k, n in enumerate(EXCHANGE_OUTPUTS)}
 
-        def point(name, desc, unit, k=None):
-            k = where[name] if k is None else k
-            self._output(name, desc, lambda: self._out()[k], unit=unit, block=(self._out, k))
+        feed = JOURNAL_IN + ("rotor_speed",)
+        every = feed  # initialization mode: the ring starts from its parameters; force_end from the inputs
 
-        def state(name, desc, unit, k):
-            self._output(name, desc, lambda: self._state_out()[k], unit=unit, block=(self._state_out, k))
+        def point(name, desc, unit, k=None, depends=feed, **kw):
+            k = where[name] if k is None else k
+            self._output(name, desc, lambda: self._out()[k], unit=unit, block=(self._out, k), depends=depends,
+                         init_depends=every, **kw)
+
+        def state(name, desc, unit, k, depends=(), **kw):
+            self._output(name, desc, lambda: self._state_out()[k], unit=unit, block=(self._state_out, k),
+                         depends=depends, init_depends=every, **kw)
 
         point("force.x", "film force on the journal, x [N]", "N")
         point("force.y", "film force on the journal, y [N]", "N")
-        for i in range(2):
-            for k in range(2):
-                point(f"stiffness[{i + 1},{k + 1}]", "interface Jacobian -dF/dx_journal [N/m]", "N/m")
-                point(f"damping[{i + 1},{k + 1}]", "interface Jacobian -dF/dv_journal [N s/m]", "N.s/m")
+        for i in "xy":
+            for k in "xy":
+                point(f"stiffness.{i}{k}", f"interface Jacobian -dF_{i}/d{k}_journal [N/m]", "N/m")
+                point(f"damping.{i}{k}", f"interface Jacobian -dF_{i}/dv{k}_journal [N s/m]", "N.s/m")
         for qi, (q, u) in enumerate((("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))):
             point(f"journal_ref.{q}", f"journal {q} at which force and Jacobian were evaluated [{u}]", u,
-                  len(EXCHANGE_OUTPUTS) + qi)
+                  len(EXCHANGE_OUTPUTS) + qi, depends=(f"journal.{q}",))
         state("force_end.x", "force on the journal at the end of the last step along the extrapolated journal "
               "path, x [N] (staggered coupling)", "N", 0)
         state("force_end.y", "force on the journal at the end of the last step, y [N]", "N", 1)
@@ -114,10 +124,12 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         point("power_loss", "friction power of the inner and outer film [W]", "W")
         state("ring.x", "ring centre x [m]", "m", 4)
         state("ring.y", "ring centre y [m]", "m", 5)
-        state("ring.speed", "ring spin speed [rad/s]", "rad/s", 6)
-        point("eps_inner", "inner film eccentricity ratio [-]", "1")
-        point("eps_outer", "outer film eccentricity ratio [-]", "1")
-        state("ring_speed_ratio", "ring speed / rotor speed [-]", "1", 7)
+        state("ring.speed", "ring spin speed [rad/s] (ring_speed_model rsr_eq6/7: from the rotor speed)", "rad/s", 6,
+              depends=("rotor_speed",))
+        point("eps_inner", "inner film eccentricity ratio [-]", "1", depends=("journal.x", "journal.y"), low=0.0,
+              high=1.0)
+        point("eps_outer", "outer film eccentricity ratio [-]", "1", depends=(), low=0.0, high=1.0)
+        state("ring_speed_ratio", "ring speed / rotor speed [-]", "1", 7, depends=("rotor_speed",))
 
     # ------------------------------------------------------------------ helpers
     def _journal(self):
@@ -143,8 +155,6 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                          speed, speed / w if w else 0.0])
 
     def _linear(self):
-        if not self._values["linearization"]:
-            return {k: np.zeros((4, 4)) for k in "ABCD"}
         if self._lin is None or self._lin_gen != self._gen:
             A, B, C, D = self._comp.linearization(self._journal(), self._in("rotor_speed"))
             self._lin = {"A": A, "B": B, "C": C, "D": D}
@@ -171,6 +181,19 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
             comp.force_end[:] = comp.outputs(j, w)[0]
         self._comp = comp
         self._changed()
+        self._warm_up(j, w)
+
+    def _warm_up(self, j, w):
+        """Load (or compile) the compiled kernels of the exchange and the ring step now, in initialization, not in
+        the first doStep: one evaluation and one 1 ns step of a copy (nothing is kept; a failure here is left to
+        the real call to report)."""
+        import copy
+
+        try:
+            self._out()
+            copy.deepcopy(self._comp).step(j, w, 0.0, 1e-9)
+        except Exception:  # noqa: BLE001
+            pass
 
     def _check_geometry(self):
         """ValueError naming the FMU parameters of a film geometry the model does not cover."""

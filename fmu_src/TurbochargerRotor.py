@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 from _fmu_common import FrbSlaveMixin
-from pythonfmu import Fmi2Slave
+from pythonfmu import DefaultExperiment, Fmi2Slave
 
 #: journal state quantities and their units, in the order of the outputs and of the journal_ref inputs
 JOURNAL = (("x", "m"), ("y", "m"), ("vx", "m/s"), ("vy", "m/s"))
@@ -29,7 +29,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     """FMI 2.0 co-simulation slave of the FE rotor built into the FMU (see the module description).
 
     Parameters (all ``fixed``): ``rotor_file``, ``speed_source``, speed ramp, unbalance per disc, initial journal
-    positions per bearing, gravity, substep, ``linearization``, ``force_interpolation``. Inputs: ``speed_in``
+    positions per bearing, gravity, substep, ``force_interpolation``. Inputs: ``speed_in``
     [rad/s], ``drive_torque`` [N m]; per bearing force, end-of-step force and path acceleration, reference journal
     state, interface Jacobian, film torque on the journal ``torque`` [N m]. Outputs: ``rotor_speed`` [rad/s],
     ``rotor_angle`` [rad], journal states per bearing, disc centres per disc, optional linearization. FMI
@@ -39,6 +39,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     author = "frbmodel"
     description = ("Turbocharger rotor, FE model of the system built into the FMU (paper Table 2 by default), "
                    "speed from a ramp, an input or a drive torque (speed_source).")
+    #: the macro step validated against the monolithic run-up (frbmodel.cosim.master.VALIDATED_STEP_S)
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-5)
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -81,7 +83,6 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._param("gravity", self._built_for.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2",
                     low=0.0)
         self._param("substep", ROTOR_SUBSTEP, "trapezoidal substep [s]", unit="s", low=1e-9, high=1e-3)
-        self._param("linearization", False, "publish the local state-space matrices A, B, C, D", "bool")
         self._param("force_interpolation", False, "interpolate the bearing force between force and force_end over the "
                     "step (staggered masters that step the bearings first); false for Jacobi masters", "bool")
 
@@ -109,10 +110,12 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
             for q, u in JOURNAL:
                 self._input(f"{b}.journal_ref.{q}", f"journal {q} at which the bearing force was evaluated [{u}]",
                             unit=u)
-            for i in range(2):
-                for k in range(2):
-                    self._input(f"{b}.stiffness[{i + 1},{k + 1}]", "bearing interface stiffness [N/m]", unit="N/m")
-                    self._input(f"{b}.damping[{i + 1},{k + 1}]", "bearing interface damping [N s/m]", unit="N.s/m")
+            for i in "xy":
+                for k in "xy":
+                    self._input(f"{b}.stiffness.{i}{k}", f"bearing interface stiffness -dF_{i}/d{k} [N/m]",
+                                unit="N/m")
+                    self._input(f"{b}.damping.{i}{k}", f"bearing interface damping -dF_{i}/dv{k} [N s/m]",
+                                unit="N.s/m")
             self._input(f"{b}.torque", "film torque on the journal about +z [N m] (the bearing's journal_torque; "
                         "brakes the rotor when speed_source = torque)", unit="N.m")
         from frbmodel.components import COUPLING_COLUMNS
@@ -130,7 +133,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
 
         def state(name, desc, unit):
             i = next(k)
-            self._output(name, desc, lambda: self._state_out()[i], unit=unit, block=(self._state_out, i))
+            self._output(name, desc, lambda: self._state_out()[i], unit=unit, block=(self._state_out, i),
+                         depends=(), init_depends=("speed_in",))
 
         state("rotor_speed", "rotor spin speed [rad/s]", "rad/s")
         state("rotor_angle", "rotor rotation angle about +z since t = 0 [rad]", "rad")
@@ -145,7 +149,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._linearization_outputs(x_units, ["N", "N"] * nb, [u for _ in range(nb) for _, u in JOURNAL],
                                     ("states: q, dq/dt (per node x, y, rotation about x, about y)",
                                      "inputs: bearing forces x, y per bearing",
-                                     "outputs: journal x, y, vx, vy per bearing"))
+                                     "outputs: journal x, y, vx, vy per bearing"), depends=())
 
     # ------------------------------------------------------------------ helpers
     def _state_out(self):
@@ -160,10 +164,6 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         return self._out_cache
 
     def _linear(self):
-        if not self._values["linearization"]:
-            nx, nb = 2 * self._built_for.rotor.n_dof, len(self._bearings)
-            return {"A": np.zeros((nx, nx)), "B": np.zeros((nx, 2 * nb)), "C": np.zeros((4 * nb, nx)),
-                    "D": np.zeros((4 * nb, 2 * nb))}
         from frbmodel.components import rotor_state_space
 
         return rotor_state_space(self._comp)
@@ -204,6 +204,21 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._out_gen = None
         self._comp = comp
         self._changed()
+        self._warm_up(w0)
+
+    def _warm_up(self, w0):
+        """Load (or compile) the rotor step's compiled kernel now, in initialization, not in the first doStep: one
+        1 ns step of a copy without bearing forces (nothing is kept)."""
+        import copy
+
+        from frbmodel.components import COUPLING_COLUMNS
+
+        nb = len(self._bearings)
+        try:
+            copy.deepcopy(self._comp).step_coupled(1e-9, np.zeros((nb, len(COUPLING_COLUMNS))), False, speed_in=w0,
+                                                   drive_torque=0.0, journal_torques=np.zeros(nb))
+        except Exception:  # noqa: BLE001
+            pass
 
     def _advance(self, current_time, step_size):
         """One step of the component with the bearing inputs gathered into its packed coupling array (it refuses

@@ -16,22 +16,8 @@ INSTANTIATED, INITIALIZATION, STEP, TERMINATED, ERROR = ("the instantiated state
 STATUS_FROM_LOG = "frb_status_from_log"
 #: most lists of value references whose index arrays a slave keeps (a master uses a handful; more are forgotten)
 MAX_PLANS = 256
-
-
-def _with_initial_unknowns(root):
-    """``root`` (the modelDescription element) with ModelStructure/InitialUnknowns listing every output declared
-    ``initial="calculated"`` (FMI 2.0 section 2.2.8), by its 1-based index, after Outputs."""
-    from xml.etree.ElementTree import Element
-
-    calculated = [str(i) for i, sv in enumerate(root.iter("ScalarVariable"), start=1)
-                  if sv.get("causality") == "output" and sv.get("initial") == "calculated"]
-    structure = root.find("ModelStructure")
-    if calculated and structure is not None and structure.find("InitialUnknowns") is None:
-        node = Element("InitialUnknowns")
-        for i in calculated:
-            node.append(Element("Unknown", {"index": i}))
-        structure.append(node)
-    return root
+#: build options in the FMU's resources (written by frbmodel.cosim.build): {"linearization": bool}
+BUILD_OPTIONS = "frb_build.json"
 
 
 class FrbSlaveMixin:
@@ -68,6 +54,7 @@ class FrbSlaveMixin:
         self._input_pos = {}  # input name -> position in self._input_values
         self._mode = INSTANTIATED
         self._failure = ""  # why the instance is in the error state (repeated when a later call is refused)
+        self._last_discard = ""  # why the last doStep was discarded ("" after a successful one)
         self._gen = 0  # counts changes of inputs, parameters and state: output caches compare it
         self._comp = None
         self._units = {}  # variable name -> unit of every Real variable (written by to_xml)
@@ -78,7 +65,21 @@ class FrbSlaveMixin:
         self._blocks = {}  # value reference of a block output -> (block function, index in its array)
         self._set_plans = {}  # tuple of value references -> index array into self._input_values (or None: no fast path)
         self._get_plans = {}  # tuple of value references -> block plan (or None: no fast path)
+        self._ranges = {}  # variable name -> (min, max) written into the model description
+        self._deps = {}  # output name -> input names it depends on at communication points (None: all)
+        self._init_deps = {}  # calculated output name -> input names it depends on in initialization mode
         self._status_from_log = bool(self.resources) and (Path(self.resources) / STATUS_FROM_LOG).is_file()
+        self._build = self._build_options()
+
+    def _build_options(self):
+        """The build options of this FMU (``resources/frb_build.json``); defaults when there is none."""
+        import json
+
+        path = Path(self.resources) / BUILD_OPTIONS if self.resources else None
+        opts = {"linearization": False}
+        if path is not None and path.is_file():
+            opts.update(json.loads(path.read_text(encoding="utf-8")))
+        return opts
 
     def _changed(self):
         """Inputs, parameters or state changed: every cached output is stale."""
@@ -110,10 +111,13 @@ class FrbSlaveMixin:
         if kind == "real":
             self._raw_get[vr] = var.getter
             self._checks[name] = (unit, low, high, low_open, None)
+            self._ranges[name] = (low, high)
         elif choices is not None:
             self._checks[name] = (None, None, None, False, tuple(choices))
 
-    def _input(self, name, desc, start=0.0, unit=None):
+    def _input(self, name, desc, start=0.0, unit=None, low=-math.inf, high=math.inf):
+        """Register a continuous Real input (``low``/``high``: its valid range, written as min/max)."""
+        self._ranges[name] = (low, high)
         k = self._input_values.size
         self._input_values = np.append(self._input_values, float(start))
         self._input_pos[name] = k
@@ -123,46 +127,68 @@ class FrbSlaveMixin:
         self._raw_get[vr] = var.getter
         self._in_vr[vr] = k
 
-    def _output(self, name, desc, fn, kind="real", unit=None, block=None):
+    def _output(self, name, desc, fn, kind="real", unit=None, block=None, depends=None, init_depends=None,
+                low=-math.inf, high=math.inf):
         """Register an output read by ``fn()``; ``block = (block_fn, index)``: it is also ``block_fn()[index]``,
-        an array the slave computes once for many outputs (the fast path of :meth:`get_real`)."""
+        an array the slave computes once for many outputs (the fast path of :meth:`get_real`).
+
+        ``depends``: the inputs it depends on at communication points (direct feedthrough; () none, None all);
+        ``init_depends``: those it depends on in initialization mode (default ``depends``), besides the parameters.
+        ``low``/``high``: its range (min/max). ``kind="const"``: an Integer constant ``fn()`` (a size)."""
+        self._deps[name] = None if depends is None else tuple(depends)
+        if kind == "const":
+            var = Integer(name, causality=Fmi2Causality.output, variability=Fmi2Variability.constant,
+                          initial=Fmi2Initial.exact, description=desc, getter=fn)
+            self._register(var, "output", None)
+            return
         if kind == "int":
             var = Integer(name, causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
-                          initial=Fmi2Initial.exact, description=desc,
+                          initial=Fmi2Initial.calculated, description=desc,
                           getter=lambda f=fn, n=name: self._evaluate(n, f, int, 0))
         else:
             var = Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
                        initial=Fmi2Initial.calculated, description=desc,
                        getter=lambda f=fn, n=name: self._evaluate(n, f, float, math.nan))
         vr = self._register(var, "output", unit)
+        self._init_deps[name] = self._deps[name] if init_depends is None else tuple(init_depends)
         if kind != "int":
             self._raw_get[vr] = fn
+            self._ranges[name] = (low, high)
         if block is not None:
             self._blocks[vr] = block
 
-    def _linearization_outputs(self, x_units, u_units, y_units, what):
-        """Integer outputs nx, nu, ny and Real outputs A[i,j], B[i,j], C[i,j], D[i,j] (1-based, row-major) read
-        from ``self._linear()`` for states, inputs and outputs of the units ``x_units``, ``u_units``,
-        ``y_units`` (each entry's unit follows: A[i,j] = unit(x_i)/(s unit(x_j)), ...); ``what`` = (states,
-        inputs, outputs) descriptions."""
+    def _linearization_outputs(self, x_units, u_units, y_units, what, depends=None):
+        """In an FMU built with the linearization option only (``frb build-fmus --linearization``): the Integer
+        constants nx, nu, ny and the Real outputs A_i_j, B_i_j, C_i_j, D_i_j (1-based row i, column j) read from
+        ``self._linear()`` for states, inputs and outputs of the units ``x_units``, ``u_units``, ``y_units`` (each
+        entry's unit follows: A_i_j = unit(x_i)/(s unit(x_j)), ...); ``what`` = (states, inputs, outputs)
+        descriptions; ``depends`` as for :meth:`_output`."""
         from frbmodel.cosim.units import ratio
 
+        if not self._build["linearization"]:
+            return
         for name, n, desc in (("nx", len(x_units), what[0]), ("nu", len(u_units), what[1]),
                               ("ny", len(y_units), what[2])):
-            self._output(name, f"linearization: number of {desc}", lambda n=n: n, "int")
+            self._output(name, f"linearization: number of {desc}", lambda n=n: n, "const")
         for name, rows, cols, tp in (("A", x_units, x_units, -1), ("B", x_units, u_units, -1),
                                      ("C", y_units, x_units, 0), ("D", y_units, u_units, 0)):
             for i, ru in enumerate(rows):
                 for k, cu in enumerate(cols):
-                    self._output(f"{name}[{i + 1},{k + 1}]", f"linearization matrix {name} (row-major, 1-based)",
-                                 lambda name=name, i=i, k=k: self._linear()[name][i, k], unit=ratio(ru, cu, tp))
+                    self._output(f"{name}_{i + 1}_{k + 1}", f"linearization matrix {name}, row {i + 1}, column "
+                                 f"{k + 1}", lambda name=name, i=i, k=k: self._linear()[name][i, k],
+                                 unit=ratio(ru, cu, tp), depends=depends)
 
     def to_xml(self, model_options=None):
-        """pythonfmu's model description plus the declared units (``unit`` of each Real, UnitDefinitions)."""
+        """pythonfmu's model description plus what it does not write: units (``unit`` of each Real,
+        UnitDefinitions), ranges (min/max), ModelStructure with the real dependencies
+        (:mod:`frbmodel.cosim.fmu_description`)."""
+        from frbmodel.cosim.fmu_description import finish
         from frbmodel.cosim.units import declare_units
 
         root = declare_units(super().to_xml(model_options or {}), self._units)
-        return _with_initial_unknowns(root)
+        params = [v.name for v in self.vars.values() if self._kind[v.value_reference] == "parameter"]
+        initial = {n: self._init_deps[n] for n in self._init_deps}
+        return finish(root, self._ranges, self._deps, initial, params)
 
     # ------------------------------------------------------------------ status protocol
     def _refuse(self, msg):
@@ -391,9 +417,11 @@ class FrbSlaveMixin:
         except Exception as exc:  # noqa: BLE001
             self._set_component_state(saved)
             self._changed()
-            self._discard(f"doStep from t = {current_time:.6g} s by {step_size:.3g} s discarded, the state stays at "
-                          f"t = {current_time:.6g} s: {self._step_context()}{exc}")
+            self._last_discard = (f"doStep from t = {current_time:.6g} s by {step_size:.3g} s discarded, the state "
+                                  f"stays at t = {current_time:.6g} s: {self._step_context()}{exc}")
+            self._discard(self._last_discard)
             return False
+        self._last_discard = ""
         self._changed()
         return True
 
@@ -431,6 +459,30 @@ class FrbSlaveMixin:
         if self._comp is not None and state.get("_component") is not None:
             self._set_component_state(state["_component"])
         self._changed()
+
+    # FMU state serialization (fmi2SerializeFMUstate): the state above as JSON, arrays tagged so they come back as
+    # arrays; floats round-trip exactly (JSON writes their shortest repr)
+    @staticmethod
+    def _fmu_state_to_bytes(state):
+        import json
+
+        def encode(x):
+            if isinstance(x, np.ndarray):
+                return {"__ndarray__": x.tolist(), "dtype": str(x.dtype)}
+            if isinstance(x, np.generic):
+                return x.item()
+            raise TypeError(f"cannot serialize {type(x).__name__}")
+
+        return json.dumps(state, default=encode).encode("utf-8")
+
+    @staticmethod
+    def _fmu_state_from_bytes(data):
+        import json
+
+        def decode(d):
+            return np.array(d["__ndarray__"], dtype=d["dtype"]) if "__ndarray__" in d else d
+
+        return json.loads(bytes(data).decode("utf-8"), object_hook=decode)
 
     def _check_version(self):
         """Refuse to start if the imported frbmodel is not the bundled version (pythonfmu slaves share the

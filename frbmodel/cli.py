@@ -913,12 +913,12 @@ def _first_run_notice(command):
 
 
 def cmd_build_fmus(args):
-    """``frb build-fmus``: build the bearing and rotor FMUs and the SSP into a folder."""
+    """``frb build-fmus``: build the FMUs and the SSP into a folder."""
     from .cosim.build import build_fmus
 
     if Path(args.out).exists() and not Path(args.out).is_dir():
         raise ParameterError(f"--out = {args.out!r} is not a writable folder: it is a file")
-    build_fmus(args.out, args.src, rotor_file=args.rotor_file)
+    build_fmus(args.out, args.src, rotor_file=args.rotor_file, linearization=args.linearization)
     print(f"results in {Path(args.out).resolve()}")
 
 
@@ -926,9 +926,12 @@ def cmd_cosim(args):
     """``frb cosim``: co-simulated run-up of an SSP system (rotor speed from the parameter set's ramp, a drive torque
     or a CSV speed profile), streamed to a folder, with figures; exit code."""
     from .cosim.master import COUPLING_TOL, cosimulate
+    from .cosim.system_master import is_system_ssp
     from .parameters import Turbocharger
     from .runup import SpeedProfile
 
+    if Path(args.ssp).exists() and is_system_ssp(args.ssp):
+        return _cosim_system(args)
     if args.coupling_tol is not None and not args.adaptive:
         raise ParameterError(f"--coupling-tol {args.coupling_tol:g} applies only with --adaptive")
     tol = COUPLING_TOL if args.coupling_tol is None else check_positive("--coupling-tol", args.coupling_tol)
@@ -977,6 +980,41 @@ def cmd_cosim(args):
         print(f"convergence check: the same co-simulation with half the macro step ({h:g} s)")
         check_convergence(run, lambda folder: cosimulate(
             args.ssp, args.parameter_set, args.stop_time, h, folder, **kw), out, "macro step / 2")
+    return code
+
+
+#: frb cosim options of the bearing + rotor split that a system with the turbocharger FMU has no use for
+_SPLIT_ONLY = (("rollback", "--rollback"), ("speed_source", "--speed-source"), ("profile", "--profile"),
+               ("drive_torque", "--drive-torque"), ("adaptive", "--adaptive"), ("coupling_tol", "--coupling-tol"),
+               ("check_convergence", "--check-convergence"), ("unvalidated_step", "--unvalidated-step"))
+
+
+def _cosim_system(args):
+    """``frb cosim`` of an SSP with the turbocharger FMU (e.g. build/engine_turbocharger.ssp): the fixed-step
+    Jacobi master, the FMU's own record at 20 kHz, the composite figures."""
+    from .cosim.system_master import SystemMaster
+    from .parameters import Turbocharger
+
+    given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None)]
+    if given:
+        raise ParameterError(f"{' / '.join(given)} applies to the bearing + rotor split; {args.ssp} holds the "
+                             "turbocharger FMU, which integrates itself with error control at any macro step (set its "
+                             "speed_source and drive_torque in the SSP's parameter set)")
+    out = writable_dir(args.out)
+    trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
+    master = SystemMaster(args.ssp, args.parameter_set, args.stop_time, args.step, trace=trace)
+    print(f"system {args.ssp} ({args.parameter_set}): fixed-step Jacobi master, macro step {master.step_size:g} s, "
+          f"stop time {master.stop_time:g} s")
+    run, code = _stoppable("cosim", lambda: master.run(out, progress=True), out)
+    if run is None:
+        return code
+    m = run.meta
+    print(f"wall time {m.get('wall_time_s', float('nan')):.1f} s "
+          f"({m.get('fmi_time_s', 0) / max(m.get('wall_time_s', 1e-9), 1e-9):.0%} in FMI calls), "
+          f"{m.get('master', {}).get('steps_taken', 0)} macro steps, {run.time.size} samples of the turbocharger's "
+          "record")
+    _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
+                title=f"turbocharger FMU in {Path(args.ssp).name} ({args.parameter_set})")
     return code
 
 
@@ -1203,13 +1241,16 @@ def _add_compare(sub):
 
 def _add_build_fmus(sub):
     bf = sub.add_parser("build-fmus", formatter_class=_Formatter,
-                       help="build the bearing and rotor FMUs and pack build/turbocharger.ssp")
+                       help="build the turbocharger FMU, the bearing and rotor FMUs, and pack build/turbocharger.ssp")
     bf.add_argument("--out", default="build", help="output folder")
     bf.add_argument("--src", default=None, help="folder holding fmu_src/ and ssp/ (default: this checkout, else the "
                     "copies shipped in the installed package)")
     bf.add_argument("--rotor-file", default=None, metavar="FILE",
                     help="system file (frb system) the rotor FMU is built for: its discs, bearings and node count "
-                         "define the rotor FMU's variables (default: Table 2)")
+                         "define the rotor and turbocharger FMUs' variables (default: Table 2)")
+    bf.add_argument("--linearization", action="store_true",
+                    help="give the bearing and rotor FMUs their linearization outputs (nx, nu, ny, A_i_j ... D_i_j) "
+                         "for frb linearize, which otherwise builds this variant itself")
     bf.set_defaults(func=cmd_build_fmus)
 
 

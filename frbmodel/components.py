@@ -78,8 +78,8 @@ def _interface_jacobian(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, eps
 
 
 #: the values of :meth:`BearingComponent.exchange`, in its order (named as the bearing FMU's outputs)
-EXCHANGE_OUTPUTS = ("force.x", "force.y", "stiffness[1,1]", "stiffness[1,2]", "stiffness[2,1]", "stiffness[2,2]",
-                    "damping[1,1]", "damping[1,2]", "damping[2,1]", "damping[2,2]", "eps_inner", "eps_outer",
+EXCHANGE_OUTPUTS = ("force.x", "force.y", "stiffness.xx", "stiffness.xy", "stiffness.yx", "stiffness.yy",
+                    "damping.xx", "damping.xy", "damping.yx", "damping.yy", "eps_inner", "eps_outer",
                     "journal_torque", "power_loss")
 
 
@@ -795,8 +795,8 @@ def _with_supports(minv, minv_k, jdofs, kb, cb):
 #: the columns of the per-bearing coupling array of :meth:`RotorComponent.step_coupled` (named as the rotor FMU's
 #: inputs after ``<bearing>_bearing.``): F0 [N], K [N/m] and C [N s/m] row-major, the journal state they belong to
 #: [m, m/s], and the staggered coupling's end-of-path force F1 [N] and path acceleration a [m/s²]
-COUPLING_COLUMNS = ("force.x", "force.y", "stiffness[1,1]", "stiffness[1,2]", "stiffness[2,1]", "stiffness[2,2]",
-                    "damping[1,1]", "damping[1,2]", "damping[2,1]", "damping[2,2]", "journal_ref.x", "journal_ref.y",
+COUPLING_COLUMNS = ("force.x", "force.y", "stiffness.xx", "stiffness.xy", "stiffness.yx", "stiffness.yy",
+                    "damping.xx", "damping.xy", "damping.yx", "damping.yy", "journal_ref.x", "journal_ref.y",
                     "journal_ref.vx", "journal_ref.vy", "force_end.x", "force_end.y", "journal_accel.x",
                     "journal_accel.y")
 

@@ -20,6 +20,18 @@ def built(tmp_path_factory):
     return out
 
 
+@pytest.fixture(scope="session")
+def built_lin(tmp_path_factory):
+    """The FMUs built with their linearization outputs (frb build-fmus --linearization), once per session."""
+    from pathlib import Path
+
+    from frbmodel.cosim.build import build_fmus
+
+    out = tmp_path_factory.mktemp("build_lin")
+    build_fmus(out, Path(__file__).resolve().parents[1], progress=lambda m: None, linearization=True)
+    return out
+
+
 @pytest.fixture(scope="session", autouse=True)
 def _dask_scratch_in_tmp(tmp_path_factory):
     """Dask's LocalCluster writes its scratch space under the temporary directory (/tmp/dask-scratch-space by

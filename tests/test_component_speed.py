@@ -280,9 +280,9 @@ def _start(slave, params, inputs):
 
 
 def _real_outputs(slave):
-    """Value references of the Real outputs but the linearization matrices A[i,j], B[i,j], C[i,j], D[i,j]."""
+    """Value references of the Real outputs but the linearization matrices A_i_j, B_i_j, C_i_j, D_i_j."""
     return [v.value_reference for v in slave.vars.values() if v.causality.name == "output" and isinstance(v, Real)
-            and not (v.name[0] in "ABCD" and v.name[1] == "[")]
+            and not (v.name[0] in "ABCD" and v.name[1] == "_")]
 
 
 def test_slave_fast_paths_read_what_the_per_variable_paths_read():
@@ -307,17 +307,17 @@ def test_slave_fast_paths_read_what_the_per_variable_paths_read():
         np.testing.assert_array_equal(b.get_real(outs[::-1]), b._get_each(outs[::-1], Real,
                                                                            math.nan))
     rot = rotor_cls(instance_name="rotor", resources=None)
-    vr = _start(rot, {"speed_start": w}, {f"{n}_bearing.stiffness[{i},{i}]": 1e6 for n in ("turbine", "compressor")
-                                          for i in (1, 2)})
+    vr = _start(rot, {"speed_start": w}, {f"{n}_bearing.stiffness.{i}{i}": 1e6 for n in ("turbine", "compressor")
+                                          for i in "xy"})
     outs = _real_outputs(rot)
     inputs = [v for k, v in vr.items() if rot.vars[v].causality.name == "input"]
     rng = np.random.default_rng(2)
     for k in range(3):
         values = list(rng.normal(size=len(inputs)) * 1e-3)
         for n in ("turbine", "compressor"):  # supported by springs and dampers, so that the steps stay bounded
-            for i in (1, 2):
-                values[inputs.index(vr[f"{n}_bearing.stiffness[{i},{i}]"])] = 1e6
-                values[inputs.index(vr[f"{n}_bearing.damping[{i},{i}]"])] = 1e2
+            for i in "xy":
+                values[inputs.index(vr[f"{n}_bearing.stiffness.{i}{i}"])] = 1e6
+                values[inputs.index(vr[f"{n}_bearing.damping.{i}{i}"])] = 1e2
         rot.set_real(inputs, values)
         assert [rot.vars[v].getter() for v in inputs] == values  # the array assignment stored every value
         assert rot.do_step(k * 1e-5, 1e-5)

@@ -248,10 +248,11 @@ def test_fmu_state_round_trip_and_recovery_after_a_failed_step(built, tmp_path):
     s.freeFMUstate(saved)
 
 
-def test_rotor_fmu_takes_its_rotor_from_rotor_file(built, tmp_path):
+def test_rotor_fmu_takes_its_rotor_from_rotor_file(built_lin, tmp_path):
     """A system written like `frb system` does, with a 50 % heavier turbine wheel: the rotor FMU's state matrix
-    (linearization mode) must be A = [[0, I], [−M⁻¹K, −Ω M⁻¹G]] (physics.md §9) of that rotor — built here from the
-    bundled rotor's matrices with the extra wheel mass added by hand — and not the bundled Table 2 rotor's."""
+    (an FMU built with the linearization outputs) must be A = [[0, I], [−M⁻¹K, −Ω M⁻¹G]] (physics.md §9) of that
+    rotor — built here from the bundled rotor's matrices with the extra wheel mass added by hand — and not the
+    bundled Table 2 rotor's."""
     from dataclasses import replace
 
     tc = frb.turbocharger()
@@ -260,15 +261,14 @@ def test_rotor_fmu_takes_its_rotor_from_rotor_file(built, tmp_path):
     heavy = tc.with_(rotor=replace(tc.rotor, discs=discs))
     path = heavy.save(tmp_path / "heavy.toml")
     omega = 1000.0  # [rad/s], constant (no Ω̇ G term)
-    s, vr, _ = _slave(built / "fmus" / "TurbochargerRotor.fmu", "heavy", tmp_path)
+    s, vr, _ = _slave(built_lin / "fmus" / "TurbochargerRotor.fmu", "heavy", tmp_path)
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.setString([vr["rotor_file"]], [str(path)])
-    s.setBoolean([vr["linearization"]], [True])
     s.setReal([vr["speed_start"], vr["speed_end"]], [omega, omega])
     s.exitInitializationMode()
     n = tc.rotor.n_dof
-    names = [f"A[{i + 1},{k + 1}]" for i in range(2 * n) for k in range(2 * n)]
+    names = [f"A_{i + 1}_{k + 1}" for i in range(2 * n) for k in range(2 * n)]
     A = np.array(s.getReal([vr[x] for x in names])).reshape(2 * n, 2 * n)
 
     def expected(M):

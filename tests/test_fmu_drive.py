@@ -165,8 +165,8 @@ def test_torque_mode_spin_and_rollback(built, tmp_path):
     h.set("setString", ["speed_source"], ["torque"])
     h.set("setReal", ["speed_start"], [2000.0])
     h(OK, "exitInitializationMode")
-    springs = {f"{b.name}_bearing.{m}[{i},{i}]": v for b in tc.bearings
-               for m, v in (("stiffness", 2e6), ("damping", 300.0)) for i in (1, 2)}
+    springs = {f"{b.name}_bearing.{m}.{i}{i}": v for b in tc.bearings
+               for m, v in (("stiffness", 2e6), ("damping", 300.0)) for i in "xy"}
     springs.update({f"{b.name}_bearing.torque": t for b, t in zip(tc.bearings, tj)})
     h.set("setReal", springs.keys(), springs.values())
     outs = ["rotor_speed", "rotor_angle", "turbine_bearing.journal.x", "turbine_bearing.journal.y",

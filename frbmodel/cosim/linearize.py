@@ -16,8 +16,68 @@ from .master import CosimStopped, Master, operating_point_overrides, system_from
 
 
 def _matrix(fmu, name, nr, nc):
-    names = [f"{name}[{i + 1},{k + 1}]" for i in range(nr) for k in range(nc)]
+    names = [f"{name}_{i + 1}_{k + 1}" for i in range(nr) for k in range(nc)]
     return np.array(fmu.call("getReal", fmu.vr(names))).reshape(nr, nc)
+
+
+def has_linearization(fmu) -> bool:
+    """True if the FMU (``.fmu`` file) was built with the linearization outputs (``frb build-fmus
+    --linearization``)."""
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    return any(sv.get("name") == "nx" for sv in root.iter("ScalarVariable"))
+
+
+_VARIANTS = {}  # (SSP path, modification time) -> folder of its linearization variant (this process)
+
+
+def linearization_ssp(ssp, progress=None):
+    """The SSP ``ssp`` with FMUs that have the linearization outputs: ``ssp`` itself if its FMUs have them, else a
+    copy (in a temporary folder, made once per process and SSP) whose bearing and rotor FMUs are rebuilt with them
+    for the system its rotor FMU was built for; its SSDs and parameter sets are those of ``ssp``.
+
+    Parameters
+    ----------
+    ssp : str or Path
+        The SSP archive or folder.
+    progress : callable, optional
+        Called with one message per written file of the rebuild.
+
+    Returns
+    -------
+    Path
+    """
+    import atexit
+    import shutil
+    import tempfile
+
+    from .build import build_fmus
+    from .fmu_system import rotor_system_of_fmu
+    from .loader import model_identifier
+    from .ssp import read_ssp
+
+    key = (str(Path(ssp).resolve()), Path(ssp).stat().st_mtime if Path(ssp).exists() else None)
+    if key in _VARIANTS and _VARIANTS[key].is_dir():
+        return _VARIANTS[key]
+    with read_ssp(ssp) as s:
+        fmus = sorted(set(s.components.values()))
+        if all(has_linearization(f) for f in fmus):
+            return Path(ssp)
+        tmp = Path(tempfile.mkdtemp(prefix="frb_linearization_"))
+        atexit.register(shutil.rmtree, str(tmp), ignore_errors=True)
+        shutil.copytree(s.root, tmp / "ssp")
+        rotor = [f for f in fmus if model_identifier(f) == "TurbochargerRotor"]
+        system = rotor_system_of_fmu(rotor[0]) if rotor else None
+        built = {p.stem: p for p in build_fmus(tmp / "build", rotor_file=system, linearization=True,
+                                               progress=progress or (lambda m: None)) if p.suffix == ".fmu"}
+        for f in fmus:
+            target = tmp / "ssp" / f.relative_to(s.root)
+            shutil.copyfile(built[model_identifier(f)], target)
+    _VARIANTS[key] = tmp / "ssp"
+    return _VARIANTS[key]
 
 
 def _dims(fmu):
@@ -60,12 +120,11 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
         raise ParameterError(f"method = {method!r}: the FMU linearization covers the film methods with ring DoFs "
                              "(F, G, I, J)")
     check_speed("speed_rpm", speed_rpm)
-    master = Master(ssp, parameter_set)
+    master = Master(linearization_ssp(ssp), parameter_set)
     system = master.system
     ov = operating_point_overrides(system, speed_rpm, method=m.letter)
     for comp in master.ssp.components:
         master.params.setdefault(comp, {}).update(ov.get(comp, {}))
-        master.params[comp]["linearization"] = ("Boolean", True)
     with master:
         master.initialize()  # parameters, then the journals and speed to the bearings (the operating point)
         rotor = master.rotor

@@ -177,12 +177,13 @@ def model_identifier(fmu_path) -> str:
     return cs.get("modelIdentifier")
 
 
-def _rewrite(fmu_path: Path, entries: dict[str, bytes]):
-    """Rewrite the zip ``fmu_path`` with ``entries`` (name -> bytes) added or replaced."""
+def _rewrite(fmu_path: Path, entries: dict[str, bytes], drop=lambda name: False):
+    """Rewrite the zip ``fmu_path`` with ``entries`` (name -> bytes) added or replaced and the members for which
+    ``drop(name)`` is true left out."""
     tmp = fmu_path.with_name(fmu_path.name + ".tmp")
     with zipfile.ZipFile(fmu_path) as zin, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
         for info in zin.infolist():
-            if info.filename not in entries:
+            if info.filename not in entries and not drop(info.filename):
                 zout.writestr(info, zin.read(info))
         for name, data in entries.items():
             zi = zipfile.ZipInfo(name, date_time=time.localtime()[:6])
@@ -240,8 +241,11 @@ def install_loader(fmu_path, src=None, cc=None, config_text=None, progress=print
             raise ValueError(f"{fmu_path}: no {front} (not a pythonfmu FMU for {PLATFORM}?)")
     entries.update({front: binary, CONFIG_NAME: text.encode("utf-8"),
                     STATUS_MARKER: b"the FMU binary returns the worst status logged during each FMI call\n"})
-    _rewrite(fmu_path, entries)
-    progress(f"{fmu_path.name}: loader for non-Python FMI hosts installed ({front}, {CONFIG_NAME})")
+    # the binaries of other platforms: the Python description is this machine's, so a Windows or macOS host would
+    # accept the FMU and then fail to start it
+    _rewrite(fmu_path, entries, drop=lambda n: n.startswith("binaries/") and not n.startswith(f"binaries/{PLATFORM}/"))
+    progress(f"{fmu_path.name}: loader for non-Python FMI hosts installed ({front}, {CONFIG_NAME}; binaries for "
+             "other platforms removed)")
     return True
 
 

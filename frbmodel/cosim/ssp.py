@@ -1,4 +1,5 @@
-"""SSP 1.0 system of the turbocharger: one rotor FMU, two bearing FMUs, their connections and parameter sets.
+"""SSP 1.0 systems: the turbocharger split into one rotor FMU and two bearing FMUs (their connections and parameter
+sets, :func:`write_ssp`), and the example engine side driving the whole-turbocharger FMU (:func:`write_engine_ssp`).
 
 The system is the rotor FMU's (default: the paper's Table 2 turbocharger): the bearing components are named after
 its bearings, and connect to the rotor's ``<bearing>_bearing.*`` variables.
@@ -51,7 +52,7 @@ def _bearing_connections(inst, prefix):
     con += [(inst, f"force_end.{q}", "rotor", f"{prefix}.force_end.{q}") for q in "xy"]
     con += [(inst, f"journal_accel.{q}", "rotor", f"{prefix}.journal_accel.{q}") for q in "xy"]
     for m in ("stiffness", "damping"):
-        con += [(inst, f"{m}[{i},{k}]", "rotor", f"{prefix}.{m}[{i},{k}]") for i in (1, 2) for k in (1, 2)]
+        con += [(inst, f"{m}.{i}{k}", "rotor", f"{prefix}.{m}.{i}{k}") for i in "xy" for k in "xy"]
     return con
 
 
@@ -185,10 +186,10 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
             comp["rotor"][f"{prefix}.force_end.y"] = ("Real", float(F[1]), "N")
             comp["rotor"][f"{prefix}.force.x"] = ("Real", float(F[0]), "N")
             comp["rotor"][f"{prefix}.force.y"] = ("Real", float(F[1]), "N")
-            for i in range(2):
-                for k in range(2):
-                    comp["rotor"][f"{prefix}.stiffness[{i + 1},{k + 1}]"] = ("Real", float(K[i, k]), "N/m")
-                    comp["rotor"][f"{prefix}.damping[{i + 1},{k + 1}]"] = ("Real", float(C[i, k]), "N.s/m")
+            for i, qi in enumerate("xy"):
+                for k, qk in enumerate("xy"):
+                    comp["rotor"][f"{prefix}.stiffness.{qi}{qk}"] = ("Real", float(K[i, k]), "N/m")
+                    comp["rotor"][f"{prefix}.damping.{qi}{qk}"] = ("Real", float(C[i, k]), "N.s/m")
             comp["rotor"][f"{prefix}.torque"] = ("Real", float(torque), "N.m")
             p = {"journal.x": ("Real", jx, "m"), "journal.y": ("Real", float(e.journal[1]), "m"),
                  "rotor_speed": ("Real", w0, "rad/s")}
@@ -217,31 +218,41 @@ def _q(ns, tag):
 
 def _ssd_tree(bound_set, step_size, stop_time, tc=None):
     """SSD of the system ``tc`` (default Table 2) whose components bind ``resources/<bound_set>_<component>.ssv``."""
-    root = ET.Element(_q("ssd", "SystemStructureDescription"), {"version": "1.0", "name": "turbocharger"})
-    system = ET.SubElement(root, _q("ssd", "System"), {"name": "turbocharger", "description":
-                           "Turbocharger rotor on two floating-ring bearings (frbmodel), interface-Jacobian coupling"})
-    elements = ET.SubElement(system, _q("ssd", "Elements"))
-    cons = connections(tc)
     comps = [("rotor", "TurbochargerRotor")] + [(inst, "FloatingRingBearing") for inst, _ in bearing_components(tc)]
-    for name, fmu in comps:
-        el = ET.SubElement(elements, _q("ssd", "Component"), {"name": name, "source": f"resources/{fmu}.fmu",
+    return ssd_tree("turbocharger", "Turbocharger rotor on two floating-ring bearings (frbmodel), interface-Jacobian "
+                    "coupling", comps, connections(tc), bound_set, step_size, stop_time)
+
+
+def ssd_tree(name, description, comps, cons, bound_set, step_size, stop_time, unit=None):
+    """A flat SSD: components ``comps`` [(name, FMU model identifier)] with the connectors of the connections
+    ``cons`` [(start element, start connector, end element, end connector)], each component binding
+    ``resources/<bound_set>_<component>.ssv``, a default experiment to ``stop_time`` with the OSP fixed-step
+    annotation ``step_size`` [s] (so that libcosim runs it unchanged). ``unit(connector)``: a connector's unit
+    (default: the split system's, :func:`_unit`)."""
+    unit = unit or _unit
+    root = ET.Element(_q("ssd", "SystemStructureDescription"), {"version": "1.0", "name": name})
+    system = ET.SubElement(root, _q("ssd", "System"), {"name": name, "description": description})
+    elements = ET.SubElement(system, _q("ssd", "Elements"))
+    for comp, fmu in comps:
+        el = ET.SubElement(elements, _q("ssd", "Component"), {"name": comp, "source": f"resources/{fmu}.fmu",
                                                                "type": "application/x-fmu-sharedlibrary"})
         ctors = ET.SubElement(el, _q("ssd", "Connectors"))
         for s_el, s_c, e_el, e_c in cons:
             for el_name, c_name, kind in ((s_el, s_c, "output"), (e_el, e_c, "input")):
-                if el_name == name:
+                if el_name == comp:
                     ce = ET.SubElement(ctors, _q("ssd", "Connector"), {"name": c_name, "kind": kind})
-                    ET.SubElement(ce, _q("ssc", "Real"), {"unit": _unit(c_name)})
+                    ET.SubElement(ce, _q("ssc", "Real"), {"unit": unit(c_name)})
         pb = ET.SubElement(el, _q("ssd", "ParameterBindings"))
-        ET.SubElement(pb, _q("ssd", "ParameterBinding"), {"source": f"resources/{bound_set}_{name}.ssv"})
+        ET.SubElement(pb, _q("ssd", "ParameterBinding"), {"source": f"resources/{bound_set}_{comp}.ssv"})
     cs = ET.SubElement(system, _q("ssd", "Connections"))
     for s_el, s_c, e_el, e_c in cons:
         ET.SubElement(cs, _q("ssd", "Connection"), {"startElement": s_el, "startConnector": s_c,
                                                     "endElement": e_el, "endConnector": e_c})
+    used = sorted({unit(c) for s_el, s_c, e_el, e_c in cons for c in (s_c, e_c)})
     units = ET.SubElement(root, _q("ssd", "Units"))
-    for uname, base in UNITS.items():
+    for uname in used:
         u = ET.SubElement(units, _q("ssc", "Unit"), {"name": uname})
-        ET.SubElement(u, _q("ssc", "BaseUnit"), {k: str(v) for k, v in base.items()})
+        ET.SubElement(u, _q("ssc", "BaseUnit"), {k: str(v) for k, v in UNITS[uname].items()})
     de = ET.SubElement(root, _q("ssd", "DefaultExperiment"), {"startTime": "0", "stopTime": repr(float(stop_time))})
     ann = ET.SubElement(ET.SubElement(de, _q("ssd", "Annotations")), _q("ssc", "Annotation"),
                         {"type": "com.opensimulationplatform"})
@@ -297,6 +308,70 @@ def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, system=None, **kw):
     for i, set_name in enumerate(sets):
         paths.append(out / (DEFAULT_SSD if i == 0 else f"{set_name}.ssd"))
         _ssd_tree(set_name, step_size, stop_time, system).write(paths[-1], xml_declaration=True, encoding="UTF-8")
+    for set_name, comps_p in sets.items():
+        for comp, params in comps_p.items():
+            paths.append(out / "resources" / f"{set_name}_{comp}.ssv")
+            _ssv_tree(set_name, params).write(paths[-1], xml_declaration=True, encoding="UTF-8")
+    return paths
+
+
+#: the example system of the turbocharger FMU: its components and connections (the turbine drives the rotor through
+#: the engine side's drive torque, the engine side reads the rotor speed)
+ENGINE_COMPONENTS = (("engine", "EngineTorque"), ("turbocharger", "FloatingRingTurbocharger"))
+ENGINE_CONNECTIONS = (("turbocharger", "rotor_speed", "engine", "rotor_speed"),
+                      ("engine", "drive_torque", "turbocharger", "drive_torque"))
+#: the example engine's parameters (fmu_src/EngineTorque.py: a torque balance at 18 000 rad/s)
+ENGINE_PARAMETERS = {"turbine_torque_0": 2.0, "turbine_torque_slope": 2.0 / 30000.0,
+                     "compressor_coefficient": 0.8 / 18000.0 ** 2, "pulsation": 0.3, "firing_frequency": 100.0}
+
+
+def engine_parameter_sets(clearances=(36e-6,), start_rpm=20e3, system=None):
+    """Parameter sets of the engine + turbocharger example, one per outer clearance (``co36`` ...): the engine's
+    parameters and start speed, the turbocharger torque-driven from ``start_rpm`` with both outer films at the
+    clearance.
+
+    Returns
+    -------
+    dict
+        ``{set name: {component: {parameter: (type, value, unit)}}}``.
+    """
+    tc = _table2(system)
+    w0 = rpm_to_rad_s(start_rpm)
+    units = {"turbine_torque_0": "N.m", "turbine_torque_slope": "N.m.s/rad", "compressor_coefficient": "N.m.s2/rad2",
+             "pulsation": "1", "firing_frequency": "Hz"}
+    sets = {}
+    for c in clearances:
+        engine = {k: ("Real", v, units[k]) for k, v in ENGINE_PARAMETERS.items()}
+        engine["rotor_speed"] = ("Real", w0, "rad/s")
+        turbo = {"speed_source": ("String", "torque", None), "speed_start": ("Real", w0, "rad/s")}
+        for b in tc.bearings:
+            turbo[f"{b.name}_bearing.outer.clearance"] = ("Real", float(c), "m")
+        sets[f"co{round(c * 1e6)}"] = {"engine": engine, "turbocharger": turbo}
+    return sets
+
+
+def write_engine_ssp(out_dir="ssp/engine", step_size=1e-3, stop_time=1.0, system=None, **kw):
+    """Write the SSP folder of the example: the example engine (EngineTorque FMU) driving the turbocharger FMU
+    (FloatingRingTurbocharger) through its drive torque, at a system-model step (default 1 ms), one SSD variant per
+    parameter set (:func:`engine_parameter_sets`; ``**kw`` go there). The FMUs are added by
+    :func:`frbmodel.cosim.build.build_fmus`.
+
+    Returns
+    -------
+    list of Path
+        The written files, SSDs first.
+    """
+    out = Path(out_dir)
+    (out / "resources").mkdir(parents=True, exist_ok=True)
+    for k, v in NS.items():
+        ET.register_namespace(k, v)
+    sets = engine_parameter_sets(system=system, **kw)
+    paths = []
+    for i, set_name in enumerate(sets):
+        paths.append(out / (DEFAULT_SSD if i == 0 else f"{set_name}.ssd"))
+        ssd_tree("engine_turbocharger", "Example engine side driving the turbocharger FMU (frbmodel)",
+                 ENGINE_COMPONENTS, ENGINE_CONNECTIONS, set_name, step_size, stop_time).write(
+            paths[-1], xml_declaration=True, encoding="UTF-8")
     for set_name, comps_p in sets.items():
         for comp, params in comps_p.items():
             paths.append(out / "resources" / f"{set_name}_{comp}.ssv")
@@ -605,4 +680,5 @@ def _read_folder(folder, source, require_fmus):
     return SSPSystem(folder, comps, cons, files, step, stop, sets, next(iter(sets)), source)
 
 
-__all__ = ["write_ssp", "read_ssp", "read_ssv", "connections", "bearing_components", "parameter_sets", "SSPSystem"]
+__all__ = ["write_ssp", "write_engine_ssp", "read_ssp", "read_ssv", "connections", "bearing_components",
+           "parameter_sets", "engine_parameter_sets", "ssd_tree", "SSPSystem"]

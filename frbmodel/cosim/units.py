@@ -8,7 +8,7 @@ declaration when pythonfmu writes modelDescription.xml. pythonfmu 0.7 itself has
 Unit names follow the FMI/Modelica convention: factors joined by ``.``, integer powers appended (``kg.m2``,
 ``m/s2``), one ``/`` with a parenthesized denominator of several factors (``m/(rad.s2)``), ``1`` for a
 dimensionless quantity. Tokens are the SI base units of FMI's BaseUnit (kg, m, s, A, K, mol, cd, rad) and the
-derived units N, Pa, J and W.
+derived units N, Pa, J, W and Hz.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from xml.etree.ElementTree import Element, SubElement
 BASE = ("kg", "m", "rad", "s", "A", "K", "mol", "cd")
 #: derived units allowed as tokens: exponents of the base units
 DERIVED = {"N": {"kg": 1, "m": 1, "s": -2}, "Pa": {"kg": 1, "m": -1, "s": -2}, "J": {"kg": 1, "m": 2, "s": -2},
-           "W": {"kg": 1, "m": 2, "s": -3}}
+           "W": {"kg": 1, "m": 2, "s": -3}, "Hz": {"s": -1}}
 #: names used for a combination of exponents when it occurs (instead of a generated base-unit name)
 PREFERRED = ("1", "m", "m/s", "m/s2", "rad", "rad/s", "rad/s2", "s", "kg", "kg.m", "kg.m2", "N", "N/m", "N.s/m",
              "N.m", "W", "Pa.s")
