@@ -1015,6 +1015,15 @@ def _cosim_system(args):
           "record")
     _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
                 title=f"turbocharger FMU in {Path(args.ssp).name} ({args.parameter_set})")
+    if not args.no_figure and run.time.size >= 2:
+        import pandas as pd
+
+        from .plots import system_run_figure
+
+        fig = system_run_figure(run, pd.read_csv(out / "signals.csv"),
+                                title=f"{Path(args.ssp).name} ({args.parameter_set}), frb cosim")
+        fig.savefig(out / "system_run.png", dpi=130, bbox_inches="tight")
+        print(f"wrote {(out / 'system_run.png').resolve()}")
     return code
 
 

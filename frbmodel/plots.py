@@ -892,3 +892,62 @@ def write_html(fig, path, include_plotlyjs=HTML_PLOTLYJS):
     path.write_text("<html><head><meta charset='utf-8'></head><body>" + "\n".join(divs) + "</body></html>",
                     encoding="utf-8")
     return path
+
+
+def system_run_figure(run, signals=None, title=None, orbit_windows_s=0.01):
+    """A run of the turbocharger FMU in a system (e.g. ``frb cosim build/engine_turbocharger.ssp``): rotor speed
+    and the drive torque the system passed, the bearings' power loss, and the turbine wheel's orbit over the last
+    ``orbit_windows_s`` [s] of the first and second half of the run.
+
+    Parameters
+    ----------
+    run : RunupResult
+        The turbocharger FMU's record (its ``record_folder``).
+    signals : pandas.DataFrame, optional
+        The master's ``signals.csv`` (time and connected values at the communication points).
+    title : str, optional
+    orbit_windows_s : float
+        Length of each orbit window [s].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    t = run.time
+    ax = axes[0]
+    ax.plot(t, run.speed_rpm / 1e3, color="k", lw=1.4, label="rotor speed")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("rotor speed [krpm]")
+    torque = [c for c in (signals.columns if signals is not None else []) if "drive_torque" in c]
+    if torque:
+        tw = ax.twinx()
+        tw.plot(signals["time [s]"], signals[torque[0]], color="tab:red", lw=0.6, alpha=0.7)
+        tw.set_ylabel(f"{torque[0]} (at the communication points)", color="tab:red")
+    ax.set_title("speed and drive torque")
+    ax = axes[1]
+    for name, p in run.power_loss.items():
+        ax.plot(t, p, lw=0.8, label=f"{name} bearing")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("power loss [W]")
+    ax.legend(frameon=False)
+    ax.set_title("bearing power loss (both films)")
+    ax = axes[2]
+    disc = "turbine_wheel" if "turbine_wheel" in run.displacement else next(iter(run.displacement))
+    xy = run.displacement[disc] * 1e6
+    for end, style in ((t[-1] / 2, "tab:blue"), (t[-1], "tab:orange")):
+        sel = (t > end - orbit_windows_s) & (t <= end)
+        rpm = float(np.interp(end, t, run.speed_rpm))
+        ax.plot(xy[sel, 0], xy[sel, 1], color=style, lw=0.8, label=f"{end - orbit_windows_s:.3g}-{end:.3g} s, "
+                f"{rpm / 1e3:.0f} krpm")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{disc} x [µm]")
+    ax.set_ylabel(f"{disc} y [µm]")
+    ax.legend(frameon=False, fontsize=8)
+    ax.set_title("orbit (relative to the housing)")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig

@@ -106,7 +106,7 @@ def test_wheel_installed_outside_the_checkout_builds_fmus_that_step(tmp_path):
     assert modules <= names, f"modules missing in the wheel (pyproject [tool.setuptools] packages): {modules - names}"
     data = {f"frbmodel/_data/{p.relative_to(ROOT).as_posix()}" for p in
             [*(ROOT / "fmu_src").glob("*.py"), *(ROOT / "fmu_src" / "loader").glob("*.c"),
-             *(ROOT / "ssp").glob("*.ssd"), *(ROOT / "ssp").rglob("*.ssv")]}
+             *(ROOT / "ssp").rglob("*.ssd"), *(ROOT / "ssp").rglob("*.ssv")]}
     assert data <= names, f"FMU sources / SSP missing in the wheel: {data - names}"
 
     py, purelib = _fresh_venv(tmp_path / "venv", wheel)
@@ -121,6 +121,12 @@ def test_wheel_installed_outside_the_checkout_builds_fmus_that_step(tmp_path):
     assert not [n for n in bundled if n.startswith("resources/frbmodel/_data")]  # not shipped twice
     ssp = read_ssp(out / "turbocharger.ssp")
     assert sorted(ssp.parameter_sets) == SETS and all(p.is_file() for p in ssp.components.values())
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(out / "fmus" / "FloatingRingTurbocharger.fmu")) == []  # the whole turbocharger too
+    engine = read_ssp(out / "engine_turbocharger.ssp")
+    assert sorted(engine.components) == ["engine", "turbocharger"] and all(p.is_file() for p in
+                                                                           engine.components.values())
 
     parameters, inputs, load = _bearing_operating_point()
     env = _clean_env()

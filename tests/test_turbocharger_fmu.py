@@ -18,6 +18,7 @@ from frbmodel.units import RPM
 
 fmpy = pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
+from _fmu import Slave  # noqa: E402
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
 from fmpy.fmi2 import FMU2Slave  # noqa: E402
@@ -26,49 +27,6 @@ from fmpy.validation import validate_fmu  # noqa: E402
 C_O = 36e-6  # [m] outer clearance of the main job (the FMU's default is the Table 2 system's, 36 µm too)
 T_CHECK = 0.1  # [s] the acceptance window: the first 0.1 s of the main job (20 -> 250 krpm in 1 s)
 JOURNAL = ["turbine_bearing.journal.x", "turbine_bearing.journal.y"]
-
-
-class Slave:
-    """One FMU instance driven through fmpy's FMU2Slave (a plain FMI loop, as any Python host)."""
-
-    def __init__(self, fmu, name, tmp, params=None):
-        self.md = read_model_description(str(fmu))
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        d = extract(str(fmu), unzipdir=str(tmp / name))
-        self.s = FMU2Slave(guid=self.md.guid, unzipDirectory=d, modelIdentifier=self.md.coSimulation.modelIdentifier,
-                           instanceName=name)
-        self.s.instantiate()
-        self.s.setupExperiment(startTime=0.0)
-        self.s.enterInitializationMode()
-        for k, v in (params or {}).items():
-            setter = self.s.setString if isinstance(v, str) else self.s.setReal
-            setter([self.vr[k]], [v])
-        self.s.exitInitializationMode()
-
-    def get(self, names):
-        return np.array(self.s.getReal([self.vr[n] for n in names]))
-
-    def set(self, values):
-        self.s.setReal([self.vr[n] for n in values], list(values.values()))
-
-    def run(self, h, t_end, names, inputs=None, every=None):
-        """Step by ``h`` to ``t_end``; returns (times, outputs) at every ``every`` [s] (default every step);
-        ``inputs(t)`` -> dict set before each step."""
-        n = int(round(t_end / h))
-        ts, ys = [], []
-        for k in range(n):
-            if inputs is not None:
-                self.set(inputs(k * h))
-            self.s.doStep(k * h, h)
-            t = (k + 1) * h
-            if every is None or abs(t / every - round(t / every)) < 1e-6:
-                ts.append(t)
-                ys.append(self.get(names))
-        return np.array(ts), np.array(ys)
-
-    def close(self):
-        self.s.terminate()
-        self.s.freeInstance()
 
 
 @pytest.fixture(scope="module")
@@ -329,3 +287,56 @@ def test_engine_ssp_runs_in_libcosim_and_frb_cosim(built, tmp_path):
     meta = json.loads((tmp_path / "cosim" / "runup.json").read_text())
     assert meta["status"] == "finished" and run.time.size == int(T * 20e3) + 1
     assert (tmp_path / "cosim" / "signals.csv").read_text().startswith("time [s],turbocharger.rotor_speed")
+
+
+@pytest.mark.parametrize("h", [1e-4, 1e-3])
+def test_libcosim_runs_the_turbocharger_fmu_from_an_ssp_like_the_run_up(built, tmp_path, reference, h):
+    """The turbocharger FMU alone in an SSP, run by libcosim's fixed-step algorithm: the turbine journal equals
+    frb.runup within 0.1 % of c_o over the first 0.1 s (the acceptance bound)."""
+    pytest.importorskip("libcosimpy")
+    import shutil
+    from xml.etree import ElementTree as ET
+
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+
+    from frbmodel.cosim.ssp import NS, _ssv_tree, ssd_tree
+
+    d = tmp_path / "single"
+    (d / "resources").mkdir(parents=True)
+    for k, v in NS.items():
+        ET.register_namespace(k, v)
+    ssd_tree("turbocharger", "the turbocharger FMU alone", [("turbocharger", "FloatingRingTurbocharger")], [],
+             "co36", h, T_CHECK).write(d / "SystemStructure.ssd", xml_declaration=True, encoding="UTF-8")
+    _ssv_tree("co36", {f"{b}_bearing.outer.clearance": ("Real", C_O, "m") for b in ("turbine", "compressor")}).write(
+        d / "resources" / "co36_turbocharger.ssv", xml_declaration=True, encoding="UTF-8")
+    shutil.copy(_fmu(built), d / "resources")
+    ex = CosimExecution.from_ssp_file(str(d))
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(obs)
+    i = ex.slave_index_from_instance_name("turbocharger")
+    names = {(v.name.decode() if isinstance(v.name, bytes) else v.name): v.reference for v in ex.slave_variables(i)}
+    t_ref, x_ref = reference
+    every = max(1, int(round(5e-5 / h)))
+    dev = 0.0
+    for k in range(1, int(round(T_CHECK / h)) + 1):
+        ex.step(1)
+        if k % every == 0:
+            x = np.array(obs.last_real_values(i, [names[n] for n in JOURNAL]))
+            dev = max(dev, float(np.abs(x - x_ref[int(round(k * h * 20e3))]).max()))
+    assert dev < 1e-3 * C_O
+
+
+def test_frb_cosim_runs_the_engine_example_and_refuses_the_split_options(built, tmp_path, capsys):
+    """frb cosim on the engine SSP: the Jacobi master, the FMU's record, signals.csv and the system figure; options
+    that belong to the bearing + rotor split are refused with exit code 2, before anything runs."""
+    from frbmodel.cli import main
+
+    ssp = str(built / "engine_turbocharger.ssp")
+    assert main(["cosim", ssp, "--stop-time", "0.01", "--out", str(tmp_path / "run")]) == 0
+    for f in ("runup.csv", "runup.json", "signals.csv", "system_run.png"):
+        assert (tmp_path / "run" / f).is_file(), f
+    for opt in (["--adaptive"], ["--rollback"], ["--speed-source", "torque"], ["--unvalidated-step"]):
+        assert main(["cosim", ssp, *opt, "--out", str(tmp_path / "refused")]) == 2
+        assert "applies to the bearing + rotor split" in capsys.readouterr().err
+    assert not (tmp_path / "refused" / "runup.csv").exists()
