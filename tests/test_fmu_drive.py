@@ -293,3 +293,11 @@ def test_ssp_for_a_rotor_with_other_bearing_and_disc_names(tmp_path):
     run = cosimulate(ssp, "co36", progress=False, overrides=ov)
     assert run.status == "finished" and run.speed_rpm[-1] > run.speed_rpm[0]
     assert np.all(run.power_loss["hot"] > 0) and np.all(run.journal_torque["cold"] < 0)
+    # the whole-turbocharger FMU of the same build carries the system's names, and so does the engine example
+    tc_fmu = build / "fmus" / "FloatingRingTurbocharger.fmu"
+    tc_vars = {v.name for v in read_model_description(str(tc_fmu)).modelVariables}
+    assert {"hot_bearing.housing_force.y", "cold_bearing.outer.clearance", "wheel_0.x", "wheel_1.unbalance"} <= tc_vars
+    assert not any(n.startswith(("turbine", "compressor")) for n in tc_vars)
+    with read_ssp(build / "engine_turbocharger.ssp") as s:
+        params = s.parameters()["turbocharger"]
+        assert "hot_bearing.outer.clearance" in params and "turbine_bearing.outer.clearance" not in params

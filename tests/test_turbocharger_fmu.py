@@ -204,6 +204,14 @@ def test_bad_input_gives_fmi_errors_and_discards_never_nan(built, tmp_path):
     g.s.setReal([vr["drive_torque"]], [0.01])
     g.s.doStep(0.0, 1e-3)  # recovered: the same step again, with a finite input
     assert np.all(np.isfinite(g.get(JOURNAL)))
+    good = g.get(JOURNAL)
+    g.s.setReal([vr["drive_torque"]], [math.nan])
+    with pytest.raises(FMICallException, match="discard"):
+        g.s.doStep(1e-3, 1e-3)
+    g.s.setReal([vr["drive_torque"]], [0.01])
+    with pytest.raises(FMICallException, match="discard"):  # a host that ignores the Discard and steps on from
+        g.s.doStep(2e-3, 1e-3)  # the later time: refused too (the FMU is still at 1 ms), outputs those of 1 ms
+    np.testing.assert_array_equal(g.get(JOURNAL), good)
     g.close()
     w = Slave(fmu, "wall", tmp_path)
     w.set({"housing_acceleration.y": -3e4})  # ~3000 g upwards on every mass: the rings reach their walls
@@ -257,6 +265,12 @@ print(len(r.rodas_chunk.signatures))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     assert int(out.stdout.split()[-1]) >= 1
+    for name, kernel in (("FloatingRingBearing", "_ring_step"), ("TurbochargerRotor", "_rotor_macro_step")):
+        split = code.replace(str(_fmu(built)), str(built / "fmus" / f"{name}.fmu")).replace(
+            "import frbmodel.rosenbrock as r\nprint(len(r.rodas_chunk.signatures))",
+            f"import frbmodel.components as r\nprint(len(r.{kernel}.signatures))")
+        out = subprocess.run([sys.executable, "-c", split], capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0 and int(out.stdout.split()[-1]) >= 1, (name, out.stderr[-2000:])
 
 
 def test_engine_ssp_runs_in_libcosim_and_frb_cosim(built, tmp_path):
@@ -340,3 +354,21 @@ def test_frb_cosim_runs_the_engine_example_and_refuses_the_split_options(built, 
         assert main(["cosim", ssp, *opt, "--out", str(tmp_path / "refused")]) == 2
         assert "applies to the bearing + rotor split" in capsys.readouterr().err
     assert not (tmp_path / "refused" / "runup.csv").exists()
+
+
+@pytest.mark.parametrize("name, outs", [("FloatingRingBearing", ["force.x", "ring.x", "ring.speed"]),
+                                         ("TurbochargerRotor", ["turbine_bearing.journal.y", "rotor_angle"])])
+def test_the_split_fmus_serialize_their_state_too(built, tmp_path, name, outs):
+    """canSerializeFMUstate of the bearing and rotor FMUs: a serialized and restored state replays a step bit for
+    bit."""
+    s = Slave(built / "fmus" / f"{name}.fmu", name, tmp_path)
+    if name == "FloatingRingBearing":
+        s.set({"journal.x": 5e-6, "journal.y": -1e-5, "rotor_speed": 3000.0})
+    s.s.doStep(0.0, 1e-5)
+    blob = s.s.serializeFMUstate(s.s.getFMUstate())
+    s.s.doStep(1e-5, 1e-5)
+    first = s.get(outs)
+    s.s.setFMUstate(s.s.deSerializeFMUstate(blob))
+    s.s.doStep(1e-5, 1e-5)
+    np.testing.assert_array_equal(s.get(outs), first)
+    s.close()
