@@ -44,7 +44,9 @@ _HOSTS = {}
 
 
 def _log(env, name, status, category, message):
-    _HOSTS[name.decode()].messages.append((int(status), message.decode("utf-8", "replace")))
+    host = _HOSTS.get(name.decode())  # (another module's instance in this process reaches the proxy too)
+    if host is not None:
+        host.messages.append((int(status), message.decode("utf-8", "replace")))
 
 
 _LOGGER = fmi2CallbackLoggerTYPE(_log)
