@@ -68,7 +68,9 @@ class SystemMaster:
     trace : callable, optional
         Receives one line per FMI call (``frb cosim --trace-fmi``).
 
-    Use as a context manager (or call :meth:`close`).
+    Notes
+    -----
+    Use it as a context manager (or call :meth:`close`): the FMU instances are freed, the extracted files deleted.
     """
 
     def __init__(self, ssp, parameter_set=None, stop_time=None, step_size=None, overrides=None, trace=None):
