@@ -18,7 +18,8 @@ def build_rotor(kx=1e6, ky=None):
     """The Table 2 rotor in ROSS on undamped springs ``kx``, ``ky`` [N/m] at nodes 1 and 2 (``ky = kx`` if None).
 
     3 Euler-Bernoulli shaft elements (33, 39, 33 mm, d = 11 mm) with rotary inertia and gyroscopic terms and
-    no shear, the turbine and compressor wheels as rigid discs at nodes 0 and 3 (physics.md §7.4, §10).
+    no shear, the turbine and compressor wheels as rigid discs at nodes 0 and 3
+    (docs/theory/equations-of-motion.md#euler-bernoulli-shaft-element, parameters.md#table-2-in-si-units).
     """
     import ross as rs
 

@@ -48,7 +48,10 @@ class FrbSlaveMixin:
 
     def _init_state(self):
         """Common slave state: parameter values, input array, FMI mode, change counter, the component, variable
-        tables."""
+        tables. First of all, the bundled frbmodel is put first on sys.path (its stable copy) unless it is imported
+        already (:func:`import_bundled_package_from_stable_copy`)."""
+        if self.resources:
+            import_bundled_package_from_stable_copy("frbmodel", self.resources)
         self._values = {}  # parameter name -> value
         self._input_values = np.zeros(0)  # Real input values, in the order of registration
         self._input_pos = {}  # input name -> position in self._input_values
@@ -502,21 +505,27 @@ class FrbSlaveMixin:
         return None
 
 
-def import_bundled_package_from_stable_copy(name="frbmodel"):
+def import_bundled_package_from_stable_copy(name="frbmodel", resources=None):
     """Make ``import frbmodel`` use a per-user copy of this FMU's bundled package that outlives the extraction.
 
     Hosts unzip an FMU into a new folder at every start; numba finds its cached kernels by the source file's path
     and modification time, so a package imported from the fresh folder recompiles every kernel (8-12 s) at every
     start. The copy ``$XDG_CACHE_HOME/frbmodel/fmu-pkg/<version>-<content hash>/<name>`` (default ``~/.cache``)
     is made once per package content and reused afterwards together with the numba cache numba writes into it.
-    Nothing changes when ``name`` is already imported (a Python host with its own frbmodel; ``_check_version``
-    compares the versions) or when the copy cannot be made or does not match (e.g. a read-only home): the
-    bundled folder is then imported as before, with a warning.
+    Nothing changes when ``name`` is already imported (a Python host with its own frbmodel, or an FMU instantiated
+    before in this process; ``_check_version`` compares the versions) or when the copy cannot be made or does not
+    match (e.g. a read-only home): the bundled folder is then imported as before, with a warning. Called when this
+    module is first imported and again by every slave before it imports the package (:meth:`FrbSlaveMixin._init_state`):
+    this module is imported once per process, from the first FMU's folder, and pythonfmu puts each further FMU's
+    resources folder first on ``sys.path``, which would otherwise shadow the copy (measured in ecos: an engine FMU
+    instantiated before the turbocharger FMU made the latter recompile its kernels at every start, 17 s).
 
     Parameters
     ----------
     name : str
-        The package bundled next to this file in the FMU's resources folder.
+        The package bundled in the FMU's resources folder.
+    resources : str or Path, optional
+        That folder (default: the folder of this file).
 
     Returns
     -------
@@ -530,7 +539,7 @@ def import_bundled_package_from_stable_copy(name="frbmodel"):
     import tempfile
     import warnings
 
-    src = Path(__file__).resolve().parent / name
+    src = (Path(resources) if resources else Path(__file__).resolve().parent) / name
     if name in sys.modules or not (src / "__init__.py").is_file():
         return None
 
@@ -561,6 +570,8 @@ def import_bundled_package_from_stable_copy(name="frbmodel"):
         warnings.warn(f"{name}: no stable copy outside the FMU ({exc}); importing the bundled copy, whose numba "
                       "kernels recompile at every start", RuntimeWarning, stacklevel=2)
         return None
+    if str(dest) in sys.path:
+        sys.path.remove(str(dest))
     sys.path.insert(0, str(dest))
     return dest
 

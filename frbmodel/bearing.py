@@ -1,4 +1,4 @@
-"""Floating ring: torques on the ring and ring-speed-ratio (RSR) models (physics.md §6).
+"""Floating ring: torques on the ring and ring-speed-ratio (RSR) models (docs/theory/rings.md#floating-ring).
 
 The ring is the outer wall of the inner film and the inner wall of the outer film, so its torque is the
 sum of :func:`frbmodel.film.film_torques` of both films; the RSR formulas follow from setting that sum to 0.
@@ -21,7 +21,7 @@ from .film import (
 @njit(cache=True)
 def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_y, fo_x, fo_y, omega_rotor,
                        omega_ring):
-    """Total torque M^I + M^O on the ring (compiled, scalars; physics.md §6.2).
+    """Total torque M^I + M^O on the ring (compiled, scalars; docs/theory/rings.md#torques-on-the-ring).
 
     Parameters
     ----------
@@ -53,7 +53,8 @@ def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_
 @njit(cache=True)
 def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, omega_rotor, eps_cap, dring,
                     housing_ax=0.0, housing_ay=0.0):
-    """Ring equations of physics.md §7.2 for one bearing (compiled; the one implementation: the monolithic run-up
+    """Ring equations of docs/theory/equations-of-motion.md#floating-rings for one bearing (compiled; the one
+    implementation: the monolithic run-up
     and the bearing FMU both call it), written relative to the bearing housing: a housing that accelerates by
     (``housing_ax``, ``housing_ay``) loads the ring with −m (a_x, a_y) (docs/theory/housing.md; zero: bit for bit
     the fixed-housing equations).
@@ -108,7 +109,8 @@ def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, o
 
 
 def ring_torque(bearing, r_inner, force_inner, r_outer, force_outer, omega_rotor, omega_ring):
-    """Total torque on the ring, M^I + M^O of physics.md §6.2 / §7.2.
+    """Total torque on the ring, M^I + M^O of docs/theory/rings.md#torques-on-the-ring /
+    equations-of-motion.md#floating-rings.
 
     Parameters
     ----------
@@ -160,7 +162,7 @@ def ring_speed_ratio(bearing, eps_inner: float = 0.0, eps_outer: float = 0.0, to
 
     ``torque="petroff"``: Petroff torques only — the paper's eq. (7); with ``eps_inner = eps_outer = 0``
     this is eq. (6), ``1 / (1 + (μ_O/μ_I)(L_O/L_I)(c_I/c_O)(D_O/D_I)³)``.
-    ``torque="full"``: Petroff plus the pressure-offset torques (physics.md §6.3),
+    ``torque="full"``: Petroff plus the pressure-offset torques (docs/theory/rings.md#ring-speed-ratio),
     ``(A_I − k_I) / (A_I + A_O + k_I + k_O)``.
 
     Parameters
@@ -203,7 +205,7 @@ def ring_speed_ratio(bearing, eps_inner: float = 0.0, eps_outer: float = 0.0, to
 
 def static_torque_coefficients(bearing, eps_inner: float, eps_outer: float, film_model: str = "short",
                                offset: bool = True):
-    """Coefficients of the steady ring torque (physics.md §6.2, §6.3).
+    """Coefficients of the steady ring torque (docs/theory/rings.md#torques-on-the-ring, rings.md#ring-speed-ratio).
 
     Parameters
     ----------

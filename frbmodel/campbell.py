@@ -87,7 +87,7 @@ class CampbellResult(Result):
     eccentricity : ndarray (n, 2 n_bearings)
         ε of the films at the whirl (method J) equilibrium, in the order of :attr:`film_labels`.
     whirl_hz : ndarray (n, 2 n_bearings)
-        Film whirl frequencies γ ω_s / 2π [Hz] (method-J equilibria, physics.md §8).
+        Film whirl frequencies γ ω_s / 2π [Hz] (method-J equilibria, docs/theory/whirl.md#film-whirl).
     whirl_margin : ndarray (n, 2 n_bearings)
         > 0 where the film is past its whirl onset [-].
     meta : dict
@@ -766,7 +766,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     --------
     >>> import numpy as np, frbmodel as frb
     >>> cd = frb.campbell(frb.turbocharger(), "A", np.array([1.0, 100e3]), whirl=False)
-    >>> [round(float(f), 1) for f in cd.frequencies_hz[1, :3]]     # physics.md §11
+    >>> [round(float(f), 1) for f in cd.frequencies_hz[1, :3]]     # docs/theory/parameters.md#reference-numbers
     [60.2, 192.5, 297.3]
     >>> set(cd.stability.ravel())                                   # undamped springs: every mode neutral
     {'neutral'}
@@ -801,7 +801,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
 
 
 def film_whirl_rows(system, equilibria):
-    """Per-film whirl data at one speed from the bearings' equilibria (physics.md §8).
+    """Per-film whirl data at one speed from the bearings' equilibria (docs/theory/whirl.md#film-whirl).
 
     Parameters
     ----------
@@ -820,7 +820,8 @@ def film_whirl_rows(system, equilibria):
     >>> import frbmodel as frb
     >>> tc = frb.turbocharger()
     >>> w, margin, eps = film_whirl_rows(tc, frb.equilibrium(tc, "J", 30e3).bearings)
-    >>> round(float(w[0]), 1), (margin > 0).tolist()          # physics.md §11; onsets 11.1/68.1/11.8/69.2 krpm
+    >>> # onsets 11.1/68.1/11.8/69.2 krpm: docs/theory/parameters.md#reference-numbers
+    >>> round(float(w[0]), 1), (margin > 0).tolist()
     (306.0, [True, False, True, False])
     """
     whirl_hz, margin, eps = (np.empty(2 * len(system.bearings)) for _ in range(3))

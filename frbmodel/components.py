@@ -1,7 +1,8 @@
 """Co-simulation components: one floating-ring bearing and the FE rotor as separately steppable models.
 
 These are the physics behind the FMUs (``fmu_src/``), kept here free of any FMI import. Coupling scheme
-(DESIGN.md, staggered variant): at a communication point the rotor's journal state goes to each bearing, whose
+(the staggered variant of docs/guides/fmus.md): at a communication point the rotor's journal state goes to each bearing,
+whose
 force F0 and interface Jacobian K = −∂F/∂x_J, C = −∂F/∂v_J are evaluated at that state. Each bearing first
 integrates its ring (lateral and spin; 2-stage L-stable SDIRK substeps with Newton iterations) over the macro step
 with the journal on a quadratic path x_p(τ) = x0 + v0 τ + a τ²/2, where a is the backward difference of the

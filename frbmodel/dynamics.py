@@ -1,4 +1,5 @@
-"""Compiled equations of motion: the rotor acceleration kernel and the monolithic model (physics.md §7).
+"""Compiled equations of motion: the rotor acceleration kernel and the monolithic model
+(docs/theory/equations-of-motion.md#equations-of-motion).
 
 :func:`rotor_acceleration` is the one implementation of the rotor's equation of motion in compiled code,
 q̈ = M⁻¹f − (M⁻¹K + Ω̇ M⁻¹G) q − Ω M⁻¹G q̇, with the constant matrices of :attr:`Rotor.acceleration_matrices`;
@@ -108,7 +109,8 @@ def rotor_operators(minv_k, minv_g, omega, omega_dot, minv_c=None):
 
 @njit(cache=True)
 def rotor_acceleration(minv, minv_k, minv_g, f, q, qd, omega, omega_dot, minv_c=None):
-    """Rotor acceleration of M q̈ + Ω G q̇ + (K + Ω̇ G) q = f (physics.md §7.1): the one compiled kernel.
+    """Rotor acceleration of M q̈ + Ω G q̇ + (K + Ω̇ G) q = f (docs/theory/equations-of-motion.md#rotor): the one
+    compiled kernel.
 
     Parameters
     ----------
@@ -142,7 +144,7 @@ def rotor_acceleration(minv, minv_k, minv_g, f, q, qd, omega, omega_dot, minv_c=
 
 def rotor_polar_inertia(rotor):
     """Polar moment of inertia J_p [kg m²] of the rotor about its spin axis: discs plus shaft elements,
-    J_p = Σ I_p,disc + Σ ρ (π/32)(D_o⁴ − D_i⁴) l (physics.md §7.3).
+    J_p = Σ I_p,disc + Σ ρ (π/32)(D_o⁴ − D_i⁴) l (docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up).
 
     Parameters
     ----------
@@ -166,7 +168,8 @@ def rotor_polar_inertia(rotor):
 
 @njit(cache=True)
 def spin_acceleration(drive_torque, journal_torques, polar_inertia):
-    """Rotor angular acceleration [rad/s²] of the torque-driven spin, J_p Ω̇ = T_drive + Σ_b T_J,b (physics.md §7.3):
+    """Rotor angular acceleration [rad/s²] of the torque-driven spin, J_p Ω̇ = T_drive + Σ_b T_J,b
+    (docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up):
     the one implementation of the spin equation (monolithic run-up and co-simulation rotor).
 
     Parameters

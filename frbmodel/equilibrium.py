@@ -1,4 +1,5 @@
-"""Static equilibria of the floating-ring bearings for methods C, D, F, G, I and J (physics.md §6.4).
+"""Static equilibria of the floating-ring bearings for methods C, D, F, G, I and J
+(docs/theory/rings.md#coupled-static-equilibrium).
 
 Per bearing X the inner film must carry the static reaction W_X and the outer film W_X plus the ring
 weight. Because each film force depends only on its own relative position and speed, F (and D) solve each
@@ -255,7 +256,8 @@ def _ring_speed_root(bearing, w, omega_r, model, g, residual_kind):
 
 
 def bearing_equilibrium(bearing, load, omega_rotor, method, film_model="short", gravity=GRAVITY):
-    """Equilibrium of one bearing carrying a vertical load at one rotor speed (physics.md §6.4).
+    """Equilibrium of one bearing carrying a vertical load at one rotor speed
+    (docs/theory/rings.md#coupled-static-equilibrium).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Oil films: short-bearing (IS) π-film forces, finite-length correction, coefficients, static inverse, torques.
 
-Conventions (physics.md §1): a film sits between an *inner member* and an *outer member*;
+Conventions (docs/theory/conventions.md#conventions): a film sits between an *inner member* and an *outer member*;
 ``e = centre_inner - centre_outer`` [m], ``e_dot`` its time derivative [m/s]; ``omega_sum`` [rad/s] is the
 sum of the two surfaces' angular speeds (journal + ring for the inner film, ring for the outer film).
 Every force returned is the film force **on the inner member** [N]; the outer member receives its negative.
@@ -9,10 +9,11 @@ Two film models exist (``film_model=``):
 
 ``"short"``
     Infinitely short bearing with half-Sommerfeld cavitation (π-film, moving cavitation boundary),
-    closed form for arbitrary dynamic states (physics.md §2).
+    closed form for arbitrary dynamic states (docs/theory/films.md#short-bearing-film-model).
 ``"short_corrected"``
     The short-bearing forces multiplied by finite-length correction factors ``f_r(ε, L/D)``,
-    ``f_t(ε, L/D)`` in the line-of-centres frame (physics.md §5), calibrated against a finite-difference
+    ``f_t(ε, L/D)`` in the line-of-centres frame (docs/theory/films.md#finite-length-correction), calibrated against a
+    finite-difference
     solution of the finite-length Reynolds equation (:mod:`frbmodel.finite_length`).
 """
 from __future__ import annotations
@@ -121,7 +122,7 @@ def check_model(film_model: str) -> str:
 
 
 # --------------------------------------------------------------------------------------------------
-# Short-bearing π-film: the force kernel (physics.md §2.4). This is the one implementation of the dynamic
+# Short-bearing π-film: the force kernel (docs/theory/films.md#forces). This is the one implementation of the dynamic
 # film force; the vectorised public API, the equilibria, the run-up and the FMUs all call it.
 # --------------------------------------------------------------------------------------------------
 #: correction polynomial of the plain short film: f = 1
@@ -138,7 +139,7 @@ def _polyval(p, x):
 
 @njit(cache=True)
 def film_force_kernel(radius, length, clearance, viscosity, poly_r, poly_t, rx, ry, vx, vy, omega_sum, eps_cap):
-    """Film force on the inner member for one relative state (compiled, scalars, SI units; physics.md §2.4).
+    """Film force on the inner member for one relative state (compiled, scalars, SI units; docs/theory/films.md#forces).
 
     Parameters
     ----------
@@ -301,7 +302,7 @@ def film_force(film: Film, e, e_dot, omega_sum, film_model: str = "short"):
     --------
     >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
     >>> F = film_force(f, [9.4691e-6, -3.7916e-6], [0.0, 0.0], 3000.0)
-    >>> round(float(F[1]), 2)   # physics.md §4.3: W = 5.6157 N carried upward
+    >>> round(float(F[1]), 2)   # docs/theory/films.md#worked-numbers: W = 5.6157 N carried upward
     5.62
     """
     film_model = check_model(film_model)
@@ -335,10 +336,12 @@ def _broadcast_inputs(e, e_dot, omega_sum):
 
 
 # --------------------------------------------------------------------------------------------------
-# Static (quasi-static) relations (physics.md §2.6, §3, §4.2)
+# Static (quasi-static) relations (docs/theory/films.md#static-and-quasi-static-case,
+# films.md#static-equilibrium-of-one-film, films.md#line-of-centres-frame)
 # --------------------------------------------------------------------------------------------------
 def static_force_rt(eps: float, film_model: str = "short", lam: float | None = None):
-    """Static film force in the line-of-centres frame, dimensionless (physics.md §2.6, §5).
+    """Static film force in the line-of-centres frame, dimensionless (docs/theory/films.md#static-and-quasi-static-case,
+    films.md#finite-length-correction).
 
     Parameters
     ----------
@@ -387,7 +390,7 @@ def static_load(eps: float, film_model: str = "short", lam: float | None = None)
 
     Examples
     --------
-    >>> round(static_load(0.3), 6)     # physics.md §3 table
+    >>> round(static_load(0.3), 6)     # docs/theory/films.md#static-equilibrium-of-one-film table
     0.292375
     """
     f_r, f_t = static_force_rt(eps, film_model, lam)
@@ -395,7 +398,8 @@ def static_load(eps: float, film_model: str = "short", lam: float | None = None)
 
 
 def _eps_from_load_short(wbar: float):
-    """Exact inverse of W̄(ε) for the short π-film via the quartic in X = ε² (physics.md §3).
+    """Exact inverse of W̄(ε) for the short π-film via the quartic in X = ε²
+    (docs/theory/films.md#static-equilibrium-of-one-film).
 
     Safeguarded Newton on g(X) = 16 W̄² (1-X)^4 - (16-π²) X² - π² X, which falls monotonically on [0, 1].
     Returns (ε, iterations).
@@ -442,7 +446,8 @@ def _eps_from_load_corrected(wbar: float, lam: float):
 
 @renamed_keyword("model", "film_model")
 def static_eccentricity(film: Film, load: float, omega_sum: float, film_model: str = "short"):
-    """Eccentricity ratio ε of a film carrying a static load (physics.md §3, §5).
+    """Eccentricity ratio ε of a film carrying a static load (docs/theory/films.md#static-equilibrium-of-one-film,
+    films.md#finite-length-correction).
 
     Closed form (quartic) for the short film, a 1-D root for the corrected film.
 
@@ -472,7 +477,7 @@ def static_eccentricity(film: Film, load: float, omega_sum: float, film_model: s
     --------
     >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
     >>> eps, _ = static_eccentricity(f, 5.61568, 3000.0)
-    >>> round(eps, 4)                     # physics.md §4.3
+    >>> round(eps, 4)                     # docs/theory/films.md#worked-numbers
     0.3
     """
     film_model = check_model(film_model)
@@ -486,7 +491,7 @@ def static_eccentricity(film: Film, load: float, omega_sum: float, film_model: s
 
 
 def attitude_angle(eps: float, film_model: str = "short", lam: float | None = None) -> float:
-    """Attitude angle β between load line and line of centres (physics.md §3).
+    """Attitude angle β between load line and line of centres (docs/theory/films.md#static-equilibrium-of-one-film).
 
     Parameters
     ----------
@@ -503,7 +508,7 @@ def attitude_angle(eps: float, film_model: str = "short", lam: float | None = No
 
     Examples
     --------
-    >>> round(math.degrees(attitude_angle(0.3)), 3)     # physics.md §3 table
+    >>> round(math.degrees(attitude_angle(0.3)), 3)     # docs/theory/films.md#static-equilibrium-of-one-film table
     68.178
     """
     if eps <= 0.0:
@@ -516,7 +521,8 @@ def attitude_angle(eps: float, film_model: str = "short", lam: float | None = No
 def static_position(film: Film, force, omega_sum: float, film_model: str = "short"):
     """Relative position ``e`` [m] at which the film exerts ``force`` [N] on its inner member.
 
-    Closed-form inverse of the static film law (physics.md §3): ε from the load, the attitude angle β,
+    Closed-form inverse of the static film law (docs/theory/films.md#static-equilibrium-of-one-film): ε from the load,
+    the attitude angle β,
     and φ = ψ_F + β − π with ψ_F the direction of the required force.
 
     Parameters
@@ -600,7 +606,9 @@ def static_position_kernel(film: Film, fx: float, fy: float, omega_sum: float, f
 
 
 def rt_coefficients(eps: float, film_model: str = "short", lam: float | None = None):
-    """Dimensionless stiffness and damping in the (r, t) frame (physics.md §4.2, §5); valid down to ε = 0.
+    """Dimensionless stiffness and damping in the (r, t) frame (docs/theory/films.md#line-of-centres-frame,
+    films.md#finite-length-correction); valid
+    down to ε = 0.
 
     Parameters
     ----------
@@ -683,7 +691,7 @@ def film_coefficients(film: Film, e, omega_sum: float, film_model: str = "short"
     --------
     >>> f = Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)
     >>> K, C = film_coefficients(f, [9.4691e-6, -3.7916e-6], 3000.0)
-    >>> round(float(K[0, 0]) / 1e5, 2), round(float(C[1, 1]), 0)       # physics.md §4.3
+    >>> round(float(K[0, 0]) / 1e5, 2), round(float(C[1, 1]), 0)       # docs/theory/films.md#worked-numbers
     (3.98, 449.0)
     """
     film_model = check_model(film_model)
@@ -709,7 +717,7 @@ def film_coefficients(film: Film, e, omega_sum: float, film_model: str = "short"
 
 
 # --------------------------------------------------------------------------------------------------
-# Wall torques (physics.md §6)
+# Wall torques (docs/theory/rings.md#floating-ring)
 # --------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def petroff_kernel(radius, length, clearance, viscosity, eps):
@@ -732,7 +740,8 @@ def petroff_kernel(radius, length, clearance, viscosity, eps):
 
 @njit(cache=True)
 def film_torques_kernel(radius, length, clearance, viscosity, rx, ry, fx, fy, omega_inner, omega_outer):
-    """Wall torques of one film (compiled; scalars or equal-shape arrays), physics.md §6.1.
+    """Wall torques of one film (compiled; scalars or equal-shape arrays),
+    docs/theory/rings.md#wall-torques-of-one-film.
 
     ``T_inner = +M_P(ω_outer − ω_inner) − (e × F)/2``, ``T_outer = −M_P(ω_outer − ω_inner) − (e × F)/2``.
 
@@ -783,7 +792,8 @@ def petroff_coefficient(film: Film, eps):
 
 
 def film_torques(film: Film, e, force, omega_inner, omega_outer):
-    """Torques the film exerts on its inner and outer wall, each about its own centre (physics.md §6.1).
+    """Torques the film exerts on its inner and outer wall, each about its own centre
+    (docs/theory/rings.md#wall-torques-of-one-film).
 
     ``T_inner = +M_P(ω_outer − ω_inner) − (e × F)/2`` and ``T_outer = −M_P(ω_outer − ω_inner) − (e × F)/2``,
     with ``e × F = e_x F_y − e_y F_x``.
@@ -832,7 +842,8 @@ def film_torques(film: Film, e, force, omega_inner, omega_outer):
 
 
 def offset_torque_coefficient(film: Film, eps: float, film_model: str = "short") -> float:
-    """Pressure-offset torque coefficient k with (e/2) F_t = k ω_s at a static point (physics.md §6.2, §6.3).
+    """Pressure-offset torque coefficient k with (e/2) F_t = k ω_s at a static point
+    (docs/theory/rings.md#torques-on-the-ring, rings.md#ring-speed-ratio).
 
     Parameters
     ----------

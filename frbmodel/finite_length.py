@@ -1,10 +1,11 @@
-"""Finite-length correction of the short-bearing forces ("IScor", physics.md §5).
+"""Finite-length correction of the short-bearing forces ("IScor", docs/theory/films.md#finite-length-correction).
 
 The correction factors ``f_r(ε, λ)`` and ``f_t(ε, λ)`` (λ = L/D) are the ratios of the static force
 components of the finite-length π-film to those of the infinitely short film, in the line-of-centres frame.
 They are *calibrated here*, for any λ, by solving the finite-length Reynolds equation with finite
 differences (full-Sommerfeld solution with negative pressures clipped, the π-film analogue of the
-half-Sommerfeld short film), then fitted by quartic polynomials in ε as in physics.md §5.
+half-Sommerfeld short film), then fitted by quartic polynomials in ε as in
+docs/theory/films.md#finite-length-correction.
 The calibration runs once per λ (about 0.2 s) and is cached for the process.
 """
 from __future__ import annotations
@@ -17,7 +18,8 @@ import numpy as np
 from .errors import ParameterError
 from .film import static_force_rt
 
-#: ε values at which the ratios are computed for the fit (physics.md §5 uses 0.02 ... 0.9)
+#: ε values at which the ratios are computed for the fit (docs/theory/films.md#finite-length-correction uses 0.02 ...
+# 0.9)
 CALIBRATION_EPS = np.array([0.02, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9])
 
 
@@ -100,7 +102,8 @@ def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 
     integ = P.sum(axis=1) * dz
     f_r = -np.sum(integ * np.cos(th)) * dth
     f_t = -np.sum(integ * np.sin(th)) * dth
-    # short-bearing static forces per μ ω_s R L³/c² (physics.md §2.6); convert units: R³ L = R L³ / (4 λ²)
+    # short-bearing static forces per μ ω_s R L³/c² (docs/theory/films.md#static-and-quasi-static-case); convert units:
+    # R³ L = R L³ / (4 λ²)
     fr_is, ft_is = static_force_rt(eps, "short")
     scale = 1.0 / (4.0 * lam * lam)  # R³L / (R L³)
     return f_r * scale / fr_is, f_t * scale / ft_is

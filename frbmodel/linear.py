@@ -100,7 +100,7 @@ def series_elementwise(a, b):
     """Element-wise series combination 1/x = 1/a + 1/b (method D, as written in the paper).
 
     Where one entry is 0 the series value is 0; where a + b = 0 with a·b ≠ 0 the result is infinite —
-    the artefact physics.md §12 item 7 warns about; it is reported as an error.
+    the artefact docs/theory/parameters.md#interpretation-choices item 7 warns about; it is reported as an error.
 
     Parameters
     ----------

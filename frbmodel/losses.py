@@ -1,4 +1,5 @@
-"""Bearing friction: film torque on the journal and friction power of both films (physics.md §6.5).
+"""Bearing friction: film torque on the journal and friction power of both films
+(docs/theory/rings.md#friction-torque-and-power-loss).
 
 The journal torque and the power loss of a floating-ring bearing come from the same film kernels as the ring's
 torque balance (:func:`frbmodel.film.film_force_kernel`, :func:`frbmodel.film.film_torques_kernel`; the ring
@@ -6,7 +7,9 @@ torque of :func:`frbmodel.bearing.ring_torque_kernel` is the sum of the same two
 torque that brakes a torque-driven rotor (:func:`frbmodel.dynamics.spin_acceleration`) is the reaction of the
 film torque that drives the ring.
 
-Sign conventions (physics.md §1, §6): torques are CCW about +z; the journal torque T_J is the inner film's torque on
+Sign conventions (docs/theory/conventions.md#conventions, rings.md#floating-ring): torques are CCW about +z; the journal
+torque T_J is the
+inner film's torque on
 the journal about its centre, negative when it brakes the rotor. The friction power of a film is the mechanical
 power its two walls put into it, P = −Σ_walls (T_wall ω_wall + F_wall · v_wall), with F_wall the film force on the
 wall and v_wall the velocity of the wall's centre. For the inner film (journal, ring) and the outer film (ring,
@@ -16,7 +19,8 @@ fixed housing)::
     P_O = −[M^O ω_FR + F^O · v_FR]
 
 With the short-film torques and forces this is P = A Δω² + (c K_F / 2) ∫ G² / D³ dϑ over the pressure zone
-(Δω the speed difference of the walls, A the Petroff coefficient, G and D of physics.md §2.2–2.4): never negative,
+(Δω the speed difference of the walls, A the Petroff coefficient, G and D of
+docs/theory/films.md#reynolds-equation-and-pressure–2.4): never negative,
 and A_I (ω_R − ω_FR)² + A_O ω_FR² with centred members (Petroff). In a steady state with the ring torque balanced
 (method J) the total is −T_J ω_R.
 
@@ -101,7 +105,8 @@ def journal_torque_kernel(inner_geom, rx, ry, fx, fy, omega_rotor, omega_ring, e
     Returns
     -------
     float
-        T_J = −A_I (ω_R − ω_FR) − (e_I × F^I)/2 (physics.md §6.5), the inner wall torque of
+        T_J = −A_I (ω_R − ω_FR) − (e_I × F^I)/2 (docs/theory/rings.md#friction-torque-and-power-loss), the inner wall
+        torque of
         :func:`frbmodel.film.film_torques_kernel`.
     """
     eps = math.sqrt(rx * rx + ry * ry) / inner_geom[2]

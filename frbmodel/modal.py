@@ -1,6 +1,7 @@
 """Modal analysis: state space, eigenvalues, modal damping, precession, ring-mode classification, tracking.
 
-Conventions (physics.md §9): λ = α + iβ with β > 0 kept; modal damping D = −α/|λ|; precession indicator
+Conventions (docs/theory/modal.md#modal-analysis): λ = α + iβ with β > 0 kept; modal damping D = −α/|λ|; precession
+indicator
 Ψ_j = Im(v̄_j · conj(w̄_j)) per node (> 0 forward, < 0 backward for CCW rotation).
 
 Neutral modes. An eigen-solver returns the eigenvalues of a slightly perturbed matrix, so an undamped mode
@@ -456,7 +457,7 @@ def precession_index(shapes, v_idx, w_idx):
 
 
 def classify_precession(psi, amp2):
-    """'forward', 'backward' or 'mixed' per mode from per-node Ψ (physics.md §9).
+    """'forward', 'backward' or 'mixed' per mode from per-node Ψ (docs/theory/modal.md#modal-analysis).
 
     Nodes with negligible amplitude or a planar orbit do not vote. A mode whose voting nodes all have
     Ψ > 0 is forward, all Ψ < 0 backward, otherwise mixed (the paper's "combined precession").
@@ -595,7 +596,7 @@ def mac(a, b):
 
 
 def track(eigenvalue_list, shape_list, w_lambda=0.3):
-    """Order modes consistently across a speed sweep (physics.md §9 tracking).
+    """Order modes consistently across a speed sweep (docs/theory/modal.md#modal-analysis tracking).
 
     Each step's modes are assigned to the tracks of the previous steps by minimising
     ``1 − MAC + w_λ |Δλ| / |λ|`` (Hungarian assignment); unmatched modes open new tracks.

@@ -21,7 +21,6 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-import tomli_w
 
 from .errors import ParameterError, check_positive
 from .film import Film, check_model
@@ -264,7 +263,8 @@ class Turbocharger:
     --------
     >>> import frbmodel as frb
     >>> tc = frb.turbocharger(outer_clearance=36e-6)
-    >>> [round(float(w), 4) for w in tc.bearing_loads]   # static reactions [N], physics.md §10
+    >>> # static reactions [N]: docs/theory/parameters.md#table-2-in-si-units
+    >>> [round(float(w), 4) for w in tc.bearing_loads]
     [5.3093, -0.1843]
     """
 
@@ -391,6 +391,8 @@ class Turbocharger:
         ...     frb.load_system(tc.save(f"{d}/tc.toml")) == tc
         True
         """
+        import tomli_w  # (only for writing TOML: an FMU in a host's Python needs numpy, scipy and numba alone)
+
         path = Path(path)
         d = self.to_dict()
         if path.suffix.lower() in (".json", ".toml"):

@@ -1,4 +1,4 @@
-"""The paper's Table 2 turbocharger in SI units (physics.md §10)."""
+"""The paper's Table 2 turbocharger in SI units (docs/theory/parameters.md#table-2-in-si-units)."""
 from __future__ import annotations
 
 from .errors import check_real
@@ -64,7 +64,8 @@ def turbocharger(outer_clearance: float = PAPER_OUTER_CLEARANCES[0], film_model:
 
     Notes
     -----
-    The ring mass is 7.2e-3 kg: the table's "7.2 kg" is a typo (physics.md §10: a steel ring of these
+    The ring mass is 7.2e-3 kg: the table's "7.2 kg" is a typo (docs/theory/parameters.md#table-2-in-si-units: a steel
+    ring of these
     dimensions weighs 7.4 g, and 7.2 g reproduces the table's polar inertia).
 
     Examples

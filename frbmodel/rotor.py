@@ -1,8 +1,9 @@
-"""Euler–Bernoulli finite-element rotor with rotary inertia, gyroscopics and rigid discs (physics.md §7).
+"""Euler–Bernoulli finite-element rotor with rotary inertia, gyroscopics and rigid discs
+(docs/theory/equations-of-motion.md#equations-of-motion).
 
 Node DoFs are ``[v, w, θx, θy]`` (x-displacement, y-displacement, rotation about x, rotation about y), with
 θx = −∂w/∂z and θy = +∂v/∂z; x horizontal, y vertical up, z along the shaft, rotation CCW about +z.
-The equation of motion (physics.md §7.1, no rotor damping) is
+The equation of motion (docs/theory/equations-of-motion.md#rotor, no rotor damping) is
 
     M q̈ + Ω G q̇ + (K + Ω̇ G) q = f,
 
@@ -22,11 +23,11 @@ import numpy as np
 from .errors import ParameterError, check_real
 
 DOF_PER_NODE = 4
-GRAVITY = 9.81  # [m/s²], physics.md §1
+GRAVITY = 9.81  # [m/s²], docs/theory/conventions.md#conventions
 
 
 def first_order_state_matrix(minv_k, minv_c):
-    """State matrix of ``M q̈ + C q̇ + K q = f`` in the state s = [q; q̇] (physics.md §9).
+    """State matrix of ``M q̈ + C q̇ + K q = f`` in the state s = [q; q̇] (docs/theory/modal.md#modal-analysis).
 
     Parameters
     ----------
@@ -114,7 +115,8 @@ class ShaftElement:
         return self.density * self.area * self.length
 
     def matrices(self):
-        """Element matrices of the Euler–Bernoulli element with rotary inertia (physics.md §7).
+        """Element matrices of the Euler–Bernoulli element with rotary inertia
+        (docs/theory/equations-of-motion.md#equations-of-motion).
 
         Returns
         -------
@@ -348,7 +350,8 @@ class Rotor:
         return out
 
     def eom_matrices(self, omega: float = 0.0, omega_dot: float = 0.0):
-        """Matrices of the equation of motion M q̈ + C q̇ + K q = f at one rotor speed (physics.md §7.1).
+        """Matrices of the equation of motion M q̈ + C q̇ + K q = f at one rotor speed
+        (docs/theory/equations-of-motion.md#rotor).
 
         Parameters
         ----------

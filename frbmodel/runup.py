@@ -1,6 +1,7 @@
 """Nonlinear run-up: FE rotor + both rings (lateral and spin) + nonlinear films, integrated in compiled code.
 
-The equations are physics.md §7: all rotor FE DoFs with gyroscopics (``M q̈ + Ω G q̇ + (K + Ω̇ G) q``),
+The equations are docs/theory/equations-of-motion.md#equations-of-motion: all rotor FE DoFs with gyroscopics (``M q̈ + Ω
+G q̇ + (K + Ω̇ G) q``),
 gravity, optional unbalance per wheel, both rings' lateral DoFs and spin speed (ring speed is a state, driven
 by the film torques), and the nonlinear film forces of :mod:`frbmodel.film` (short or finite-length corrected).
 The rotor speed follows a prescribed profile, or, torque-driven (:meth:`SpeedProfile.torque`), is a state driven by a
@@ -34,7 +35,8 @@ from .progress import simulation_bar
 from .recorder import Recorder, RunupResult, RunupSchema
 from .units import RPM
 
-#: numerical guard: film forces of trial states beyond this ε are evaluated at this ε (physics.md §2.7)
+#: numerical guard: film forces of trial states beyond this ε are evaluated at this ε
+# (docs/theory/films.md#limits-and-validity)
 EPS_CAP = 0.999
 
 __all__ = ["CHUNK_SAMPLES", "DEFAULT_ATOL_M", "DEFAULT_RTOL", "INTEGRATORS", "MAX_PROFILE_POINTS", "MAX_SPEED_RPM",
@@ -207,7 +209,8 @@ class SpeedProfile:
     Build with :meth:`ramp`, :meth:`constant`, :meth:`exponential`, :meth:`from_function`, :meth:`from_csv`,
     :meth:`piecewise_linear` or :meth:`up_down`. A profile whose speed falls is a run-down (:attr:`direction`
     ``"down"``); one that rises and then falls is ``"up-down"``. :meth:`torque` makes the rotor
-    speed a state instead: J_p Ω̇ = T_drive(t) + Σ T_J (physics.md §7.3); then ``omega`` holds only the start speed
+    speed a state instead: J_p Ω̇ = T_drive(t) + Σ T_J
+    (docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up); then ``omega`` holds only the start speed
     and ``drive_torque`` the drive torque [N m] on the grid ``t``.
 
     Parameters
@@ -394,7 +397,8 @@ class SpeedProfile:
     @classmethod
     def torque(cls, drive_torque_Nm, start_rpm, duration, n=20001):
         """Torque-driven rotor: the speed starts at ``start_rpm`` and follows J_p Ω̇ = T_drive(t) + Σ T_J, with the
-        journals' film torques T_J braking it (physics.md §7.3; J_p from the system's rotor).
+        journals' film torques T_J braking it (docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up; J_p
+        from the system's rotor).
 
         Parameters
         ----------

@@ -1,8 +1,8 @@
-"""Film whirl frequencies and their stability onset (physics.md §8).
+"""Film whirl frequencies and their stability onset (docs/theory/whirl.md#film-whirl).
 
 Each of the four films (turbine/compressor × inner/outer) is treated as the only flexible element under a
 rigid mass (Lund's closed form of the Routh–Hurwitz threshold). Whirl frequency Ω_w = γ(ε) ω_s; the film is
-unstable when c ω_s² / g > K̄_eq(ε) / γ²(ε) (the W = m g form of the criterion, physics.md §8 step 4).
+unstable when c ω_s² / g > K̄_eq(ε) / γ²(ε) (the W = m g form of the criterion, docs/theory/whirl.md#film-whirl step 4).
 """
 from __future__ import annotations
 
@@ -76,7 +76,7 @@ def lund_threshold(K, C):
 
 
 def characteristic_polynomial(m, K, C):
-    """Coefficients of det(m s² I + C s + K) for a rigid mass on a 2x2 film (physics.md §8).
+    """Coefficients of det(m s² I + C s + K) for a rigid mass on a 2x2 film (docs/theory/whirl.md#film-whirl).
 
     Parameters
     ----------
@@ -128,7 +128,8 @@ def routh_hurwitz_stable(m, K, C) -> bool:
 
 
 def film_whirl_ratio(eps: float, film_model: str = "short", lam: float | None = None):
-    """Whirl frequency ratio and mass threshold of a film at eccentricity ratio ``eps`` (physics.md §8).
+    """Whirl frequency ratio and mass threshold of a film at eccentricity ratio ``eps``
+    (docs/theory/whirl.md#film-whirl).
 
     Parameters
     ----------
@@ -147,7 +148,7 @@ def film_whirl_ratio(eps: float, film_model: str = "short", lam: float | None = 
 
     Examples
     --------
-    >>> [round(x, 5) for x in film_whirl_ratio(0.3)]        # physics.md §8 table: 0.51942, 6.790
+    >>> [round(x, 5) for x in film_whirl_ratio(0.3)]        # docs/theory/whirl.md#film-whirl table: 0.51942, 6.790
     [0.51942, 6.79012]
     """
     e = max(eps, 1e-9)  # the ratios are continuous at ε → 0 (limits γ = 1/2, K̄_eq/γ² = 24/π)
@@ -183,7 +184,8 @@ def bearing_whirl(bearing, eq, film_model="short", gravity=GRAVITY):
     >>> tc = frb.turbocharger()
     >>> eq = frb.equilibrium(tc, "J", 30e3).bearings[0]
     >>> w_i, w_o, m_i, m_o = bearing_whirl(tc.bearings[0], eq)
-    >>> round(w_i / (2 * np.pi), 1), bool(m_i > 0), bool(m_o > 0)   # physics.md §11; onsets 11.1, 68.1 krpm
+    >>> # onsets 11.1, 68.1 krpm: docs/theory/parameters.md#reference-numbers
+    >>> round(w_i / (2 * np.pi), 1), bool(m_i > 0), bool(m_o > 0)
     (306.0, True, False)
     """
     out = []
@@ -206,7 +208,7 @@ def _check_search_range(speed_range_rpm):
 
 
 def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM):
-    """Rotor speeds at which each film passes its whirl threshold, to 1e-6 rpm (physics.md §8).
+    """Rotor speeds at which each film passes its whirl threshold, to 1e-6 rpm (docs/theory/whirl.md#film-whirl).
 
     The margins of :func:`bearing_whirl` at the ``method`` equilibria are sampled at 40 geometrically spaced
     speeds; the first sign change from stable (<= 0) to unstable (> 0) of each film is refined by Brent's method.
@@ -235,7 +237,7 @@ def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM):
     --------
     >>> import frbmodel as frb
     >>> on = frb.film_onset_speeds(frb.turbocharger(36e-6))
-    >>> [round(float(x) / 1e3, 1) for x in on]        # krpm, physics.md §11
+    >>> [round(float(x) / 1e3, 1) for x in on]        # krpm, docs/theory/parameters.md#reference-numbers
     [11.1, 68.1, 11.8, 69.2]
     """
     from scipy.optimize import brentq

@@ -1,6 +1,7 @@
 """Independent reference implementations used by the tests (not imported by frbmodel).
 
-Everything here is written from physics.md directly (closed forms, brute-force quadrature, hand statics); none
+Everything here is written from the formulas of docs/theory/ directly (closed forms, brute-force quadrature, hand
+statics); none
 of it calls the code it is used to check.
 """
 import math
@@ -50,8 +51,10 @@ def quadrature_film_force(film, r, rdot, omega_s):
 
 def static_film_force(film, r, omega_s, poly_r=(1.0,), poly_t=(1.0,)):
     """Static film force on the inner member [N] at relative position ``r`` [m] (ṙ = 0): the closed form of
-    physics.md §2.6, F_r = −(μRL³/c²) ε² ω_s/(1−ε²)², F_t = (μRL³/c²) π ε ω_s/(4 (1−ε²)^{3/2}), multiplied by
-    the finite-length factors f_r(ε), f_t(ε) given as polynomial coefficients (highest power first; §5)."""
+    docs/theory/films.md#static-and-quasi-static-case, F_r = −(μRL³/c²) ε² ω_s/(1−ε²)², F_t = (μRL³/c²) π ε ω_s/(4
+    (1−ε²)^{3/2}), multiplied by
+    the finite-length factors f_r(ε), f_t(ε) given as polynomial coefficients (highest power first;
+    films.md#finite-length-correction)."""
     c = film.clearance
     e = math.hypot(r[0], r[1])
     eps = e / c
@@ -64,13 +67,15 @@ def static_film_force(film, r, omega_s, poly_r=(1.0,), poly_t=(1.0,)):
 
 
 def petroff(film, eps):
-    """Petroff torque coefficient A = 2π μ R³ L / (c sqrt(1 − ε²)) [N m s] (physics.md §6.1)."""
+    """Petroff torque coefficient A = 2π μ R³ L / (c sqrt(1 − ε²)) [N m s]
+    (docs/theory/rings.md#wall-torques-of-one-film)."""
     return 2 * math.pi * film.viscosity * film.radius ** 3 * film.length / (film.clearance * math.sqrt(1 - eps * eps))
 
 
 def table2_bearing_loads(gravity=9.81):
     """Static reactions [N] (turbine, compressor bearing; upward positive) of the paper's Table 2 rotor by hand
-    statics (physics.md §10): wheels at z = 0 and 105 mm, a solid 11 mm steel shaft in three pieces of 33, 39
+    statics (docs/theory/parameters.md#table-2-in-si-units): wheels at z = 0 and 105 mm, a solid 11 mm steel shaft in
+    three pieces of 33, 39
     and 33 mm, supports at z = 33 and 72 mm."""
     rho_a = 7860 * math.pi / 4 * 0.011 ** 2  # shaft mass per length [kg/m]
     pieces = [(0.326, 0.0), (0.118, 0.105), (rho_a * 0.033, 0.0165), (rho_a * 0.039, 0.0525), (rho_a * 0.033, 0.0885)]

@@ -50,7 +50,7 @@ def test_torque_balance_reproduces_eq6_and_eq7():
     for ei, eo in [(0.2, 0.4), (0.6, 0.1), (0.05, 0.8)]:
         assert _balance(b, ei, eo, False) == pytest.approx(eq7(b, ei, eo), rel=1e-12)
         assert frb.ring_speed_ratio(b, ei, eo) == pytest.approx(eq7(b, ei, eo), rel=1e-13)
-        # the full balance brakes the ring further (offset torques brake, physics.md §6.2)
+        # the full balance brakes the ring further (offset torques brake, docs/theory/rings.md#torques-on-the-ring)
         assert _balance(b, ei, eo, True) < eq7(b, ei, eo)
 
 
@@ -86,5 +86,5 @@ def test_wall_torques_equal_numerical_wall_shear():
         # pressure at the cavitation boundary limits it to ~1e-5
         assert ti == pytest.approx(t_in, rel=2e-4)
         assert to == pytest.approx(t_out, rel=2e-4)
-        # moment balance of the film (physics.md §6.1)
+        # moment balance of the film (docs/theory/rings.md#wall-torques-of-one-film)
         assert ti + to == pytest.approx(-(r[0] * F[1] - r[1] * F[0]), rel=1e-12)

@@ -1,4 +1,5 @@
-"""Equilibria of methods C, D, F, G, I, J: physics.md §11 reference values and consistency between methods."""
+"""Equilibria of methods C, D, F, G, I, J: docs/theory/parameters.md#reference-numbers reference values and consistency
+between methods."""
 
 import numpy as np
 import pytest
@@ -6,7 +7,7 @@ import pytest
 import frbmodel as frb
 from frbmodel.film import film_force
 
-# physics.md §11 (turbine bearing unless noted): c_o [µm], rpm, method -> RSR, ε_I, ε_O
+# docs/theory/parameters.md#reference-numbers (turbine bearing unless noted): c_o [µm], rpm, method -> RSR, ε_I, ε_O
 REF = [
     (36, 30e3, "F", 0.19903, 0.2436, 0.3613), (36, 30e3, "I", 0.19240, 0.2446, 0.3686),
     (36, 30e3, "J", 0.18894, 0.2452, 0.3725), (36, 100e3, "F", 0.19903, 0.0828, 0.1422),
@@ -32,7 +33,8 @@ def test_compressor_reference_and_positions():
     assert c.ring_speed_ratio == pytest.approx(0.19903, abs=6e-6)
     assert c.eps_inner == pytest.approx(0.0022, abs=6e-5) and c.eps_outer == pytest.approx(0.0024, abs=6e-5)
     f = frb.equilibrium(frb.turbocharger(36e-6), "F", 100e3).bearings[0]
-    # physics.md §11: journal rel. ring (2.7985, −0.2959) µm, ring (5.0354, −0.9210) µm at RSR (6)
+    # docs/theory/parameters.md#reference-numbers: journal rel. ring (2.7985, −0.2959) µm, ring (5.0354, −0.9210) µm at
+    # RSR (6)
     np.testing.assert_allclose(f.r_inner * 1e6, [2.7985, -0.2959], atol=2e-4)
     np.testing.assert_allclose(f.ring * 1e6, [5.0354, -0.9210], atol=2e-4)
 

@@ -78,7 +78,8 @@ def test_centred_limit_is_pure_squeeze_damping():
     f = TURB_INNER
     v = np.array([1e-3, -2e-3])
     F = film_force(f, np.zeros(2), v, 3000.0)
-    expected = -math.pi * f.viscosity * f.radius * f.length ** 3 / (2 * f.clearance ** 3) * v  # physics.md §2.7
+    expected = -math.pi * f.viscosity * f.radius * f.length ** 3 / (2 * f.clearance ** 3) * v  #
+    # docs/theory/films.md#limits-and-validity
     np.testing.assert_allclose(F, expected, rtol=1e-12)
 
 
@@ -95,7 +96,7 @@ def test_contact_raises_clear_error():
         film_force(TURB_INNER, [TURB_INNER.clearance, 0.0], [0, 0], 1000.0)
 
 
-# physics.md §3 reference table: ε -> (W̄, β [deg])
+# docs/theory/films.md#static-equilibrium-of-one-film reference table: ε -> (W̄, β [deg])
 STATIC_TABLE = [(0.05, 0.039498, 86.353), (0.3, 0.292375, 68.178), (0.6, 1.27263, 46.321), (0.9, 24.0061, 20.826)]
 
 
@@ -120,7 +121,7 @@ def test_static_inverse_round_trip(eps):
 def test_worked_example_physics_4_3():
     f = TURB_INNER
     ws = 3000.0
-    # ε = 0.3 and 0.6: W, journal position, K, C (physics.md §4.3; given to 5-6 digits)
+    # ε = 0.3 and 0.6: W, journal position, K, C (docs/theory/films.md#worked-numbers; given to 5-6 digits)
     cases = [
         (5.61568, (9.4691, -3.7916), [[3.98474e5, 4.33498e5], [-7.40361e5, 2.96452e5]],
          [[333.701, -133.619], [-133.619, 448.872]]),
@@ -136,7 +137,8 @@ def test_worked_example_physics_4_3():
 
 
 def test_dimensionless_standard_frame_table():
-    # physics.md §4.3: k̄ = K c / W, c̄ = C c ω_s / W for the standard frame (load on inner member along −y)
+    # docs/theory/films.md#worked-numbers: k̄ = K c / W, c̄ = C c ω_s / W for the standard frame (load on inner member
+    # along −y)
     ref = {0.3: [2.412553, 2.624601, -4.482499, 1.794861, 6.061152, -2.426978, 8.153048],
            0.6: [2.091723, 0.307070, -4.137699, 3.951212, 2.238884, -2.137977, 6.650655]}
     f, ws = TURB_INNER, 3000.0
@@ -184,7 +186,8 @@ def test_coefficients_at_zero_eccentricity():
 
 
 def test_compressor_film_coefficients_physics_11():
-    # physics.md §11: compressor inner film at 100 krpm, RSR 0.19903, ε = 0.00223 — stays finite, matches
+    # docs/theory/parameters.md#reference-numbers: compressor inner film at 100 krpm, RSR 0.19903, ε = 0.00223 — stays
+    # finite, matches
     tc = frb.turbocharger(36e-6)
     b = tc.bearings[1]
     wr = 100e3 * math.pi / 30
@@ -198,7 +201,8 @@ def test_compressor_film_coefficients_physics_11():
 
 
 def test_reynolds_ratios_match_physics_5_table():
-    # physics.md §5 table (λ = 0.5909 inner); its grid is converged to about 1e-3, ours is an independent
+    # docs/theory/films.md#finite-length-correction table (λ = 0.5909 inner); its grid is converged to about 1e-3, ours
+    # is an independent
     # finite-volume discretisation of the same problem, so agreement within 2e-3 is expected
     ref = {0.02: (0.7209, 0.8772), 0.3: (0.6918, 0.8476), 0.6: (0.5851, 0.7361), 0.9: (0.2822, 0.3909)}
     for eps, (fr, ft) in ref.items():
@@ -209,11 +213,13 @@ def test_reynolds_ratios_match_physics_5_table():
 
 def test_reynolds_ratio_tends_to_one_for_short_bearings():
     fr, ft = reynolds_force_ratio(0.3, 0.05)
-    assert fr == pytest.approx(1.0, abs=5e-3) and ft == pytest.approx(1.0, abs=5e-3)  # physics.md: 0.996/0.998
+    assert fr == pytest.approx(1.0, abs=5e-3) and ft == pytest.approx(1.0, abs=5e-3)  # docs/theory/films.md:
+    # 0.996/0.998
 
 
 def test_correction_polynomial_close_to_physics_fit():
-    # physics.md quartic for λ = 0.5625 (outer) has max fit error 0.003-0.004: compare the evaluated fits
+    # the quartic fit of docs/theory/films.md#finite-length-correction for λ = 0.5625 (outer) has max fit error
+    # 0.003-0.004: compare the evaluated fits
     pr_ref = [-1.2544, 1.4466, -0.9242, 0.0906, 0.7367]
     pt_ref = [-1.6862, 2.0149, -1.1721, 0.1279, 0.8840]
     pr, pt = correction_polynomials(0.5625)
@@ -247,7 +253,8 @@ def test_unknown_film_model():
 
 
 def test_turbine_film_coefficients_physics_11():
-    """physics.md §11: turbine inner and outer film at 100 krpm with RSR (6) (method F equilibrium)."""
+    """docs/theory/parameters.md#reference-numbers: turbine inner and outer film at 100 krpm with RSR (6) (method F
+    equilibrium)."""
     tc = frb.turbocharger(36e-6)
     eq = frb.equilibrium(tc, "F", 100e3).bearings[0]
     b = tc.bearings[0]

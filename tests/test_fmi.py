@@ -250,7 +250,8 @@ def test_fmu_state_round_trip_and_recovery_after_a_failed_step(built, tmp_path):
 
 def test_rotor_fmu_takes_its_rotor_from_rotor_file(built_lin, tmp_path):
     """A system written like `frb system` does, with a 50 % heavier turbine wheel: the rotor FMU's state matrix
-    (an FMU built with the linearization outputs) must be A = [[0, I], [−M⁻¹K, −Ω M⁻¹G]] (physics.md §9) of that
+    (an FMU built with the linearization outputs) must be A = [[0, I], [−M⁻¹K, −Ω M⁻¹G]]
+    (docs/theory/modal.md#modal-analysis) of that
     rotor — built here from the bundled rotor's matrices with the extra wheel mass added by hand — and not the
     bundled Table 2 rotor's."""
     from dataclasses import replace

@@ -1,7 +1,9 @@
 """Driven rotor FMU and bearing-loss outputs (issue #11 items 1-2, FMU side).
 
 The bearing FMU's ``journal_torque`` and ``power_loss`` against the Petroff closed form and the film moment
-balance (physics.md §6.2, §6.5); the rotor FMU's ``speed_source`` = "torque" co-simulated through the SSP against
+balance (docs/theory/rings.md#torques-on-the-ring, rings.md#friction-torque-and-power-loss); the rotor FMU's
+``speed_source`` = "torque" co-simulated
+through the SSP against
 the monolithic torque-driven run-up; "input" against "ramp"; an invalid ``speed_source``; rollback in torque mode.
 """
 import math
@@ -38,13 +40,15 @@ def _bearing_at(built, tmp_path, name, journal):
 
 
 def _petroff_coefficient(f):
-    """A = 2π μ R³ L / c [N m s] of a centred film (physics.md §6.2, the Petroff torque per unit speed)."""
+    """A = 2π μ R³ L / c [N m s] of a centred film (docs/theory/rings.md#torques-on-the-ring, the Petroff torque per
+    unit speed)."""
     return 2 * math.pi * f["viscosity"] * f["radius"] ** 3 * f["length"] / f["clearance"]
 
 
 def test_bearing_losses_are_petroff_at_a_centred_journal_and_ring(built, tmp_path):
     """Acceptance (issue #11): centred journal and ring, T_J = −A_I (ω_R − ω_FR) and P = A_I (ω_R − ω_FR)² +
-    A_O ω_FR² (physics.md §6.5) to 1e-6 (the kernels evaluate the same integrals in closed form: round-off)."""
+    A_O ω_FR² (docs/theory/rings.md#friction-torque-and-power-loss) to 1e-6 (the kernels evaluate the same integrals in
+    closed form: round-off)."""
     h, out = _bearing_at(built, tmp_path, "petroff", (0.0, 0.0, 0.0, 0.0))
     a_i, a_o = _petroff_coefficient(INNER), _petroff_coefficient(OUTER)
     assert out["ring.speed"] == OMEGA_FR and out["eps_inner"] == 0.0 and out["eps_outer"] == 0.0
@@ -58,7 +62,9 @@ def test_bearing_losses_belong_to_the_force_output(built, tmp_path):
     eccentricity-corrected Petroff term plus the offset term of the FMU's own force output,
     T_J = −A_I Δω / sqrt(1 − ε²) − (r_x F_y − r_y F_x)/2, and with the inner film's moment balance
     T_J + M^I = −(r_x F_y − r_y F_x) the power the walls put in is P = −T_J Δω + (r_x F_y − r_y F_x) ω_FR +
-    A_O ω_FR² (physics.md §6.2, §6.5): outputs evaluated at one journal and ring state. 1e-9: round-off of
+    A_O ω_FR² (docs/theory/rings.md#torques-on-the-ring, rings.md#friction-torque-and-power-loss): outputs evaluated at
+    one journal and ring state. 1e-9:
+    round-off of
     sums of terms of similar size."""
     eps = 0.6
     r = eps * INNER["clearance"] * np.array([math.cos(1.1), math.sin(1.1)])
@@ -104,7 +110,8 @@ def test_numerical_failure_of_the_ring_integrator_is_a_discard_with_the_state_re
 
 # ---------------------------------------------------------------------------------------------------- torque mode
 def _polar_inertia(rotor):
-    """J_p [kg m²] written out from physics.md §7.3: discs plus shaft elements ρ (π/32)(D_o⁴ − D_i⁴) l."""
+    """J_p [kg m²] written out from docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up: discs plus
+    shaft elements ρ (π/32)(D_o⁴ − D_i⁴) l."""
     shaft = sum(e.density * math.pi / 32 * (e.outer_diameter ** 4 - e.inner_diameter ** 4) * e.length
                 for e in rotor.shaft)
     return sum(d.polar_inertia for d in rotor.discs) + shaft
@@ -151,7 +158,8 @@ def test_torque_mode_cosimulation_equals_monolithic_runup(built):
 
 def test_torque_mode_spin_and_rollback(built, tmp_path):
     """The rotor FMU alone in torque mode (bearing inputs: fixed springs and dampers, journal torques): each step
-    Ω1 = Ω0 + H (T_drive + Σ T_J) / J_p (J_p from physics.md §7.3) and φ1 = φ0 + H (Ω0 + Ω1) / 2 (the speed is
+    Ω1 = Ω0 + H (T_drive + Σ T_J) / J_p (J_p from docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up)
+    and φ1 = φ0 + H (Ω0 + Ω1) / 2 (the speed is
     linear over the step); getFMUstate / setFMUstate replays the same inputs bit for bit (rotor DoFs, speed,
     angle); a step with a non-finite journal torque is discarded and, after restoring, the rotor runs on as
     before. 1e-12: round-off of a few operations."""

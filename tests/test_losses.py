@@ -15,7 +15,7 @@ from frbmodel.recorder import RunupResult, RunupSchema
 
 
 def _petroff(film):
-    """A = 2π μ R³ L / c of a centred film [N m s] (physics.md §6.1), written out."""
+    """A = 2π μ R³ L / c of a centred film [N m s] (docs/theory/rings.md#wall-torques-of-one-film), written out."""
     return 2 * math.pi * film.viscosity * film.radius ** 3 * film.length / film.clearance
 
 
@@ -23,7 +23,8 @@ def _petroff(film):
 @pytest.mark.parametrize("omega_r, omega_fr", [(2000.0, 400.0), (26180.0, 5210.0), (1000.0, 1500.0)])
 def test_centred_power_loss_is_petroff(b, omega_r, omega_fr):
     """Centred journal and ring, no lateral motion: no pressure force, so T_J = −A_I (ω_R − ω_FR) and
-    P = A_I (ω_R − ω_FR)² + A_O ω_FR² (physics.md §6.5), for both bearings (their viscosities differ)."""
+    P = A_I (ω_R − ω_FR)² + A_O ω_FR² (docs/theory/rings.md#friction-torque-and-power-loss), for both bearings (their
+    viscosities differ)."""
     bearing = frb.turbocharger(36e-6).bearings[b]
     a_i, a_o = _petroff(bearing.inner), _petroff(bearing.outer)
     t_j, p_i, p_o = bearing_loss(bearing, [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, omega_fr], omega_r)
@@ -36,7 +37,8 @@ def test_centred_power_loss_is_petroff(b, omega_r, omega_fr):
 
 def _dissipation(film, r, rdot, omega_s, d_omega):
     """Viscous dissipation [W] of one short π-film, built from the pressure field (not from torques or forces):
-    Couette shear μ (R Δω)² / h over the full circumference (the model's oil streamers, physics.md §6.1) plus the
+    Couette shear μ (R Δω)² / h over the full circumference (the model's oil streamers,
+    docs/theory/rings.md#wall-torques-of-one-film) plus the
     axial Poiseuille flow of the short-bearing pressure p = P(θ) (z² − L²/4) over its positive zone, whose
     dissipation ∫ h³/(12 μ) (∂p/∂z)² dz = h³ P² L³ / (36 μ) per unit circumferential length."""
     mu, radius, length, c = film.viscosity, film.radius, film.length, film.clearance
@@ -89,7 +91,8 @@ def test_power_loss_equals_the_dissipation_of_the_film_flow():
 
 def test_journal_torque_is_the_reaction_of_the_ring_torque():
     """The film is massless: the torques on journal and ring about the origin cancel,
-    T_J + q_J × F + M^I − q_FR × F = 0, i.e. T_J + M^I = −(q_J − q_FR) × F^I (physics.md §6.1). M^I is taken from the
+    T_J + q_J × F + M^I − q_FR × F = 0, i.e. T_J + M^I = −(q_J − q_FR) × F^I
+    (docs/theory/rings.md#wall-torques-of-one-film). M^I is taken from the
     ring's equation of motion (:func:`frbmodel.bearing.ring_rhs_kernel`, I_FR ω̇_FR = M^I + M^O) with a centred,
     resting ring, whose outer film then adds M^O = −A_O ω_FR (closed form)."""
     tc = frb.turbocharger(36e-6)
@@ -116,7 +119,7 @@ def test_journal_torque_is_the_reaction_of_the_ring_torque():
 
 def test_steady_power_loss_is_journal_torque_times_speed():
     """At the method-J equilibrium the ring torque is balanced and nothing moves laterally, so the power the films
-    dissipate is all taken from the journal: P = −T_J ω_R (physics.md §6.5)."""
+    dissipate is all taken from the journal: P = −T_J ω_R (docs/theory/rings.md#friction-torque-and-power-loss)."""
     tc = frb.turbocharger(36e-6)
     df = bearing_losses(tc, [20e3, 100e3, 250e3])
     w = df["speed [rpm]"].to_numpy() * math.pi / 30

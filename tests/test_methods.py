@@ -115,7 +115,7 @@ def test_precession_sign_equals_frequency_slope_for_method_a():
 def test_precession_indicator_hand_check():
     from frbmodel.modal import precession_index
 
-    # v = cos βt, w = sin βt (CCW orbit) -> v̄ = 1, w̄ = −i -> Ψ = +1 (physics.md §9)
+    # v = cos βt, w = sin βt (CCW orbit) -> v̄ = 1, w̄ = −i -> Ψ = +1 (docs/theory/modal.md#modal-analysis)
     psi, _ = precession_index(np.array([[1.0 + 0j], [-1j]]), [0], [1])
     assert psi[0, 0] == pytest.approx(1.0)
     psi, _ = precession_index(np.array([[1.0 + 0j], [1j]]), [0], [1])

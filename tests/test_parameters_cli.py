@@ -13,11 +13,12 @@ def test_table2_values():
     tc = frb.turbocharger(40e-6)
     t, c = tc.bearings
     assert (t.name, c.name) == ("turbine", "compressor")
-    assert t.ring_mass == 7.2e-3  # 7.2 g, not the table's "7.2 kg" (physics.md §10)
+    assert t.ring_mass == 7.2e-3  # 7.2 g, not the table's "7.2 kg" (docs/theory/parameters.md#table-2-in-si-units)
     assert t.ring_inertia == pytest.approx(33.641e-8)
     assert t.inner.viscosity == 4.9e-3 and c.inner.viscosity == 6.4e-3
     assert t.outer.clearance == 40e-6 and t.inner.clearance == 34e-6
-    # ring mass consistent with its inertia: m (r_i² + r_o²)/2 within 1.3 % (physics.md §10)
+    # ring mass consistent with its inertia: m (r_i² + r_o²)/2 within 1.3 %
+    # (docs/theory/parameters.md#table-2-in-si-units)
     ri, ro = t.inner.radius + t.inner.clearance, t.outer.radius
     assert t.ring_mass * (ri ** 2 + ro ** 2) / 2 == pytest.approx(t.ring_inertia, rel=0.015)
 
@@ -96,7 +97,7 @@ def test_cli_equilibrium_and_system_file(tmp_path, capsys):
     assert main(["system", "--outer-clearance", "46e-6", "--out", str(sysfile)]) == 0
     assert main(["equilibrium", "--method", "J", "--speed-rpm", "30000", "--system", str(sysfile)]) == 0
     out = capsys.readouterr().out
-    assert "RSR 0.22191" in out  # physics.md §11: 46 µm, turbine, 30k rpm, method J
+    assert "RSR 0.22191" in out  # docs/theory/parameters.md#reference-numbers: 46 µm, turbine, 30k rpm, method J
 
 
 def test_cli_bad_input_exits_with_message(tmp_path, capsys):
@@ -120,7 +121,8 @@ def test_cli_paper_figures(tmp_path, capsys):
 
     eq = pd.read_csv(tmp_path / "fig10_11_equilibria.csv")
     assert set(eq["method"]) == set("FGIJ")
-    # F and G coincide (physics.md 6.4), I and J lie below eq. (6) in the turbine bearing
+    # F and G coincide (docs/theory/rings.md#coupled-static-equilibrium), I and J lie below eq. (6) in the turbine
+    # bearing
     f = eq[eq["method"] == "F"]["RSR turbine [-]"].to_numpy()
     g = eq[eq["method"] == "G"]["RSR turbine [-]"].to_numpy()
     assert abs(f - g).max() < 1e-12

@@ -3,7 +3,9 @@ built independently here.
 
 The reference matrices are not retyped from the code: they are integrated numerically (Gauss-Legendre) from the
 Hermite-cubic shape functions and the energy expressions of an Euler-Bernoulli shaft with rotary inertia and
-gyroscopic coupling, with physics.md §1's conventions θx = −∂w/∂z, θy = +∂v/∂z and §7.4's rigid-disc rule
+gyroscopic coupling, with docs/theory/conventions.md#conventions's conventions θx = −∂w/∂z, θy = +∂v/∂z and
+equations-of-motion.md#euler-bernoulli-shaft-element's
+rigid-disc rule
 (I_d θ̈x + I_p Ω θ̇y = M_x, I_d θ̈y − I_p Ω θ̇x = M_y).
 """
 import math
@@ -79,12 +81,14 @@ def _assembled_by_hand(shaft, discs):
 
 
 TABLE2_SHAFT = [(33e-3, 11e-3, 7860.0, 2e11), (39e-3, 11e-3, 7860.0, 2e11), (33e-3, 11e-3, 7860.0, 2e11)]
-TABLE2_DISCS = [(0, 0.326, 8.1e-5, 7.7e-5), (3, 0.118, 4.4e-5, 3.27e-5)]  # physics.md §10
+TABLE2_DISCS = [(0, 0.326, 8.1e-5, 7.7e-5), (3, 0.118, 4.4e-5, 3.27e-5)]  #
+# docs/theory/parameters.md#table-2-in-si-units
 
 
 @pytest.fixture(scope="module")
 def table2():
-    """The preset rotor and the same rotor's matrices assembled here from physics.md §10's numbers."""
+    """The preset rotor and the same rotor's matrices assembled here from
+    docs/theory/parameters.md#table-2-in-si-units's numbers."""
     return frb.turbocharger().rotor, _assembled_by_hand(TABLE2_SHAFT, TABLE2_DISCS)
 
 
@@ -105,7 +109,8 @@ def test_eom_matrices_of_a_two_node_shaft_equal_the_energy_quadrature():
     _close(m_, M, 1e-13)
     _close(c_, Om * G, 1e-13)
     _close(k_, K + Omd * G, 1e-13)
-    # the forward/backward sense is in G's sign: +I_p at (θx, θy) of the disc node (physics.md §7.4)
+    # the forward/backward sense is in G's sign: +I_p at (θx, θy) of the disc node
+    # (docs/theory/equations-of-motion.md#euler-bernoulli-shaft-element)
     assert c_[6, 7] > 0 > c_[7, 6]
 
 
@@ -167,7 +172,7 @@ def test_monolithic_rhs_rotor_rows_on_springs(table2):
                    wdg, k_s, 0.999, np.zeros(4), np.zeros(2), np.zeros((2, n)))
     f = np.zeros(n)
     f[1::4] = -tc.gravity
-    f = M @ f  # consistent gravity load (physics.md §7.1)
+    f = M @ f  # consistent gravity load (docs/theory/equations-of-motion.md#rotor)
     for node in jn:
         f[4 * node:4 * node + 2] -= k_s * y[4 * node:4 * node + 2]
     Om, Omd = 2000.0 + 4000.0 * t, 4000.0

@@ -23,16 +23,17 @@ def test_free_free_rotor_has_four_rigid_body_modes_and_correct_mass():
     assert np.sum(np.abs(ev) < 1e-6 * ev.max()) == 4  # translation + tilt in each plane
     u = np.zeros(r.n_dof)
     u[0::4] = 1.0  # rigid x-translation (Hermite shape functions represent it exactly)
-    # physics.md §10: rotor total 0.522431 kg
+    # docs/theory/parameters.md#table-2-in-si-units: rotor total 0.522431 kg
     assert u @ r.M @ u == pytest.approx(0.522431, rel=1e-6)
     assert r.mass == pytest.approx(0.522431, rel=1e-6)
 
 
 def test_static_reactions_equal_hand_statics():
     tc = frb.turbocharger()
-    # moment and force balance of the rigid rotor (tests/_reference.py, physics.md §10)
+    # moment and force balance of the rigid rotor (tests/_reference.py, docs/theory/parameters.md#table-2-in-si-units)
     np.testing.assert_allclose(tc.bearing_loads, table2_bearing_loads(tc.gravity), rtol=1e-10)
-    np.testing.assert_allclose(tc.bearing_loads, [5.3093, -0.1843], atol=1e-4)  # physics.md §10 (4 decimals)
+    np.testing.assert_allclose(tc.bearing_loads, [5.3093, -0.1843], atol=1e-4)  #
+    # docs/theory/parameters.md#table-2-in-si-units (4 decimals)
 
 
 def _pinned_pinned_frequencies_hz(n_el, plane, n_modes=3):
@@ -46,14 +47,17 @@ def _pinned_pinned_frequencies_hz(n_el, plane, n_modes=3):
 
 
 def test_pinned_pinned_shaft_converges_to_the_rayleigh_beam():
-    """The FE shaft (Euler-Bernoulli Hermite element with rotary inertia, physics.md §7.4) against the exact
+    """The FE shaft (Euler-Bernoulli Hermite element with rotary inertia,
+    docs/theory/equations-of-motion.md#euler-bernoulli-shaft-element) against the exact
     pinned-pinned Rayleigh beam, ω_n² = EI k⁴ / (ρA (1 + (I/A) k²)), k = nπ/L — 1969.76 Hz for n = 1, the
-    physics.md §7.4 value — in both planes (the y-z plane has θx = −w')."""
+    docs/theory/equations-of-motion.md#euler-bernoulli-shaft-element value — in both planes (the y-z plane has θx =
+    −w')."""
     E, rho, d, length = 2e11, 7860.0, 0.011, 0.105
     area, inertia = math.pi * d ** 2 / 4, math.pi * d ** 4 / 64
     k = np.arange(1, 4) * math.pi / length
     exact = np.sqrt(E * inertia * k ** 4 / (rho * area * (1 + inertia / area * k ** 2))) / (2 * math.pi)
-    assert exact[0] == pytest.approx(1969.8, abs=0.05)  # the reference itself: physics.md §7.4 (0.1 Hz digits)
+    assert exact[0] == pytest.approx(1969.8, abs=0.05)  # the reference itself:
+    # docs/theory/equations-of-motion.md#euler-bernoulli-shaft-element (0.1 Hz digits)
     errs = {}
     for n_el in (10, 20):
         fx = _pinned_pinned_frequencies_hz(n_el, (0, 3))  # x-z plane: v, θy

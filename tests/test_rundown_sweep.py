@@ -173,7 +173,8 @@ def test_compare_run_down_of_a_renamed_system_is_silent_by_default(tmp_path, cap
     # the default node is the system's first disc; a run-down's status column says so
     comps = (tmp_path / "co40um" / "components.csv").read_text()
     assert "vanishes at [rpm]" in comps and "onset estimate" in comps
-    # 30 krpm lies above the inner films' whirl onsets (11.0 / 11.7 krpm at c_O = 40 um, physics.md §11): the run
+    # 30 krpm lies above the inner films' whirl onsets (11.0 / 11.7 krpm at c_O = 40 um,
+    # docs/theory/parameters.md#reference-numbers): the run
     # starts inside an unstable range, so it shows sub-synchronous whirl that is there from the start (no onset)
     sub = table[table["component"].str.startswith("sub")]
     assert len(sub) >= 1 and set(table["run-down"]) == {"finished"} and "run-up" not in table.columns

@@ -235,18 +235,21 @@ def test_cli_runup_and_compare_pipeline(tmp_path, capsys):
     out = tmp_path / "c"
     assert (out / "linear_vs_nonlinear.md").exists() and (out / "co40um" / "composite.png").exists()
     assert all(p.exists() for p in paths)
-    # 20 krpm lies above the inner films' whirl onsets (11.0 / 11.7 krpm at c_O = 40 µm, physics.md §11), so the
+    # 20 krpm lies above the inner films' whirl onsets (11.0 / 11.7 krpm at c_O = 40 µm,
+    # docs/theory/parameters.md#reference-numbers), so the
     # run starts from an unstable equilibrium and must show sub-synchronous whirl: the table cannot be empty
     sub = table[table["component"].str.startswith("sub")]
     assert len(sub) >= 1 and set(table["c_o [um]"]) == {40.0} and set(table["run-up"]) == {"finished"}
-    # oil whirl runs in the rotation sense (physics.md §8) and is sub-synchronous; a component already growing at
+    # oil whirl runs in the rotation sense (docs/theory/whirl.md#film-whirl) and is sub-synchronous; a component already
+    # growing at
     # the start has no onset in this run (NaN), the others start inside the run's speed range
     assert set(sub["direction"]) == {"forward"}
     onset = sub["nonlinear onset [rpm]"]
     has = onset.notna()
     assert np.all(sub["f at onset [Hz]"][has] < onset[has] / 60.0)
     assert np.all((onset[has] >= 20e3) & (onset[has] <= 40e3))
-    # the method-J modes they are paired with are unstable, hence forward (physics.md §12, item 10)
+    # the method-J modes they are paired with are unstable, hence forward
+    # (docs/theory/parameters.md#interpretation-choices, item 10)
     paired = sub["J mode"].dropna() if "J mode" in sub else pd.Series(dtype=object)
     assert paired.str.startswith("forward").all()
     # the written table is the returned one
@@ -258,9 +261,10 @@ def test_cli_runup_and_compare_pipeline(tmp_path, capsys):
 def test_corrected_films_and_user_profile_start_from_their_equilibrium():
     """Sample 0 of a run-up without perturbation must be the static equilibrium of the corrected films with the
     ring speed of the full torque balance (method J). Checked by an independent residual: the static film forces
-    written out from physics.md §2.6 times the film model's finite-length factors (§5; checked against physics.md
-    in test_film.py), the hand-statics bearing loads (§10) and the ring torques of §6.2 — not by recomputing the
-    equilibrium the run-up starts from."""
+    written out from docs/theory/films.md#static-and-quasi-static-case times the film model's finite-length factors
+    (docs/theory/films.md#finite-length-correction; checked against the finite-volume solver in test_film.py), the
+    hand-statics bearing loads (docs/theory/parameters.md#table-2-in-si-units) and the ring torques of
+    docs/theory/rings.md#torques-on-the-ring — not by recomputing the equilibrium the run-up starts from."""
     tc = frb.turbocharger(36e-6, film_model="short_corrected")
     r = runup(tc, profile=lambda t: 30e3 + 1e5 * t * t, duration=0.01, perturbation=0.0, progress=False)
     np.testing.assert_allclose(r.speed_rpm[[0, -1]], [30e3, 30e3 + 1e5 * 1e-4], rtol=1e-6)

@@ -12,7 +12,8 @@ RPM0, DRIVE, T = 2000.0, 2e-3, 0.05  # a stable speed (first film onset ~11 krpm
 
 
 def _polar_inertia(rotor):
-    """J_p [kg m²] written out from physics.md §7.3: discs plus solid/hollow shaft elements ρ (π/32)(D_o⁴ − D_i⁴) l."""
+    """J_p [kg m²] written out from docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up: discs plus
+    solid/hollow shaft elements ρ (π/32)(D_o⁴ − D_i⁴) l."""
     shaft = sum(e.density * math.pi / 32 * (e.outer_diameter ** 4 - e.inner_diameter ** 4) * e.length
                 for e in rotor.shaft)
     return sum(d.polar_inertia for d in rotor.discs) + shaft
@@ -28,14 +29,16 @@ def mono():
 
 def test_polar_inertia_of_table2_rotor(mono):
     tc, run = mono
-    # physics.md §7.3: 8.1e-5 + 4.4e-5 + 7860 (π/32) 0.011⁴ 0.105 ≈ 1.262e-4 kg m²
+    # docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up: 8.1e-5 + 4.4e-5 + 7860 (π/32) 0.011⁴ 0.105 ≈
+    # 1.262e-4 kg m²
     assert _polar_inertia(tc.rotor) == pytest.approx(1.262e-4, rel=1e-3)
     assert run.meta["polar_inertia_kg_m2"] == pytest.approx(_polar_inertia(tc.rotor), rel=1e-14)
 
 
 def test_torque_driven_speed_is_the_integral_of_the_torques(mono):
     """Acceptance (issue #11): with a constant drive torque, Ω(t) = Ω0 + ∫ (T_drive + Σ T_J) / J_p dt, with the
-    recorded film torques on the journals integrated here by the trapezoidal rule and J_p from physics.md §7.3."""
+    recorded film torques on the journals integrated here by the trapezoidal rule and J_p from
+    docs/theory/equations-of-motion.md#linear-form-and-nonlinear-run-up."""
     tc, run = mono
     w = run.speed_rpm * math.pi / 30
     torque = DRIVE + sum(run.journal_torque[b.name] for b in tc.bearings)

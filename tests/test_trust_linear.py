@@ -21,7 +21,8 @@ from frbmodel.rotor import ShaftElement
 
 SWEEP = np.linspace(10e3, 250e3, 100)
 FILM = Film(radius=5.5e-3, length=6.5e-3, clearance=34e-6, viscosity=4.9e-3)
-#: physics.md §11: film whirl onsets [krpm] of the Table 2 system at 36 µm (rounded to 0.1 krpm)
+#: docs/theory/parameters.md#reference-numbers: film whirl onsets [krpm] of the Table 2 system at 36 µm (rounded to 0.1
+# krpm)
 ONSETS_36_KRPM = [11.1, 68.1, 11.8, 69.2]
 
 
@@ -95,7 +96,7 @@ def test_descending_grid_gives_the_ascending_result():
     np.testing.assert_array_equal(down.speeds_rpm, up.speeds_rpm)
     for name in ("frequencies_hz", "damping", "whirl_hz", "whirl_margin", "ring_speed_ratio", "whirl_onset_rpm"):
         np.testing.assert_array_equal(getattr(down, name), getattr(up, name))
-    # physics.md §11 onsets, not 250,000 rpm four times
+    # docs/theory/parameters.md#reference-numbers onsets, not 250,000 rpm four times
     np.testing.assert_allclose(down.whirl_onset_rpm / 1e3, ONSETS_36_KRPM, atol=0.051)
     ur = down.unstable_ranges()
     assert len(ur) and np.all(ur["from [rpm]"] <= ur["to [rpm]"])
@@ -129,7 +130,8 @@ def test_result_built_from_a_descending_grid_is_sorted_consistently():
 def test_reported_onsets_are_exact_whatever_the_grid(n):
     """Interpolating the margin on a 5-speed grid gave 10,280 rpm for the turbine inner film (exact 11,073)."""
     cd = frb.campbell(frb.turbocharger(), "J", np.linspace(10e3, 250e3, n))
-    np.testing.assert_allclose(cd.whirl_onset_rpm / 1e3, ONSETS_36_KRPM, atol=0.051)  # physics.md §11, 0.1 krpm
+    np.testing.assert_allclose(cd.whirl_onset_rpm / 1e3, ONSETS_36_KRPM, atol=0.051)  #
+    # docs/theory/parameters.md#reference-numbers, 0.1 krpm
     # and they are where the grid's own margins change sign (an independent consistency check)
     for k, on in enumerate(cd.whirl_onset_rpm):
         m = cd.whirl_margin[:, k]
@@ -185,7 +187,7 @@ def test_campbell_from_fmu_records_ssp_parameter_set_and_system(built, tmp_path)
     assert meta["parameter_set"] == "co46" and meta["ssp"] == str(ssp.resolve())
     system = Turbocharger.from_dict(meta["system"])
     assert [b.outer.clearance for b in system.bearings] == [46e-6, 46e-6]
-    # exact onsets of the 46 µm system (physics.md §11 table: 10.8, 49.4, 11.4, 50.6 krpm)
+    # exact onsets of the 46 µm system (docs/theory/parameters.md#reference-numbers table: 10.8, 49.4, 11.4, 50.6 krpm)
     np.testing.assert_allclose(cd.whirl_onset_rpm / 1e3, [10.8, 49.4, 11.4, 50.6], atol=0.051)
 
 

@@ -8,6 +8,7 @@ import math
 import subprocess
 import sys
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -372,3 +373,28 @@ def test_the_split_fmus_serialize_their_state_too(built, tmp_path, name, outs):
     s.s.doStep(1e-5, 1e-5)
     np.testing.assert_array_equal(s.get(outs), first)
     s.close()
+
+
+def test_a_second_fmu_instantiated_in_the_process_imports_the_stable_copy(built, tmp_path):
+    """As a tool loads an SSP: the engine FMU instantiated first, then the turbocharger FMU, before either is
+    initialized. The frbmodel the turbocharger imports must be the per-user copy (numba's cache survives fresh
+    extractions there), not its own fresh extraction, which pythonfmu puts first on sys.path: that recompiled the
+    kernels at every start (17 s in ecos) before each slave put the copy first again."""
+    code = f"""
+import sys
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+slaves = []
+for name in ("EngineTorque", "FloatingRingTurbocharger"):
+    fmu = {str(built / 'fmus')!r} + "/" + name + ".fmu"
+    md = read_model_description(fmu)
+    s = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu, unzipdir={str(tmp_path)!r} + "/" + name),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+    s.instantiate()
+    slaves.append(s)
+print(sys.modules["frbmodel"].__file__)
+"""
+    env = {**__import__("os").environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, env=env)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert Path(out.stdout.split()[-1]).is_relative_to(tmp_path / "cache" / "frbmodel" / "fmu-pkg"), out.stdout

@@ -139,7 +139,8 @@ def test_method_j_equals_the_1x_orbit_of_a_monolithic_run(tc):
     window. Measured differences at 0.4 s: wheels 0.2-0.8 %, journals 0.7-1.2 %; at 1 s: wheels 0.1-0.3 %,
     compressor journal 0.2 %, turbine journal 1.0-1.3 % — the same at 1/4 of the unbalance, so a linear modelling
     difference, not a transient or nonlinearity; it is consistent with the ring speed, which oscillates at 1X by
-    0.15 % in the run, a perturbation DoF that method J leaves out (physics.md §7). The rings' own orbits differ
+    0.15 % in the run, a perturbation DoF that method J leaves out
+    (docs/theory/equations-of-motion.md#equations-of-motion). The rings' own orbits differ
     by up to 6 % on the turbine side for the same reason and are not compared. Hence the 2 % bound."""
     rpm, me, T, fs = 1500.0, 1e-6, 0.4, 2000.0
     run = frb.runup(tc, profile=SpeedProfile.constant(rpm, T), duration=T, unbalance=[Unbalance("turbine_wheel", me)],

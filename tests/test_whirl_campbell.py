@@ -12,7 +12,7 @@ from frbmodel.film import rt_coefficients
 from frbmodel.linear import linear_system
 from frbmodel.whirl import film_whirl_ratio, lund_threshold, routh_hurwitz_stable
 
-# physics.md §8 table: ε -> (γ, K̄_eq/γ²)
+# docs/theory/whirl.md#film-whirl table: ε -> (γ, K̄_eq/γ²)
 TABLE8 = [(0.01, 0.50003, 7.638), (0.1, 0.50294, 7.515), (0.3, 0.51942, 6.790), (0.5, 0.51464, 6.460),
           (0.6, 0.47396, 7.295), (0.7, 0.34457, 13.16), (0.75, 0.12668, 94.95)]
 
@@ -55,7 +55,8 @@ def test_onset_speeds_physics_11():
 
 
 def test_whirl_frequencies_physics_11():
-    # f_wI, f_wO of the J equilibrium: 36 µm turbine at 30k and 100k rpm (physics.md §11 table)
+    # f_wI, f_wO of the J equilibrium: 36 µm turbine at 30k and 100k rpm (docs/theory/parameters.md#reference-numbers
+    # table)
     cd = frb.campbell(frb.turbocharger(36e-6), "J", [30e3, 100e3, 200e3])
     np.testing.assert_allclose(cd.whirl_hz[:, 0], [306.0, 1002.0, 1999.8], atol=0.06)
     np.testing.assert_allclose(cd.whirl_hz[:, 1], [49.5, 166.5, 332.1], atol=0.06)
@@ -74,7 +75,8 @@ def cd_j():
 @pytest.fixture(scope="module")
 def independent_eigenvalues():
     """Eigenvalues λ (Im λ > 0) of the method-J matrices at the checked speeds, from the generalized problem
-    [[I, 0], [0, M]] ṡ = [[0, I], [−K, −C]] s (physics.md §9) by scipy — no inverse of M, no mode selection or
+    [[I, 0], [0, M]] ṡ = [[0, I], [−K, −C]] s (docs/theory/modal.md#modal-analysis) by scipy — no inverse of M, no mode
+    selection or
     tracking of the library."""
     tc = frb.turbocharger(36e-6)
     out = {}
@@ -89,7 +91,7 @@ def independent_eigenvalues():
 
 def test_campbell_frequency_and_damping_follow_the_eigenvalue_definitions(cd_j, independent_eigenvalues):
     """At the checked speeds the tracked columns must hold exactly the system's modes, each with
-    f = Im λ / 2π and D = −Re λ / |λ| (physics.md §9) of an independently solved eigenvalue."""
+    f = Im λ / 2π and D = −Re λ / |λ| (docs/theory/modal.md#modal-analysis) of an independently solved eigenvalue."""
     n = SWEEP.size
     for a in (cd_j.frequencies_hz, cd_j.damping, cd_j.precession, cd_j.mode_kind, cd_j.eigenvalues):
         assert a.shape[0] == n and a.shape[1] == cd_j.n_modes
@@ -119,7 +121,8 @@ def test_campbell_frequency_and_damping_follow_the_eigenvalue_definitions(cd_j, 
 
 
 def test_whirl_onset_from_sweep_matches_exact(cd_j):
-    # the result carries the exact onsets (physics.md §11 table, rounded to 0.1 krpm), not the grid interpolation
+    # the result carries the exact onsets (docs/theory/parameters.md#reference-numbers table, rounded to 0.1 krpm), not
+    # the grid interpolation
     np.testing.assert_allclose(cd_j.whirl_onset_rpm / 1e3, [11.1, 68.1, 11.8, 69.2], atol=0.051)
     assert "film_onset_speeds" in cd_j.meta["whirl_onset_source"]
     # the grid interpolation stays available; a sweep starting at 10 krpm resolves onsets above 10 krpm to its step
@@ -152,13 +155,14 @@ def test_absent_modes_are_nan_in_every_array(cd_j):
 
 def test_unstable_ranges_are_the_forward_runs_of_negative_damping(cd_j, independent_eigenvalues):
     ur = cd_j.unstable_ranges()
-    # an almost unloaded film is unstable above a very low speed (physics.md §10; the compressor films carry
+    # an almost unloaded film is unstable above a very low speed (docs/theory/parameters.md#table-2-in-si-units; the
+    # compressor films carry
     # 0.18 N): method J is unstable over the whole sweep, as the independent eigenvalues show at the checked speeds
     for lam in independent_eigenvalues.values():
         assert np.sum(lam.real > 0) >= 1
     assert np.all(cd_j.n_unstable >= 1) and len(ur) >= 1
     # the films' cross-coupled stiffness feeds whirl in the rotation sense only: every unstable mode is forward
-    # (physics.md §12, item 10)
+    # (docs/theory/parameters.md#interpretation-choices, item 10)
     assert set(ur["precession"]) == {"forward"}
     for _, r in ur.iterrows():
         d = np.nan_to_num(cd_j.damping[:, r["mode"]], nan=1.0)
