@@ -5,8 +5,8 @@ Usage: python build_fmu.py [OUT_DIR]   (same as `frb build-fmus --out OUT_DIR`)
 import argparse
 import sys
 
+from frbmodel.core.errors import FRBError
 from frbmodel.cosim.build import build_fmus
-from frbmodel.errors import FRBError
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description="Build the two FMUs and the SSP (same as `frb build-fmus`).")

@@ -11,7 +11,7 @@ import math
 import sys
 from pathlib import Path
 
-from frbmodel.errors import FRBError
+from frbmodel.core.errors import FRBError
 
 
 def _number(text, kind, ok, valid):

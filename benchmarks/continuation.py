@@ -28,9 +28,9 @@ def main(argv=None):
     args = ap.parse_args(argv)
 
     import frbmodel as frb
-    from frbmodel.continuation import continuation
-    from frbmodel.limitcycle import WORKERS, limit_cycle
-    from frbmodel.shooting import monodromy
+    from frbmodel.cycles.continuation import continuation
+    from frbmodel.cycles.limitcycle import WORKERS, limit_cycle
+    from frbmodel.cycles.shooting import monodromy
 
     tc = frb.turbocharger(36e-6)
     lc60 = limit_cycle(tc, 60e3)
@@ -38,8 +38,8 @@ def main(argv=None):
     lc61 = limit_cycle(tc, 61e3, guess=lc60)
     t_orbit = time.perf_counter() - t0
 
-    from frbmodel.limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, _Flow
-    from frbmodel.runup import SpeedProfile, atol_vector, build_problem
+    from frbmodel.cycles.limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, _Flow
+    from frbmodel.nonlinear.runup import SpeedProfile, atol_vector, build_problem
 
     prob = build_problem(tc, SpeedProfile.constant(61e3, 1.0), tc.film_model)
     flow = _Flow(prob, SHOOT_RTOL, SHOOT_ATOL_M)

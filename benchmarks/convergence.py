@@ -17,7 +17,7 @@ import numpy as np
 from _cli import run_script  # (benchmarks/ is the script's folder)
 
 import frbmodel as frb
-from frbmodel.runup import SpeedProfile
+from frbmodel.nonlinear.runup import SpeedProfile
 
 #: (label, rtol, atol [m]): the former defaults ("default"), both x0.1 (today's defaults), x0.01, and each alone x0.1
 LEVELS = (("default", 1e-6, 1e-9), ("x0.1", 1e-7, 1e-10), ("x0.01", 1e-8, 1e-11), ("atol0.1", 1e-6, 1e-10),

@@ -28,7 +28,7 @@ from _cli import nonnegative, positive, run_script  # (benchmarks/ is the script
 import frbmodel as frb
 from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.master import CosimStopped, Master, cosimulate
-from frbmodel.spectral import spectrogram
+from frbmodel.signals.spectral import spectrogram
 
 #: FMI functions reported one by one; the others (instantiate, initialization, parameters) are set-up
 STEP_FUNCTIONS = ("doStep", "getReal", "setReal", "getFMUstate", "setFMUstate", "freeFMUstate")

@@ -25,8 +25,8 @@ from _cli import run_script  # (benchmarks/ is the script's folder)
 import frbmodel as frb
 from frbmodel.cosim.build import built_ssp
 from frbmodel.cosim.master import cosimulate, operating_point_overrides
-from frbmodel.runup import Unbalance
-from frbmodel.spectral import spectrogram
+from frbmodel.nonlinear.runup import Unbalance
+from frbmodel.signals.spectral import spectrogram
 
 START, END, T = 20e3, 250e3, 1.0
 

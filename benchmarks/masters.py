@@ -413,8 +413,8 @@ def _print_deviations(ref, runs, clearance):
 def ring_time_constants(params, speeds_rpm=SPEED_RPM):
     """{(bearing, rpm): shortest time constant [s] of the ring's lateral motion in its films}, from the bearing's
     linearization (ring speed held) at the method-J equilibrium of the co36 system."""
-    from frbmodel.components import BearingComponent
-    from frbmodel.units import rpm_to_rad_s
+    from frbmodel.core.units import rpm_to_rad_s
+    from frbmodel.nonlinear.components import BearingComponent
 
     tc = frb.turbocharger(params[BEARINGS[0]]["outer.clearance"][1])
     out = {}

@@ -5,7 +5,8 @@ Usage::
     python benchmarks/runup.py [--duration 1.0] [--repeats 1]
 
 Runs the 20k -> 250k rpm, 1 s simulated run-up of the Table 2 turbocharger at c_o = 36 um with every integrator of
-:func:`frbmodel.runup.runup` (after a short warm-up that loads the numba kernels), alternating them ``--repeats``
+:func:`frbmodel.nonlinear.runup.runup` (after a short warm-up that loads the numba kernels), alternating them
+``--repeats``
 times, and prints for each the wall time (min over the repeats), solver work, the cost of one compiled RHS, and
 the whirl onsets of the runs side by side (the same to 1 % is what the test suite checks on a short run).
 Issue #13 targets: compiled path <= 5 s and >= 2x faster than LSODA.
@@ -20,9 +21,9 @@ from _cli import count, positive, run_script  # (benchmarks/ is the script's fol
 from numba import njit
 
 import frbmodel as frb
-from frbmodel.dynamics import monolithic_rhs
-from frbmodel.runup import INTEGRATORS, SpeedProfile, build_problem, initial_state, runup
-from frbmodel.spectral import spectrogram
+from frbmodel.nonlinear.runup import INTEGRATORS, SpeedProfile, build_problem, initial_state, runup
+from frbmodel.physics.dynamics import monolithic_rhs
+from frbmodel.signals.spectral import spectrogram
 
 
 @njit(cache=True)

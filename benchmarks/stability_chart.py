@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from _cli import count, run_script  # (benchmarks/ is the script's folder)
 
-from frbmodel.sweep import grid, plot_stability_chart, run_study
+from frbmodel.studies.sweep import grid, plot_stability_chart, run_study
 
 
 def main(argv=None):

@@ -8,7 +8,8 @@ Usage::
 Cases: the outer clearances 36, 38, 40, 42 um x unbalance 0 and 1e-6 kg m, each a 20k -> 250k rpm ramp of
 ``--duration`` seconds. Every run starts from an empty output folder.
 
-* serial: in this process, after loading the compiled kernels here (:func:`frbmodel.sweep.prepare_worker`, as the
+* serial: in this process, after loading the compiled kernels here (:func:`frbmodel.studies.sweep.prepare_worker`, as
+the
   Dask workers do), so its time is the cases' alone;
 * Dask, new cluster: ``run_study(..., n_workers=2)`` as ``frb sweep`` does it, starting the cluster, loading the
   kernels on each worker once and closing the cluster all included;
@@ -31,7 +32,7 @@ from pathlib import Path
 
 from _cli import positive, run_script  # (benchmarks/ is the script's folder)
 
-from frbmodel.sweep import estimated_cost_s, grid, prepare_worker, run_study, run_summary
+from frbmodel.studies.sweep import estimated_cost_s, grid, prepare_worker, run_study, run_summary
 
 
 def _timed_study(cases, out, **kw):
@@ -57,7 +58,7 @@ def _running_cluster_study(cases, out):
 
 def _plain_worker(cases, out, barrier, results):
     """One of two plain processes: load the kernels, wait for the other, run its cases; report (start, end) [s]."""
-    from frbmodel.sweep import run_case
+    from frbmodel.studies.sweep import run_case
 
     prepare_worker()
     barrier.wait()

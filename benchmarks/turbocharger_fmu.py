@@ -32,7 +32,7 @@ import numpy as np
 from _cli import count, run_script  # (benchmarks/ is the script's folder)
 
 import frbmodel as frb
-from frbmodel.runup import SpeedProfile, runup
+from frbmodel.nonlinear.runup import SpeedProfile, runup
 
 ROOT = Path(__file__).resolve().parents[1]
 C_O, T_CHECK, STEPS = 36e-6, 0.1, (1e-5, 1e-4, 1e-3, 1e-2)
@@ -180,8 +180,8 @@ def accuracy(fmu, tmp):
 
 def onsets(fmu, tmp, steps=(1e-3, 1e-2)):
     """Markdown table: the FMU's record at each macro step against frb.runup over the whole main job."""
-    from frbmodel.convergence import match_components
-    from frbmodel.spectral import spectrogram
+    from frbmodel.signals.convergence import match_components
+    from frbmodel.signals.spectral import spectrogram
 
     ref = runup(frb.turbocharger(C_O), speed_rpm=(20e3, 250e3), duration=1.0)
     ref_c = spectrogram(ref, "turbine_wheel").components()

@@ -1,6 +1,6 @@
 """FMI 2.0 co-simulation slave: one floating-ring bearing (nonlinear films + ring lateral and spin DoFs).
 
-Thin adapter over :class:`frbmodel.components.BearingComponent`; all physics is in frbmodel.
+Thin adapter over :class:`frbmodel.nonlinear.components.BearingComponent`; all physics is in frbmodel.
 """
 import math
 
@@ -35,7 +35,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._init_state()
-        from frbmodel.components import EXCHANGE_OUTPUTS
+        from frbmodel.nonlinear.components import EXCHANGE_OUTPUTS
 
         self._cache = np.empty(len(EXCHANGE_OUTPUTS) + 4)  # BearingComponent.exchange, then journal_ref x, y, vx, vy
         self._cache_gen = None  # self._gen at which _cache was computed
@@ -55,10 +55,10 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     def _parameters(self):
         """Parameters (all ``fixed``) with units and valid ranges; defaults: the turbine bearing of the paper's
-        Table 2 system (frbmodel.presets) and the component's own."""
-        from frbmodel.components import BEARING_SUBSTEP, CONTACT_EPS
-        from frbmodel.film import FILM_MODELS
-        from frbmodel.presets import turbocharger
+        Table 2 system (frbmodel.system.presets) and the component's own."""
+        from frbmodel.nonlinear.components import BEARING_SUBSTEP, CONTACT_EPS
+        from frbmodel.physics.film import FILM_MODELS
+        from frbmodel.system.presets import turbocharger
 
         tc = turbocharger()
         bearing = tc.bearings[0]
@@ -88,7 +88,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units). Those
         of the communication point (force, Jacobian, journal_ref, losses, ε) are one array computed by one
         compiled call (:meth:`_out`), the others one array of the state (:meth:`_state_out`)."""
-        from frbmodel.components import EXCHANGE_OUTPUTS
+        from frbmodel.nonlinear.components import EXCHANGE_OUTPUTS
 
         where = {n: k for k, n in enumerate(EXCHANGE_OUTPUTS)}
 
@@ -164,9 +164,9 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
     # ------------------------------------------------------------------ FMI (FrbSlaveMixin hooks)
     def _initialize(self):
         """Build the component from the (range-checked) parameters; raises on an invalid combination."""
-        from frbmodel.components import BearingComponent
-        from frbmodel.film import Film
-        from frbmodel.parameters import FloatingRingBearing as FRB
+        from frbmodel.nonlinear.components import BearingComponent
+        from frbmodel.physics.film import Film
+        from frbmodel.system.parameters import FloatingRingBearing as FRB
 
         v = self._values
         self._check_geometry()
@@ -213,7 +213,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._comp.step(out[-4:].copy(), float(self._input_values[self._speed_idx]), 0.0, step_size, t=current_time)
 
     def _step_context(self):
-        from frbmodel.units import rad_s_to_rpm
+        from frbmodel.core.units import rad_s_to_rpm
 
         w = self._in("rotor_speed")
         return f"rotor speed {rad_s_to_rpm(w):.0f} rpm: " if math.isfinite(w) else ""

@@ -1,6 +1,6 @@
 """FMI 2.0 co-simulation slave: the whole turbocharger in one FMU, for system-simulation tools.
 
-Thin adapter over :class:`frbmodel.turbocharger_component.TurbochargerComponent`: the FE rotor and both
+Thin adapter over :class:`frbmodel.nonlinear.turbocharger_component.TurbochargerComponent`: the FE rotor and both
 floating-ring bearings (ring lateral and spin DoFs) integrated inside by the compiled monolithic integrator of
 ``frb.runup`` with its own error control. ``doStep(t, h)`` reaches exactly t + h for any h; the inputs are held over
 the step; no output depends directly on an input (ModelStructure), so the FMU closes no algebraic loop.
@@ -36,7 +36,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
     gravity, ``speed_source`` with its ramp, ``rtol``, ``atol``, ``speed_scale``, ``contact_eps``, the initial
     state (``initial``, ``perturbation``), ``check_rate`` and ``record_folder``. Inputs: ``speed_in`` [rad/s],
     ``drive_torque`` [N m], ``housing_acceleration.x/y`` [m/s2]. Outputs:
-    :func:`frbmodel.turbocharger_component.output_names`. FMI behaviour and statuses:
+    :func:`frbmodel.nonlinear.turbocharger_component.output_names`. FMI behaviour and statuses:
     :class:`_fmu_common.FrbSlaveMixin`; a film reaching ``contact_eps`` inside a step discards it.
     """
 
@@ -54,7 +54,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         self._bearings = [b.name for b in self._built_for.bearings]
         self._discs = [d.name for d in self._built_for.rotor.discs]
         self._parameters()
-        from frbmodel.units import rpm_to_rad_s
+        from frbmodel.core.units import rpm_to_rad_s
 
         for name, unit, desc, low in INPUTS:
             start = rpm_to_rad_s(20e3) if name == "speed_in" else 0.0
@@ -65,11 +65,11 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
     # ------------------------------------------------------------------ variables
     def _parameters(self):
         """Parameters with units and valid ranges; defaults: the built-in system and frb.runup's defaults."""
-        from frbmodel.film import FILM_MODELS
-        from frbmodel.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
-        from frbmodel.runup import DEFAULT_ATOL_M, DEFAULT_RTOL
-        from frbmodel.turbocharger_component import CHECK_RATE_HZ, CONTACT_EPS, SPEED_SOURCES
-        from frbmodel.units import rpm_to_rad_s
+        from frbmodel.core.units import rpm_to_rad_s
+        from frbmodel.nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL
+        from frbmodel.nonlinear.turbocharger_component import CHECK_RATE_HZ, CONTACT_EPS, SPEED_SOURCES
+        from frbmodel.physics.film import FILM_MODELS
+        from frbmodel.system.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
 
         tc = self._built_for
         positive = dict(low=0.0, low_open=True)
@@ -124,7 +124,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
     def _outputs(self):
         """All outputs are one array of the component (:meth:`_out`), computed once per step; none depends directly
         on an input (in initialization mode on speed_in, the start speed of speed_source = input)."""
-        from frbmodel.turbocharger_component import output_names
+        from frbmodel.nonlinear.turbocharger_component import output_names
 
         ranges = {"1": (0.0, 1.0), "m": (-math.inf, math.inf)}
         for k, (name, unit, desc) in enumerate(output_names(self._built_for)):
@@ -144,7 +144,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
 
         import frbmodel as frb
         from frbmodel.cosim.fmu_system import structure_differences
-        from frbmodel.film import Film
+        from frbmodel.physics.film import Film
 
         v = self._values
         tc = frb.load_system(v["system_file"]) if v["system_file"] else self._built_for
@@ -164,7 +164,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         """Build the component from the (range-checked) parameters; its compiled kernels are loaded (or compiled)
         here, not in the first doStep."""
         import frbmodel as frb
-        from frbmodel.turbocharger_component import TurbochargerComponent
+        from frbmodel.nonlinear.turbocharger_component import TurbochargerComponent
 
         v = self._values
         tc = self._system()
@@ -188,7 +188,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
                         t=current_time)
 
     def _step_context(self):
-        from frbmodel.units import rad_s_to_rpm
+        from frbmodel.core.units import rad_s_to_rpm
 
         w = float(self._comp.outputs()[0])
         return f"rotor speed {rad_s_to_rpm(w):.0f} rpm: " if math.isfinite(w) else ""

@@ -1,6 +1,6 @@
 """FMI 2.0 co-simulation slave: the turbocharger FE rotor (Euler-Bernoulli, gyroscopics, rigid wheels).
 
-Thin adapter over :class:`frbmodel.components.RotorComponent`; the bearing forces arrive linearized at the
+Thin adapter over :class:`frbmodel.nonlinear.components.RotorComponent`; the bearing forces arrive linearized at the
 communication point (force, stiffness, damping per bearing) and are applied linear-implicitly over the step.
 
 The rotor system is fixed when the FMU is built (:mod:`frbmodel.cosim.fmu_system`; ``frb build-fmus
@@ -8,10 +8,11 @@ The rotor system is fixed when the FMU is built (:mod:`frbmodel.cosim.fmu_system
 unbalance parameters, its bearings the inputs and outputs ``<bearing>_bearing.*``, and its node count sizes the
 state and the linearization matrices.
 
-The rotor speed follows ``speed_source`` (:data:`frbmodel.components.SPEED_SOURCES`): ``"ramp"`` the linear ramp
+The rotor speed follows ``speed_source`` (:data:`frbmodel.nonlinear.components.SPEED_SOURCES`): ``"ramp"`` the linear
+ramp
 of the parameters ``speed_start``, ``speed_end``, ``ramp_time``; ``"input"`` the input ``speed_in`` [rad/s] (its
 rate from the last two inputs); ``"torque"`` the spin equation J_p dΩ/dt = ``drive_torque`` + Σ
-``<bearing>_bearing.torque`` [N m] from ``speed_start`` (:func:`frbmodel.dynamics.spin_acceleration`, the same
+``<bearing>_bearing.torque`` [N m] from ``speed_start`` (:func:`frbmodel.physics.dynamics.spin_acceleration`, the same
 equation as the monolithic torque-driven run-up). The ``rotor_file`` parameter may select another system of the same
 structure at run time; a system of another structure is refused at initialization with the differences named.
 """
@@ -58,10 +59,10 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     # ------------------------------------------------------------------ variables
     def _parameters(self):
         """Parameters (all ``fixed``) with units and valid ranges; defaults: the built-in system and the default
-        run-up of frbmodel.presets."""
-        from frbmodel.components import ROTOR_SUBSTEP, SPEED_SOURCES
-        from frbmodel.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
-        from frbmodel.units import rpm_to_rad_s
+        run-up of frbmodel.system.presets."""
+        from frbmodel.core.units import rpm_to_rad_s
+        from frbmodel.nonlinear.components import ROTOR_SUBSTEP, SPEED_SOURCES
+        from frbmodel.system.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
 
         self._param("rotor_file", "", "frbmodel system description (.toml/.json, see frb system) whose rotor, bearing "
                     "nodes and gravity are used; it must have the structure this FMU was built for (node count, disc "
@@ -89,8 +90,8 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def _inputs(self):
         """Speed and drive torque; per bearing: force, end-of-step force and path acceleration, reference journal
         state, Jacobian, film torque."""
-        from frbmodel.presets import RUNUP_SPEED_RPM
-        from frbmodel.units import rpm_to_rad_s
+        from frbmodel.core.units import rpm_to_rad_s
+        from frbmodel.system.presets import RUNUP_SPEED_RPM
 
         self._input("speed_in", "rotor speed [rad/s] (speed_source = input; its value at the end of initialization "
                     "is the speed before the first step)", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), unit="rad/s")
@@ -118,7 +119,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                                 unit="N.s/m")
             self._input(f"{b}.torque", "film torque on the journal about +z [N m] (the bearing's journal_torque; "
                         "brakes the rotor when speed_source = torque)", unit="N.m")
-        from frbmodel.components import COUPLING_COLUMNS
+        from frbmodel.nonlinear.components import COUPLING_COLUMNS
 
         pos = self._input_pos
         # positions in self._input_values of the rotor component's packed coupling array (bearings x COUPLING_COLUMNS)
@@ -164,7 +165,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         return self._out_cache
 
     def _linear(self):
-        from frbmodel.components import rotor_state_space
+        from frbmodel.nonlinear.components import rotor_state_space
 
         return rotor_state_space(self._comp)
 
@@ -173,9 +174,9 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         """Build the component from the (range-checked) parameters and the system of ``rotor_file`` (the built-in
         one when empty); raises when that system's structure differs from the one the FMU was built for."""
         import frbmodel as frb
-        from frbmodel.components import RotorComponent, ramp_speed
+        from frbmodel.core.units import rad_s_to_rpm
         from frbmodel.cosim.fmu_system import structure_differences
-        from frbmodel.units import rad_s_to_rpm
+        from frbmodel.nonlinear.components import RotorComponent, ramp_speed
 
         v = self._values
         tc = frb.load_system(v["rotor_file"]) if v["rotor_file"] else self._built_for
@@ -211,7 +212,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         1 ns step of a copy without bearing forces (nothing is kept)."""
         import copy
 
-        from frbmodel.components import COUPLING_COLUMNS
+        from frbmodel.nonlinear.components import COUPLING_COLUMNS
 
         nb = len(self._bearings)
         try:
@@ -230,7 +231,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                                 journal_torques=x[self._torque_idx])
 
     def _step_context(self):
-        from frbmodel.units import rad_s_to_rpm
+        from frbmodel.core.units import rad_s_to_rpm
 
         w = self._comp.rotor_speed
         return f"rotor speed {rad_s_to_rpm(w):.0f} rpm: " if math.isfinite(w) else ""

@@ -12,10 +12,7 @@ Every name below is importable from the top level; plotting libraries are import
 """
 __version__ = "0.1.0"
 
-from .bearing import ring_speed_ratio, ring_torque
-from .campbell import CampbellResult, campbell
-from .equilibrium import BearingEquilibrium, EquilibriumResult, equilibrium
-from .errors import (
+from .core.errors import (
     ConvergenceError,
     CosimStopped,
     FilmContactError,
@@ -25,7 +22,18 @@ from .errors import (
     RunStopped,
     RunupStopped,
 )
-from .film import (
+from .core.units import rad_s_to_rpm, rpm_to_rad_s
+from .cycles.limitcycle import LimitCycle, limit_cycle
+from .linear.assembly import LinearSystem, linear_system
+from .linear.campbell import CampbellResult, campbell
+from .linear.equilibrium import BearingEquilibrium, EquilibriumResult, equilibrium
+from .linear.modal import Modes, modes
+from .linear.unbalance import UnbalanceResponse, unbalance_response
+from .linear.whirl import film_onset_speeds
+from .nonlinear.recorder import Recorder, RunupResult, RunupSchema
+from .nonlinear.runup import SpeedProfile, Unbalance, runup
+from .physics.bearing import ring_speed_ratio, ring_torque
+from .physics.film import (
     FILM_MODELS,
     Film,
     film_coefficients,
@@ -34,21 +42,13 @@ from .film import (
     static_eccentricity,
     static_position,
 )
-from .limitcycle import LimitCycle, limit_cycle
-from .linear import LinearSystem, linear_system
-from .losses import bearing_loss, bearing_losses
-from .methods import METHODS, Method, get_method
-from .modal import Modes, modes
-from .parameters import FloatingRingBearing, Turbocharger, load_system
-from .presets import PAPER_OUTER_CLEARANCES, turbocharger
-from .recorder import Recorder, RunupResult, RunupSchema
-from .rotor import Disc, Rotor, ShaftElement
-from .runup import SpeedProfile, Unbalance, runup
-from .spectral import SpectrogramResult, spectrogram
-from .tracking import Component
-from .unbalance import UnbalanceResponse, unbalance_response
-from .units import rad_s_to_rpm, rpm_to_rad_s
-from .whirl import film_onset_speeds
+from .physics.losses import bearing_loss, bearing_losses
+from .signals.spectral import SpectrogramResult, spectrogram
+from .signals.tracking import Component
+from .system.methods import METHODS, Method, get_method
+from .system.parameters import FloatingRingBearing, Turbocharger, load_system
+from .system.presets import PAPER_OUTER_CLEARANCES, turbocharger
+from .system.rotor import Disc, Rotor, ShaftElement
 
 __all__ = [
     "__version__", "BearingEquilibrium", "CampbellResult", "Component", "ConvergenceError", "CosimStopped", "Disc",

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import FRBError, ParameterError, check_finite, check_positive
-from .interrupt import Terminated
+from .core.errors import FRBError, ParameterError, check_finite, check_positive
+from .core.interrupt import Terminated
 
 
 def parse_speeds(text: str) -> np.ndarray:
@@ -34,7 +34,7 @@ def parse_speeds(text: str) -> np.ndarray:
     >>> parse_speeds("10000:30000:3").tolist(), parse_speeds("5e4,1e5").tolist()
     ([10000.0, 20000.0, 30000.0], [50000.0, 100000.0])
     """
-    from .errors import check_speeds_in_range
+    from .core.errors import check_speeds_in_range
 
     try:
         if ":" in text:
@@ -72,8 +72,8 @@ def load_from_args(args):
     >>> [b.outer.clearance for b in load_from_args(args).bearings]
     [4e-05, 4e-05]
     """
-    from .parameters import load_system
-    from .presets import turbocharger
+    from .system.parameters import load_system
+    from .system.presets import turbocharger
 
     if getattr(args, "system", None):
         tc = load_system(args.system)
@@ -112,7 +112,7 @@ def _system_args(p):
 
 def cmd_campbell(args):
     """``frb campbell``: Campbell diagram of one method (from the library or the FMUs), saved and summarised."""
-    from .campbell import campbell
+    from .linear.campbell import campbell
 
     speeds = parse_speeds(args.speeds)
     fmax = None if args.fmax is None else check_positive("--fmax", args.fmax, "Hz")
@@ -151,7 +151,7 @@ def cmd_campbell(args):
         print(f"neutral modes (|D| <= round-off bound, undamped): up to {int(cd.n_neutral.max())} at one speed")
     paths.append(_critical_table(cd, None if args.from_fmu else tc, out / f"campbell_{cd.method}_critical.csv", kw))
     if args.mode_shapes is not None:
-        from .modeshape import save_mode_shapes
+        from .linear.modeshape import save_mode_shapes
 
         if args.from_fmu:
             raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
@@ -161,8 +161,9 @@ def cmd_campbell(args):
 
 
 def _critical_table(cd, system, path, kw):
-    """Print the 1X crossings of a Campbell diagram (:func:`frbmodel.unbalance.critical_speeds`) and write them."""
-    from .unbalance import critical_speeds
+    """Print the 1X crossings of a Campbell diagram (:func:`frbmodel.linear.unbalance.critical_speeds`) and write
+    them."""
+    from .linear.unbalance import critical_speeds
 
     cs = critical_speeds(cd, system, **kw)
     _print_critical(cs)
@@ -185,7 +186,7 @@ def _print_critical(cs):
 
 def _unbalance_methods(text, kw):
     """Method letters of ``--method`` (one or a comma list) and the spring options each takes."""
-    from .methods import get_method
+    from .system.methods import get_method
 
     methods = [get_method(x) for x in text.split(",") if x.strip()] or [get_method(text)]
     unused = [k for k in kw if not any(k in m.parameters for m in methods)]
@@ -197,7 +198,7 @@ def _unbalance_methods(text, kw):
 
 def cmd_unbalance(args):
     """``frb unbalance``: unbalance response (Bode, polar, film orbits) and critical speeds of one or more methods."""
-    from .unbalance import bode_figure, location_names, unbalance_response
+    from .linear.unbalance import bode_figure, location_names, unbalance_response
 
     speeds = parse_speeds(args.speeds)
     kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
@@ -230,7 +231,7 @@ def cmd_unbalance(args):
 
 def cmd_equilibrium(args):
     """``frb equilibrium``: static equilibrium of both bearings at one speed, printed (and written as CSV)."""
-    from .equilibrium import equilibrium
+    from .linear.equilibrium import equilibrium
 
     tc = load_from_args(args)
     out = writable_dir(args.out) if args.out else None
@@ -251,7 +252,7 @@ def cmd_system(args):
 
 def cmd_paper_figures(args):
     """``frb paper-figures``: regenerate the paper's linear figures 4-11."""
-    from .paper import paper_figures
+    from .studies.paper import paper_figures
 
     tc = load_from_args(args)
     writable_dir(args.out)
@@ -261,7 +262,7 @@ def cmd_paper_figures(args):
 
 
 def _parse_unbalance(items):
-    from .runup import Unbalance
+    from .nonlinear.runup import Unbalance
 
     out = []
     for it in items or []:
@@ -276,7 +277,7 @@ def _parse_unbalance(items):
 
 #: the named speed profiles of ``frb runup --profile`` (or a FILE.csv)
 PROFILES = ("ramp", "exponential", "constant", "up-down", "torque")
-#: figure titles of the runs by :attr:`frbmodel.runup.SpeedProfile.direction` (else "run-up")
+#: figure titles of the runs by :attr:`frbmodel.nonlinear.runup.SpeedProfile.direction` (else "run-up")
 RUN_TITLES = {"down": "run-down", "up-down": "run-up and run-down", "mixed": "run with rising and falling speed"}
 
 
@@ -288,7 +289,7 @@ def _profile_arg(text):
 
 
 def _profile(args):
-    from .runup import SpeedProfile
+    from .nonlinear.runup import SpeedProfile
 
     if args.profile.lower().endswith(".csv"):
         prof = SpeedProfile.from_csv(args.profile)
@@ -344,8 +345,8 @@ def write_composites(run, system, out, xscale="linear", title="run-up", orders=(
     list of Path
         The files written.
     """
-    from .campbell import campbell
-    from .spectral import spectrogram
+    from .linear.campbell import campbell
+    from .signals.spectral import spectrogram
 
     lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
     cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
@@ -361,7 +362,7 @@ def write_composites(run, system, out, xscale="linear", title="run-up", orders=(
 
 def cmd_runup(args):
     """``frb runup``: monolithic nonlinear run-up or run-down, streamed to a folder, with figures; exit code."""
-    from .runup import check_output_rate, runup
+    from .nonlinear.runup import check_output_rate, runup
 
     tc = load_from_args(args)
     prof = _profile(args)
@@ -395,8 +396,8 @@ def cmd_runup(args):
 
 def cmd_bifurcation(args):
     """``frb bifurcation``: Hopf points and limit-cycle branches vs speed (continuation), tables and diagram."""
-    from .continuation import BifurcationDiagram, check_starts, continuation, hopf_points
-    from .runup import check_speed
+    from .cycles.continuation import BifurcationDiagram, check_starts, continuation, hopf_points
+    from .nonlinear.runup import check_speed
 
     tc = load_from_args(args)
     lo, hi = sorted(check_speed(f"--speeds {name}", v) for name, v in zip(("START", "END"), _speed_pair(args.speeds)))
@@ -456,7 +457,7 @@ BIFURCATION_CAMPBELL_SPEEDS = 120
 def _load_runs(text):
     """``[(folder, run-up result)]`` of ``--runs`` (comma-separated folders), loaded; a ParameterError names a
     folder without one."""
-    from .recorder import RunupResult
+    from .nonlinear.recorder import RunupResult
 
     return [(d, RunupResult.load(d)) for d in (text or "").split(",") if d]
 
@@ -464,12 +465,12 @@ def _load_runs(text):
 def _save_diagram(runs, tc, bd, out, lo, hi):
     """Write the diagram with the envelopes of the run-up results ``runs`` (--runs), the first run's spectrogram and
     the method-J Campbell diagram's unstable modes and film whirl lines over the speed range."""
-    from .campbell import campbell
+    from .linear.campbell import campbell
 
     envelopes = [_run_envelope(folder, r) for folder, r in runs]
     sp = None
     if runs:  # the first run's spectrogram behind the branch frequencies
-        from .spectral import spectrogram
+        from .signals.spectral import spectrogram
 
         run = runs[0][1]
         sp = spectrogram(run, run.schema.discs[0])
@@ -506,7 +507,7 @@ def write_up_down_halves(run, system, out):
     out : Path
         Output folder of the run.
     """
-    from .recorder import RunupResult
+    from .nonlinear.recorder import RunupResult
 
     df, top = run.to_dataframe(), np.flatnonzero(run.speed_rpm == run.speed_rpm.max())
     for name, rows in (("run-up", slice(0, top[0] + 1)), ("run-down", slice(top[-1], None))):
@@ -535,8 +536,8 @@ def check_convergence(run, rerun, out, what):
     """
     import pandas as pd
 
-    from .convergence import convergence_table, unconverged_summary
-    from .spectral import spectrogram
+    from .signals.convergence import convergence_table, unconverged_summary
+    from .signals.spectral import spectrogram
 
     folder = out / "convergence_check"
     tight, _ = _stoppable("convergence check", lambda: rerun(folder), folder)
@@ -559,8 +560,8 @@ def _stoppable(command, fn, out):
     """(result, exit code) of a long run that streams into ``out``: a :class:`RunStopped` (the run ended early,
     its samples kept) gives exit code 3, Ctrl-C 130 and SIGTERM 143 — the partial result is read back from
     ``out``, where the recorder marked it ``interrupted``."""
-    from .errors import RunStopped
-    from .recorder import RunupResult
+    from .core.errors import RunStopped
+    from .nonlinear.recorder import RunupResult
 
     try:
         return fn(), 0
@@ -623,7 +624,7 @@ def writable_dir(path, option="--out"):
 
 def cmd_compare(args):
     """``frb compare``: run-ups vs method-J stability per outer clearance (figures and onset table)."""
-    from .compare import compare
+    from .studies.compare import compare
 
     tc = load_from_args(args)
     check_positive("--duration", args.duration, "s")
@@ -664,8 +665,8 @@ def parse_orders(text: str) -> tuple:
 def cmd_plot(args):
     """Re-render the figures of a results folder written by frb runup / frb cosim (finished, stopped or
     interrupted) or by frb unbalance."""
-    from .parameters import Turbocharger
-    from .recorder import RunupResult
+    from .nonlinear.recorder import RunupResult
+    from .system.parameters import Turbocharger
 
     out = Path(args.dir)
     orders = parse_orders(args.orders)
@@ -685,7 +686,7 @@ def cmd_plot(args):
     system = Turbocharger.from_dict(run.meta["system"]) if "system" in run.meta else None
     if system is None:
         raise ParameterError(f"{out / 'runup.json'}: no system recorded, cannot draw the Campbell overlay")
-    from .runup import SpeedProfile
+    from .nonlinear.runup import SpeedProfile
 
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
@@ -703,8 +704,8 @@ def cmd_plot(args):
 def replot_bifurcation(args, out):
     """``frb plot DIR`` of a folder written by ``frb bifurcation``: the diagram drawn again from ``branch.nc`` (with
     the Campbell lines of the system it holds and the runs of ``--runs``)."""
-    from .continuation import BifurcationDiagram
-    from .parameters import Turbocharger
+    from .cycles.continuation import BifurcationDiagram
+    from .system.parameters import Turbocharger
 
     bd = BifurcationDiagram.load(out)
     if "system" not in bd.meta:
@@ -738,7 +739,7 @@ def replot_unbalance(out, names=None):
     """
     import matplotlib.pyplot as plt
 
-    from .unbalance import UnbalanceResponse, bode_figure
+    from .linear.unbalance import UnbalanceResponse, bode_figure
 
     stems = sorted(p.stem for p in out.glob("unbalance_*.json"))
     results = [UnbalanceResponse.load(out, s) for s in stems]
@@ -819,7 +820,7 @@ def write_orbits(run, out, speeds_rpm=(), revolutions=20.0, data=False, time_win
     list of Path
         The files written.
     """
-    from .orbits import orbits
+    from .signals.orbits import orbits
 
     windows = [orbits(run, speed_rpm=float(s), revolutions=revolutions) for s in speeds_rpm]
     windows += [orbits(run, time_s=w) for w in time_windows]
@@ -850,7 +851,7 @@ def write_waterfalls(run, out, orders=(1.0,)):
     """
     import matplotlib.pyplot as plt
 
-    from .spectral import spectrogram
+    from .signals.spectral import spectrogram
 
     paths = []
     for node in run.displacement:
@@ -869,8 +870,8 @@ def cmd_losses(args):
     the recorded losses of a run-up / co-simulation folder."""
     import matplotlib.pyplot as plt
 
-    from .losses import bearing_losses, plot_bearing_losses
-    from .recorder import RunupResult
+    from .nonlinear.recorder import RunupResult
+    from .physics.losses import bearing_losses, plot_bearing_losses
 
     tc = load_from_args(args)
     out = writable_dir(args.out)
@@ -891,7 +892,7 @@ def cmd_losses(args):
 
 def cmd_warmup(args):
     """Compile (or load) the numba kernels once, with a progress bar (CI and images call it on purpose)."""
-    from .warmup import _marker, warmup
+    from .studies.warmup import _marker, warmup
 
     wall = warmup(progress=True)
     print(f"numba kernels ready in {wall:.1f} s (cached next to the package: {_marker().parent})")
@@ -904,7 +905,7 @@ KERNEL_COMMANDS = ("campbell", "equilibrium", "losses", "runup", "compare", "cos
 
 def _first_run_notice(command):
     """On the first run after an install or an update, compile the kernels with a visible message and a bar."""
-    from .warmup import kernels_ready, warmup
+    from .studies.warmup import kernels_ready, warmup
 
     if command in KERNEL_COMMANDS and not kernels_ready():
         print("frb: compiling the numba kernels (first run only, ~40 s on 2 cores; `frb warmup` does it on purpose)",
@@ -927,8 +928,8 @@ def cmd_cosim(args):
     or a CSV speed profile), streamed to a folder, with figures; exit code."""
     from .cosim.master import COUPLING_TOL, cosimulate
     from .cosim.system_master import is_system_ssp
-    from .parameters import Turbocharger
-    from .runup import SpeedProfile
+    from .nonlinear.runup import SpeedProfile
+    from .system.parameters import Turbocharger
 
     if Path(args.ssp).exists() and is_system_ssp(args.ssp):
         return _cosim_system(args)
@@ -993,7 +994,7 @@ def _cosim_system(args):
     """``frb cosim`` of an SSP with the turbocharger FMU (e.g. build/engine_turbocharger.ssp): the fixed-step
     Jacobi master, the FMU's own record at 20 kHz, the composite figures."""
     from .cosim.system_master import SystemMaster
-    from .parameters import Turbocharger
+    from .system.parameters import Turbocharger
 
     given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None)]
     if given:
@@ -1018,7 +1019,7 @@ def _cosim_system(args):
     if not args.no_figure and run.time.size >= 2:
         import pandas as pd
 
-        from .plots import system_run_figure
+        from .plots.figures import system_run_figure
 
         fig = system_run_figure(run, pd.read_csv(out / "signals.csv"),
                                 title=f"{Path(args.ssp).name} ({args.parameter_set}), frb cosim")
@@ -1030,7 +1031,7 @@ def _cosim_system(args):
 def cmd_linearize(args):
     """``frb linearize``: global state matrix from the FMUs at one operating point; prints its modes."""
     from .cosim.linearize import linearize
-    from .modal import modes_from_state
+    from .linear.modal import modes_from_state
 
     out = writable_dir(args.out) if args.out else None
     A, tc = linearize(args.ssp, args.speed_rpm, args.method, args.parameter_set)
@@ -1049,7 +1050,7 @@ def cmd_linearize(args):
 
 def cmd_sweep(args):
     """``frb sweep``: parameter study (on Dask or serial) and its stability map; exit code 4 if a case failed."""
-    from .sweep import example_cases, grid, plot_stability_map, run_study, stability_map
+    from .studies.sweep import example_cases, grid, plot_stability_map, run_study, stability_map
 
     if args.example:
         cases = example_cases(args.example)
@@ -1086,7 +1087,7 @@ def cmd_sweep(args):
         idx = run_study(cases, args.out, scheduler=scheduler, n_workers=args.workers,
                         retry_failed=args.retry_failed, progress=True)
     except KeyboardInterrupt as exc:  # finished cases are on disk: index them and draw the map from them
-        from .sweep import write_index
+        from .studies.sweep import write_index
 
         interrupted = exc
         idx = write_index(cases, Path(args.out))
@@ -1098,7 +1099,7 @@ def cmd_sweep(args):
     print(f"{int((idx['status'] == 'finished').sum())} finished, {n_fail} failed, "
           f"{int((idx['status'] == 'pending').sum())} pending of {len(idx)} cases")
     if len(sm):
-        from .sweep import PARAMETERS
+        from .studies.sweep import PARAMETERS
 
         cols = [c for c in sm.columns if c.split(" [")[0] in PARAMETERS]
         print(sm[cols + ["method", "item", "onset [rpm]", "f at onset [Hz]"]].sort_values(cols + ["method", "item"])
@@ -1121,7 +1122,7 @@ class _Formatter(argparse.HelpFormatter):
 
 
 def _add_campbell(sub):
-    from .methods import METHODS
+    from .system.methods import METHODS
 
     c = sub.add_parser("campbell", formatter_class=_Formatter,
                        help="holistic Campbell diagram for one method (CSV + PNG + HTML)")
@@ -1180,7 +1181,7 @@ def _add_bifurcation(sub):
 
 
 def _add_equilibrium(sub):
-    from .methods import METHODS
+    from .system.methods import METHODS
 
     e = sub.add_parser("equilibrium", formatter_class=_Formatter,
                        help="static equilibrium of both bearings (methods C, D, F, G, I, J)")
@@ -1200,7 +1201,7 @@ def _add_system(sub):
 
 
 def _add_runup(sub):
-    from .runup import DEFAULT_ATOL_M, DEFAULT_RTOL, INTEGRATORS
+    from .nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, INTEGRATORS
 
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
@@ -1346,7 +1347,7 @@ def _add_paper_figures(sub):
 
 
 def _add_losses(sub):
-    from .methods import METHODS
+    from .system.methods import METHODS
 
     lo = sub.add_parser("losses", formatter_class=_Formatter,
                         help="bearing journal torque and friction power loss vs speed (CSV + PNG)")

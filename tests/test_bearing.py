@@ -7,8 +7,8 @@ from _reference import short_pressure_theta
 from scipy.optimize import brentq
 
 import frbmodel as frb
-from frbmodel.bearing import ring_torque
-from frbmodel.film import film_force, film_torques
+from frbmodel.physics.bearing import ring_torque
+from frbmodel.physics.film import film_force, film_torques
 
 
 def eq6(b):

@@ -130,7 +130,7 @@ def _stable_copy_with_kernels(fmu):
                    if n.startswith("resources/frbmodel/") and n.endswith(".py")}
     for d in root.glob(f"{frb.__version__}-*"):
         if all((d / "frbmodel" / n).is_file() and (d / "frbmodel" / n).read_bytes() == b for n, b in bundled.items()):
-            return any((d / "frbmodel" / "__pycache__").glob("*.nbi"))
+            return any((d / "frbmodel").rglob("__pycache__/*.nbi"))
     return False
 
 

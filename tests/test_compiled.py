@@ -1,11 +1,12 @@
-"""The compiled integration path (frbmodel.compiled, runup(integrator="radau")) against the scipy-LSODA reference."""
+"""The compiled integration path (frbmodel.nonlinear.compiled, runup(integrator="radau")) against the scipy-LSODA
+reference."""
 import numpy as np
 import pytest
 
 import frbmodel as frb
-from frbmodel.compiled import pack_problem, rhs_packed, solve_chunk
-from frbmodel.runup import SpeedProfile, Unbalance, atol_vector, build_problem, initial_state, runup
-from frbmodel.spectral import spectrogram
+from frbmodel.nonlinear.compiled import pack_problem, rhs_packed, solve_chunk
+from frbmodel.nonlinear.runup import SpeedProfile, Unbalance, atol_vector, build_problem, initial_state, runup
+from frbmodel.signals.spectral import spectrogram
 
 
 @pytest.fixture(scope="module")

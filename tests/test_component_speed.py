@@ -19,8 +19,7 @@ import pytest
 from pythonfmu import Real
 
 import frbmodel as frb
-from frbmodel.bearing import ring_rhs_kernel
-from frbmodel.components import (
+from frbmodel.nonlinear.components import (
     COUPLING_COLUMNS,
     EXCHANGE_OUTPUTS,
     SDIRK_GAMMA,
@@ -28,8 +27,9 @@ from frbmodel.components import (
     RotorComponent,
     ramp_speed,
 )
-from frbmodel.dynamics import add_unbalance_forces
-from frbmodel.losses import bearing_loss_kernel
+from frbmodel.physics.bearing import ring_rhs_kernel
+from frbmodel.physics.dynamics import add_unbalance_forces
+from frbmodel.physics.losses import bearing_loss_kernel
 
 EPS = np.finfo(float).eps
 FMU_SRC = Path(__file__).resolve().parents[1] / "fmu_src"

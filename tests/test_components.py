@@ -8,8 +8,8 @@ from _reference import quadrature_film_force
 from scipy.integrate import solve_ivp
 
 import frbmodel as frb
-from frbmodel.bearing import ring_rhs_kernel
-from frbmodel.components import BearingComponent, JournalHistory, RotorComponent, ramp_speed
+from frbmodel.nonlinear.components import BearingComponent, JournalHistory, RotorComponent, ramp_speed
+from frbmodel.physics.bearing import ring_rhs_kernel
 
 
 def _whirling_bearing(rpm=150e3):
@@ -183,7 +183,7 @@ def test_ring_newton_non_convergence_is_reported():
 def test_rotor_blow_up_is_an_integration_error():
     """A numerical blow-up (here a linearly unstable negative support stiffness whose growth overflows) is an
     IntegrationError (an ArithmeticError), not a ParameterError: the input was valid, the integration failed."""
-    from frbmodel.errors import IntegrationError
+    from frbmodel.core.errors import IntegrationError
 
     tc = frb.turbocharger(36e-6)
     rot = RotorComponent(tc, ramp_speed(50e3, 50e3, 1.0))

@@ -1,4 +1,4 @@
-"""Hopf points, branch continuation and bifurcation detection (frbmodel.continuation)."""
+"""Hopf points, branch continuation and bifurcation detection (frbmodel.cycles.continuation)."""
 import math
 
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 from scipy.optimize import brentq, curve_fit
 
 import frbmodel as frb
-from frbmodel.continuation import BifurcationDiagram, BranchPoint, _classify, continuation, hopf_points
-from frbmodel.modal import state_matrix
+from frbmodel.cycles.continuation import BifurcationDiagram, BranchPoint, _classify, continuation, hopf_points
+from frbmodel.linear.modal import state_matrix
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +70,7 @@ def test_branch_collapsing_onto_the_equilibrium_ends_at_the_full_models_hopf_poi
     from the side the branch grows to; branches from Hopf points and through orbits keep all their points when
     mixed (one origin per branch). Synthetic branch points near the 30.8 krpm restabilizing point (116 Hz), growing
     towards lower speeds: the unstable side there, so supercritical."""
-    from frbmodel.continuation import _diagram
+    from frbmodel.cycles.continuation import _diagram
 
     hp = hopf_points(tc, (29e3, 33e3), n_grid=8, restabilizing=True)[0]
     f = hp.frequency_hz
@@ -117,7 +117,7 @@ def test_fold_where_the_branch_turns_back_in_speed():
     """A branch that turns back in speed has a fold at the turning point (the point of extreme speed); multiplier
     changes right beside it are the fold's, not separate events (the synthetic multipliers would otherwise read as a
     Neimark-Sacker pair)."""
-    from frbmodel.continuation import _branch_events
+    from frbmodel.cycles.continuation import _branch_events
 
     speeds = [1.0e4, 1.1e4, 1.2e4, 1.25e4, 1.2e4, 1.1e4, 1.0e4, 0.9e4]
     mults = [[0.5], [0.6], [0.8], [0.9 + 0.2j, 0.9 - 0.2j], [1.1 + 0.1j, 1.1 - 0.1j], [1.2], [1.3], [1.4]]
@@ -129,7 +129,7 @@ def test_no_fold_from_speed_jitter_on_a_vertical_branch():
     """Where the orbit grows at one speed (a vertical branch, as at the 2.0 krpm Hopf point of the 36 um system)
     the computed speeds jitter by ~4e-6 relative and the radial multiplier sits at 1 within the monodromy's
     accuracy: neither makes a fold or any other bifurcation (measured jitter and multipliers of that branch)."""
-    from frbmodel.continuation import _branch_events
+    from frbmodel.cycles.continuation import _branch_events
 
     jitter = [0.0, 3.7e-6, 1.5e-6, 3.1e-6, -0.6e-6, -3.0e-6, -0.7e-6, -4.3e-6, -1.1e-6, -0.8e-6]
     radial = [0.999, 1.0014, 0.9975, 0.9985, 1.0037, 0.9981, 1.0011, 0.9985, 0.9979, 1.0016]
@@ -140,7 +140,7 @@ def test_no_fold_from_speed_jitter_on_a_vertical_branch():
 def test_branch_stops_where_it_reaches_the_equilibrium():
     """A branch whose orbit shrinks to the equilibrium has reached a Hopf point: it stops there (continuing would
     pass through it and retrace the same orbits half a period shifted) and the end is marked as a Hopf point."""
-    from frbmodel.continuation import _collapsed
+    from frbmodel.cycles.continuation import _collapsed
 
     radii = [15e-6, 8e-6, 2e-6, 0.5e-6, 0.2e-6, 0.4e-6]
     stops = [k for k in range(1, len(radii) + 1) if _collapsed(
@@ -185,7 +185,7 @@ def test_frequency_panel_shows_the_unstable_campbell_modes_and_whirl_lines(tc):
                               if np.array_equal(np.isfinite(y), cd.unstable[:, k]) else np.inf
                               for k in range(cd.n_modes)]))
         np.testing.assert_array_equal(y[cd.unstable[:, j]], cd.frequencies_hz[cd.unstable[:, j], j])
-    for k, name in enumerate(frb.whirl.FILM_NAMES):
+    for k, name in enumerate(frb.linear.whirl.FILM_NAMES):
         past = cd.whirl_margin[:, k] > 0
         if past.any():
             y = np.asarray(lines[f"whirl {name}"].get_ydata(), float)
@@ -200,7 +200,7 @@ def test_hopf_record_criticality_mode_and_film(tc):
     moving most relative to its clearance in the eigenvector, with the four shares summing to 100 %. A branch that
     stays at the Hopf speed within the jitter of a vertical branch (FOLD_MIN_REL) leaves the criticality open; the
     first excursion beyond it decides."""
-    from frbmodel.continuation import hopf_record
+    from frbmodel.cycles.continuation import hopf_record
 
     hp = hopf_points(tc, (1.5e3, 2.5e3), n_grid=4)[0]
     up, down = ([_bp(hp.speed_rpm + d * k, [0.5]) for k in (1, 2, 3)] for d in (+1.0, -1.0))
@@ -213,7 +213,7 @@ def test_hopf_record_criticality_mode_and_film(tc):
     assert hopf_record(tc, hp, bends)["criticality"] == "subcritical"
     rec = hopf_record(tc, hp)
     assert rec["criticality"] == "" and rec["mode"] == "forward conical"
-    assert rec["film"].split(" (")[0] in frb.whirl.FILM_NAMES
+    assert rec["film"].split(" (")[0] in frb.linear.whirl.FILM_NAMES
 
 
 @pytest.mark.slow
@@ -237,12 +237,13 @@ def test_branch_from_a_hopf_point_grows_as_a_square_root(tc, speeds, points):
 
 
 def test_two_parameter_stability_chart(tmp_path):
-    """A Hopf-point study over outer clearance x viscosity (frbmodel.sweep, resumable like the other studies) gives the
+    """A Hopf-point study over outer clearance x viscosity (frbmodel.studies.sweep, resumable like the other studies)
+    gives the
     chart's grid: each cell is the first Hopf speed of that system, which equals method J's linear onset (0.5 %,
     as for the default system); the CLI's --analysis hopf writes the chart."""
     import pandas as pd
 
-    from frbmodel.sweep import build_case_system, grid, plot_stability_chart, run_study
+    from frbmodel.studies.sweep import build_case_system, grid, plot_stability_chart, run_study
 
     cases = grid({"outer_clearance": [36e-6, 46e-6], "viscosity_scale": [0.7, 1.0]}, "hopf", speed_rpm=(1e3, 30e3))
     run_study(cases, tmp_path, scheduler="serial")
@@ -257,14 +258,15 @@ def test_two_parameter_stability_chart(tmp_path):
 
 
 def test_bifurcation_study_writes_each_cases_diagram_and_its_points(tmp_path):
-    """A ``bifurcation`` study (frbmodel.sweep): per case the limit-cycle branches from its Hopf points, the diagram
+    """A ``bifurcation`` study (frbmodel.studies.sweep): per case the limit-cycle branches from its Hopf points, the
+    diagram
     in ``cases/<id>/`` (loadable) and one stability-map row per bifurcation point, equal to the saved table; resumable
     (a second run computes nothing). Two outer clearances, 29-32 krpm, 2 points per branch: the restabilizing Hopf
     point there is the case's Hopf row (the same as hopf_points, checked against method J above)."""
     import pandas as pd
 
-    from frbmodel.errors import ParameterError
-    from frbmodel.sweep import (
+    from frbmodel.core.errors import ParameterError
+    from frbmodel.studies.sweep import (
         build_case_system,
         grid,
         plot_stability_chart,
@@ -307,7 +309,7 @@ def test_multiple_shooting_follows_a_strongly_unstable_branch(tc):
     orbits grow away from the equilibrium."""
     from scipy.integrate import solve_ivp
 
-    from frbmodel.runup import SpeedProfile, build_problem
+    from frbmodel.nonlinear.runup import SpeedProfile, build_problem
 
     bd = continuation(tc, (57e3, 62e3), "hopf", max_points=8, segments=4)
     assert len(bd.points) == 8
@@ -332,7 +334,7 @@ def test_vertical_branch_of_the_first_hopf_point_grows(tc):
     flows' 3e-9 tolerances over a 50 ms period, multipliers ~1)."""
     from scipy.integrate import solve_ivp
 
-    from frbmodel.runup import SpeedProfile, build_problem
+    from frbmodel.nonlinear.runup import SpeedProfile, build_problem
 
     bd = continuation(tc, (1000.0, 6000.0), "hopf", max_points=12)
     hopf = [b["speed_rpm"] for b in bd.bifurcations if b["type"] == "Hopf"][0]
@@ -356,7 +358,7 @@ def test_shooting_jacobian_equals_differences_of_the_residual(segments):
     truncation and round-off are ~1e-8 of the entries at the 1e-5 step used."""
     from scipy.linalg import expm
 
-    from frbmodel.continuation import _Branch, _jacobian
+    from frbmodel.cycles.continuation import _Branch, _jacobian
 
     def a_of(speed):
         w = 2.0 + 1e-4 * speed
@@ -445,11 +447,11 @@ def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(m
     0.1 on: a residual of 1e-6 moves r by at most ~1e-6 / 4e-4 = 2.5e-3 relative; 1e-2 is asserted). Both starts of
     the iteration: a Jacobian computed at the predicted point, and the previous point's with another phase row (as
     the continuation passes it from point to point; the corrector puts the current phase normal in)."""
-    import frbmodel.shooting
-    from frbmodel import continuation as cont
+    import frbmodel.cycles.shooting
+    from frbmodel.cycles import continuation as cont
 
-    exact = frbmodel.shooting.monodromy
-    monkeypatch.setattr(frbmodel.shooting, "monodromy",
+    exact = frbmodel.cycles.shooting.monodromy
+    monkeypatch.setattr(frbmodel.cycles.shooting, "monodromy",
                         lambda *a, **k: exact(*a, **k) + 3e-4 * np.array([[1.0, -0.5], [0.7, 1.0]]))
     br = object.__new__(cont._Branch)
     br.scale_vec, br.workers = np.array([1.0, 1.0]), 1
@@ -479,7 +481,7 @@ def test_inaccurate_monodromy_is_replaced_by_central_differences():
     closest to 1 is off by more than MULTIPLIER_TOL is replaced by central differences of the flow; an accurate one
     is kept. On the closed-form degenerate Hopf cycle r = 0.3 (mu = r^4) the multipliers are 1 and exp(-4 mu T)
     (T = 1); central differences at the 1e-4 step are exact to ~1e-8 (truncation h^2 times the flow's curvature)."""
-    from frbmodel import continuation as cont
+    from frbmodel.cycles import continuation as cont
 
     br = object.__new__(cont._Branch)
     br.scale_vec, br.workers = np.array([1.0, 1.0]), 1

@@ -15,8 +15,8 @@ pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
 
 from frbmodel.cli import main  # noqa: E402
+from frbmodel.core.errors import ParameterError  # noqa: E402
 from frbmodel.cosim.master import ADAPTIVE_MAX_STEP_S, Master, cosimulate, operating_point_overrides  # noqa: E402
-from frbmodel.errors import ParameterError  # noqa: E402
 
 START, END, RAMP_S = 20e3, 250e3, 1.0  # the main job's ramp [rpm, rpm, s]
 CLEARANCE = 36e-6  # [m], c_o of co36: the scale of the orbit comparisons
@@ -112,7 +112,7 @@ def test_cli_adaptive_with_a_profile(built, tmp_path, capsys):
     meta = json.loads((out / "runup.json").read_text())
     assert meta["adaptive"] and meta["coupling_tol"] == 1e-4 and meta["status"] == "finished"
     assert meta["steps_taken"] < 200 + 1  # fewer than the fixed 10 µs run's 200 steps and its priming sub-step
-    from frbmodel.recorder import RunupResult
+    from frbmodel.nonlinear.recorder import RunupResult
 
     run = RunupResult.load(out)
     np.testing.assert_allclose(run.time, np.arange(41) * 5e-5, rtol=0, atol=1e-12)

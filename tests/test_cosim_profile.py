@@ -16,10 +16,10 @@ pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
 
 from frbmodel.cli import main  # noqa: E402
+from frbmodel.core.errors import ParameterError  # noqa: E402
 from frbmodel.cosim.master import PRIME_STEP_S, Master, cosimulate, operating_point_overrides  # noqa: E402
-from frbmodel.errors import ParameterError  # noqa: E402
-from frbmodel.recorder import RunupResult  # noqa: E402
-from frbmodel.runup import SpeedProfile  # noqa: E402
+from frbmodel.nonlinear.recorder import RunupResult  # noqa: E402
+from frbmodel.nonlinear.runup import SpeedProfile  # noqa: E402
 
 START, END, RAMP_S = 20e3, 250e3, 1.0  # the main job's ramp [rpm, rpm, s]
 T, H = 0.005, 1e-5  # 5 ms at the SSP's macro step: 500 steps, the start transient of the 5 % offset

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import frbmodel as frb
-from frbmodel.film import film_force
+from frbmodel.physics.film import film_force
 
 # docs/theory/parameters.md#reference-numbers (turbine bearing unless noted): c_o [µm], rpm, method -> RSR, ε_I, ε_O
 REF = [

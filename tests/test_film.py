@@ -7,8 +7,8 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import frbmodel as frb
-from frbmodel.film import Film, attitude_angle, film_coefficients, film_force, static_load, static_position
-from frbmodel.finite_length import correction_polynomials, reynolds_force_ratio
+from frbmodel.physics.film import Film, attitude_angle, film_coefficients, film_force, static_load, static_position
+from frbmodel.physics.finite_length import correction_polynomials, reynolds_force_ratio
 
 TURB_INNER = Film(radius=5.5e-3, length=6.5e-3, clearance=34e-6, viscosity=4.9e-3)
 

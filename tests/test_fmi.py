@@ -126,7 +126,7 @@ def test_fmu_linearization_equals_direct_campbell(built, method):
     from scipy.optimize import linear_sum_assignment
 
     from frbmodel.cosim.linearize import linearize
-    from frbmodel.modal import state_matrix
+    from frbmodel.linear.modal import state_matrix
 
     for rpm in (30e3, 120e3, 240e3):
         A, tc = linearize(built / "turbocharger.ssp", rpm, method)
@@ -424,7 +424,7 @@ def test_version_mismatch_is_refused(built, tmp_path):
 
 
 def _assert_same_components(mono, cosim, segment_s):
-    from frbmodel.spectral import spectrogram
+    from frbmodel.signals.spectral import spectrogram
 
     cm = spectrogram(mono, "turbine_wheel", segment_s=segment_s).components()
     cc = spectrogram(cosim, "turbine_wheel", segment_s=segment_s).components()
@@ -473,7 +473,7 @@ def test_cosim_runup_through_four_onsets_equals_monolithic(built):
     sub-synchronous components, the last one (~82 krpm) born inside the developed whirl. The unbalance is a
     deterministic seed: without it that component grows out of round-off and its onset moves by ~10 % even in
     the monolithic run (rtol, 0.01 g mm; README, "Co-simulation accuracy"). Macro step from the SSP (10 µs)."""
-    from frbmodel.runup import Unbalance
+    from frbmodel.nonlinear.runup import Unbalance
 
     tc = frb.turbocharger(36e-6)
     T, a, b, me = 0.5, 20e3, 135e3, 1e-7

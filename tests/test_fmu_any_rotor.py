@@ -143,7 +143,7 @@ def test_fine_rotor_linearization_equals_campbell(fine):
     from scipy.optimize import linear_sum_assignment
 
     from frbmodel.cosim.linearize import campbell_from_fmu, linearize
-    from frbmodel.modal import state_matrix
+    from frbmodel.linear.modal import state_matrix
 
     system, _, _, ssp = fine
     speeds = (30e3, 120e3, 240e3)

@@ -19,7 +19,7 @@ pytest.importorskip("pythonfmu")
 from test_fmu_strict import ERROR, OK, Host, judge  # noqa: E402
 
 from frbmodel.cosim.master import Master, cosimulate, operating_point_overrides  # noqa: E402
-from frbmodel.runup import SpeedProfile  # noqa: E402
+from frbmodel.nonlinear.runup import SpeedProfile  # noqa: E402
 
 #: films and ring speed of the Petroff check (any valid geometry; not the presets, so nothing is shared with them)
 INNER = dict(radius=5.0e-3, length=6.0e-3, clearance=30e-6, viscosity=5.0e-3)
@@ -89,7 +89,7 @@ def test_numerical_failure_of_the_ring_integrator_is_a_discard_with_the_state_re
     into the component's step."""
     from test_fmu_strict import DISCARD
 
-    from frbmodel.components import BearingComponent
+    from frbmodel.nonlinear.components import BearingComponent
 
     h, before = _bearing_at(built, tmp_path, f"fail_{error}", (3e-6, -5e-6, 0.0, 0.0))
     real_step = BearingComponent.step
@@ -126,7 +126,7 @@ def test_torque_mode_cosimulation_equals_monolithic_runup(built):
     the change; trapezoidal rule on the 5 kHz samples). A 0.13 N m drive takes the rotor from 1.5 to 4.4 krpm in
     0.3 s; macro step 20 µs, the upper end of the validated range (the onset from the equilibrium is insensitive
     to it)."""
-    from frbmodel.spectral import spectrogram
+    from frbmodel.signals.spectral import spectrogram
 
     tc = frb.turbocharger(36e-6)
     T, H, drive, rate = 0.3, 2e-5, 0.13, 5e3  # [s], [s], [N m], [Hz]: sub-synchronous whirl at 15-50 Hz

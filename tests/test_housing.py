@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import frbmodel as frb
-from frbmodel.runup import SpeedProfile, Unbalance, build_problem, initial_state
+from frbmodel.nonlinear.runup import SpeedProfile, Unbalance, build_problem, initial_state
 
 REFERENCE = Path(__file__).resolve().parent / "reference" / "fixed_housing.json"
 
@@ -94,7 +94,7 @@ def test_stepped_upward_housing_acceleration_is_gravity():
     """The stepped turbocharger (the FMU's component) with gravity off and a housing acceleration of +g upwards
     equals it with gravity on and the housing at rest, from the same state (30 krpm, 20 ms at 1 ms steps): within
     1e-9 of the clearance (M T g and M a_g are added in another order: round-off, grown by the unstable modes)."""
-    from frbmodel.turbocharger_component import TurbochargerComponent
+    from frbmodel.nonlinear.turbocharger_component import TurbochargerComponent
 
     tc = frb.turbocharger()
     w = 30e3 * np.pi / 30

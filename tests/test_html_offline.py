@@ -10,9 +10,9 @@ from test_plot_cli import FS, figure_data, synthetic_run
 
 import frbmodel as frb
 from frbmodel.cli import main
-from frbmodel.modeshape import save_mode_shapes
-from frbmodel.orbits import orbits
-from frbmodel.plots import write_html
+from frbmodel.linear.modeshape import save_mode_shapes
+from frbmodel.plots.figures import write_html
+from frbmodel.signals.orbits import orbits
 
 LIMIT_BYTES = 1.5e6  # the bound for an interactive composite
 PLOTLY_JS = "plotly.min.js"  # the name plotly's include_plotlyjs="directory" writes and refers to

@@ -1,4 +1,5 @@
-"""Limit cycles by shooting (frbmodel.shooting, frbmodel.limitcycle): closed forms and the full model against long
+"""Limit cycles by shooting (frbmodel.cycles.shooting, frbmodel.cycles.limitcycle): closed forms and the full model
+against long
 constant-speed simulations."""
 import math
 
@@ -7,9 +8,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import frbmodel as frb
-from frbmodel.limitcycle import limit_cycle
-from frbmodel.runup import SpeedProfile, runup
-from frbmodel.shooting import shoot
+from frbmodel.cycles.limitcycle import limit_cycle
+from frbmodel.cycles.shooting import shoot
+from frbmodel.nonlinear.runup import SpeedProfile, runup
 
 
 def _flow(f, autonomous=True):
@@ -63,7 +64,7 @@ def test_failed_shooting_names_a_large_multiplier_and_multiple_shooting():
     unstable direction z3' = g z3 (multiplier exp(2 pi g) = 535 for g = 1, closed form), one Newton iteration
     allowed from a guess off the cycle. The message gives the multiplier (the difference monodromy at the guess:
     within 1 %) and names multiple shooting; a weakly unstable one (g = 0.1, 1.9) does not."""
-    from frbmodel.errors import ConvergenceError
+    from frbmodel.core.errors import ConvergenceError
 
     for g, named in ((1.0, True), (0.1, False)):
         def f(t, z, g=g):
@@ -148,7 +149,7 @@ def test_orbit_from_a_neighbouring_orbit_is_periodic(lc60):
     is periodic, checked by the other integrator: scipy's LSODA from its state over its period returns to it within
     1e-6 of the orbit's size (shooting tolerance 1e-6 scaled on micrometre scales, LSODA at rtol 1e-10), and has the
     trivial multiplier 1 (1e-3: difference monodromy)."""
-    from frbmodel.runup import SpeedProfile, build_problem
+    from frbmodel.nonlinear.runup import SpeedProfile, build_problem
 
     tc = frb.turbocharger(36e-6)
     b = limit_cycle(tc, 61e3, guess=lc60)
@@ -170,8 +171,8 @@ def test_hopf_guess_gives_the_small_orbit_born_at_the_hopf_point():
     point the orbit is small and whirls at the linear frequency: the Hopf point's frequency within 0.5 % (the
     acceptance tolerance for branch starts), radius < 5 um; periodic per scipy's LSODA (rtol 1e-10; its largest
     multiplier ~20 amplifies LSODA's errors: 1e-5 of the orbit allowed)."""
-    from frbmodel.continuation import hopf_points
-    from frbmodel.runup import build_problem
+    from frbmodel.cycles.continuation import hopf_points
+    from frbmodel.nonlinear.runup import build_problem
 
     tc = frb.turbocharger(36e-6)
     hp = hopf_points(tc, (29e3, 33e3), restabilizing=True)[0]
@@ -200,8 +201,8 @@ def test_unstable_orbit_is_left_at_the_rate_of_its_largest_multiplier():
     against a ~10 um scale of the films' nonlinearity. Measured: 0.14 % from ln|mu| (LSODA at 1e-9 as at 1e-11);
     10 % is the issue's bound, kept because the per-period growth itself scatters by +-2 % with the phase of the
     deviation over the orbit."""
-    from frbmodel.continuation import continuation
-    from frbmodel.runup import SpeedProfile, atol_vector, build_problem
+    from frbmodel.cycles.continuation import continuation
+    from frbmodel.nonlinear.runup import SpeedProfile, atol_vector, build_problem
 
     tc = frb.turbocharger(36e-6)
     p = continuation(tc, (13.5e3, 15e3), "hopf", max_points=1).points[-1]
@@ -231,8 +232,8 @@ def test_multiple_shooting_orbit_equals_single_shooting(lc60):
     finds at 61 krpm: period to 1e-7 (both converge to 1e-6 of a micrometre scale with flows at rtol 3e-9) and
     multipliers to 1e-3 (difference monodromies, columns ~3e-4). With unbalance (a forced orbit) segments > 1 is
     refused with a clear error."""
-    from frbmodel.errors import ParameterError
-    from frbmodel.runup import Unbalance
+    from frbmodel.core.errors import ParameterError
+    from frbmodel.nonlinear.runup import Unbalance
 
     tc = frb.turbocharger(36e-6)
     one = limit_cycle(tc, 61e3, guess=lc60)
@@ -248,9 +249,9 @@ def test_flow_integrator_hint_skips_the_probe_only_where_radau_keeps_its_budget(
     the neighbour's Rodas steps, no Rodas probe (its result equals the probed flow's to the tolerances: both are
     Radau). Near an equilibrium (the 2.0 krpm Hopf point: Radau needs ~400x the steps there, README) the budget is
     exceeded and the full probe chooses Rodas, as without a hint."""
-    from frbmodel.continuation import hopf_points
-    from frbmodel.limitcycle import SHOOT_ATOL_M, SHOOT_RTOL, _Flow
-    from frbmodel.runup import build_problem
+    from frbmodel.cycles.continuation import hopf_points
+    from frbmodel.cycles.limitcycle import SHOOT_ATOL_M, SHOOT_RTOL, _Flow
+    from frbmodel.nonlinear.runup import build_problem
 
     tc = frb.turbocharger(36e-6)
     prob = build_problem(tc, SpeedProfile.constant(60e3, 1.0), tc.film_model)
@@ -286,7 +287,7 @@ def test_runup_state_is_the_run_state_where_it_passes_the_speed(short_run):
     """The run-up guess's state: the run re-simulated to the first sample at or past the speed. Checked against an
     independent run of the same ramp stopped at that sample (its final state; same integrator and tolerances:
     translations within 1e-7 of the clearance, 3e-9 measured) and against the recorded journal positions."""
-    from frbmodel.limitcycle import runup_state
+    from frbmodel.cycles.limitcycle import runup_state
 
     tc, run = short_run
     state, info = runup_state(run, tc, 21e3)
@@ -313,8 +314,8 @@ def test_runup_guess_refuses_runs_it_cannot_re_simulate(short_run):
     co-simulation (states inside the FMUs)."""
     from dataclasses import replace
 
-    from frbmodel.errors import ParameterError
-    from frbmodel.limitcycle import runup_state
+    from frbmodel.core.errors import ParameterError
+    from frbmodel.cycles.limitcycle import runup_state
 
     tc, run = short_run
     with pytest.raises(ParameterError, match=r"speed 30000 rpm is not reached .* 20000 \.\.\. 22000 rpm"):
@@ -333,7 +334,7 @@ def test_runup_guess_refuses_runs_it_cannot_re_simulate(short_run):
 def test_bad_guesses_are_refused_with_what_is_wrong(guess, shown):
     """A guess that is none of the accepted kinds, a state of the wrong size or non-finite, a period <= 0: a
     ParameterError naming the problem (never a numba shape error from inside the right-hand side)."""
-    from frbmodel.errors import ParameterError
+    from frbmodel.core.errors import ParameterError
 
     with pytest.raises(ParameterError) as err:
         limit_cycle(frb.turbocharger(36e-6), 60e3, guess=guess)
@@ -347,8 +348,8 @@ def test_runup_guess_of_a_forced_orbit_starts_at_the_orbits_phase():
     below the first Hopf point: a stable 1X orbit, lightly damped there: 1.5 s of settling). The guess state is
     within 2 % of the orbit's size of the shot orbit's start; with the run's angle kept the guess is off by the run's
     phase, 3.9 rad here."""
-    from frbmodel.limitcycle import _initial_guess
-    from frbmodel.runup import Unbalance, build_problem
+    from frbmodel.cycles.limitcycle import _initial_guess
+    from frbmodel.nonlinear.runup import Unbalance, build_problem
 
     tc = frb.turbocharger(36e-6)
     unb = [Unbalance("turbine_wheel", 1e-6)]

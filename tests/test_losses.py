@@ -1,4 +1,4 @@
-"""Bearing losses (frbmodel.losses): journal torque and friction power of both films, against the Petroff closed
+"""Bearing losses (frbmodel.physics.losses): journal torque and friction power of both films, against the Petroff closed
 form, the film's moment balance, an independent dissipation integral, and the steady torque balance."""
 import math
 
@@ -9,9 +9,9 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import frbmodel as frb
-from frbmodel.bearing import ring_rhs_kernel
-from frbmodel.losses import bearing_loss, bearing_losses, film_arrays
-from frbmodel.recorder import RunupResult, RunupSchema
+from frbmodel.nonlinear.recorder import RunupResult, RunupSchema
+from frbmodel.physics.bearing import ring_rhs_kernel
+from frbmodel.physics.losses import bearing_loss, bearing_losses, film_arrays
 
 
 def _petroff(film):
@@ -93,7 +93,7 @@ def test_journal_torque_is_the_reaction_of_the_ring_torque():
     """The film is massless: the torques on journal and ring about the origin cancel,
     T_J + q_J × F + M^I − q_FR × F = 0, i.e. T_J + M^I = −(q_J − q_FR) × F^I
     (docs/theory/rings.md#wall-torques-of-one-film). M^I is taken from the
-    ring's equation of motion (:func:`frbmodel.bearing.ring_rhs_kernel`, I_FR ω̇_FR = M^I + M^O) with a centred,
+    ring's equation of motion (:func:`frbmodel.physics.bearing.ring_rhs_kernel`, I_FR ω̇_FR = M^I + M^O) with a centred,
     resting ring, whose outer film then adds M^O = −A_O ω_FR (closed form)."""
     tc = frb.turbocharger(36e-6)
     rng = np.random.default_rng(5)

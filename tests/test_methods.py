@@ -7,8 +7,8 @@ import pytest
 from scipy.linalg import eig
 
 import frbmodel as frb
-from frbmodel.linear import linear_system
-from frbmodel.methods import METHODS
+from frbmodel.linear.assembly import linear_system
+from frbmodel.system.methods import METHODS
 
 # Stored peer results: ROSS's natural frequencies and whirl directions of the same rotor on the same springs,
 # written by tests/reference/make_ross_campbell.py (which records the ROSS and Python versions and the date)
@@ -77,7 +77,7 @@ def test_method_d_with_rigid_inner_film_approaches_c():
     assert frb.ring_speed_ratio(stiff.bearings[0]) == pytest.approx(frb.ring_speed_ratio(tc.bearings[0]), rel=1e-12)
     from scipy.optimize import linear_sum_assignment
 
-    from frbmodel.modal import state_matrix
+    from frbmodel.linear.modal import state_matrix
 
     for rpm in (50e3, 200e3):
         c, d = linear_system(stiff, "C", rpm), linear_system(stiff, "D", rpm)
@@ -113,7 +113,7 @@ def test_precession_sign_equals_frequency_slope_for_method_a():
 
 
 def test_precession_indicator_hand_check():
-    from frbmodel.modal import precession_index
+    from frbmodel.linear.modal import precession_index
 
     # v = cos βt, w = sin βt (CCW orbit) -> v̄ = 1, w̄ = −i -> Ψ = +1 (docs/theory/modal.md#modal-analysis)
     psi, _ = precession_index(np.array([[1.0 + 0j], [-1j]]), [0], [1])
@@ -141,7 +141,7 @@ def test_bad_method_and_options():
 def test_complex_coordinate_path_equals_state_space_path(method):
     """The half-size Hermitian solve used for undamped isotropic systems must reproduce the general
     state-space eigenvalues and precession at every speed."""
-    from frbmodel.modal import classify_precession, modes, precession_index, speed_modes
+    from frbmodel.linear.modal import classify_precession, modes, precession_index, speed_modes
 
     tc = frb.turbocharger()
     ls0 = linear_system(tc, method, 0.0)

@@ -7,7 +7,7 @@ import pytest
 import scipy.linalg as sla
 
 import frbmodel as frb
-from frbmodel.modeshape import ModeShape, save_mode_shapes
+from frbmodel.linear.modeshape import ModeShape, save_mode_shapes
 
 SPEED = 100e3  # [rpm], below the outer films' onsets and past the inner ones': a few unstable J modes
 
@@ -104,7 +104,7 @@ def _synthetic(node_z, fx, dfx, fy, dfy):
     nn = len(node_z)
     u = np.zeros(4 * nn, dtype=complex)
     u[0::4], u[1::4] = fx(node_z), fy(node_z)
-    u[3::4], u[2::4] = dfx(node_z), -dfy(node_z)              # θy = +∂v/∂z, θx = −∂w/∂z (frbmodel.rotor)
+    u[3::4], u[2::4] = dfx(node_z), -dfy(node_z)              # θy = +∂v/∂z, θx = −∂w/∂z (frbmodel.system.rotor)
     return ModeShape("A", 0.0, 0, 1j, u, np.asarray(node_z, dtype=float), {}, {})
 
 

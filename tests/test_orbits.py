@@ -1,12 +1,13 @@
-"""Orbits of run-ups (frbmodel.orbits), the µm / dB re 1 µm spectrogram scales, the content-limited frequency axis,
-order lines and the waterfall (frbmodel.plots), on small synthetic runs (no integration)."""
+"""Orbits of run-ups (frbmodel.signals.orbits), the µm / dB re 1 µm spectrogram scales, the content-limited frequency
+axis,
+order lines and the waterfall (frbmodel.plots.figures), on small synthetic runs (no integration)."""
 import numpy as np
 import pytest
 
-from frbmodel.orbits import orbits, orbits_figure, window_indices
-from frbmodel.plots import composite_figure, content_fmax, spectrogram_colour, waterfall_figure, waterfall_lines
-from frbmodel.recorder import RunupResult
-from frbmodel.spectral import spectrogram
+from frbmodel.nonlinear.recorder import RunupResult
+from frbmodel.plots.figures import composite_figure, content_fmax, spectrogram_colour, waterfall_figure, waterfall_lines
+from frbmodel.signals.orbits import orbits, orbits_figure, window_indices
+from frbmodel.signals.spectral import spectrogram
 
 C_IN, C_OUT = {"front": 30e-6, "rear": 40e-6}, {"front": 50e-6, "rear": 60e-6}
 R_J, R_R, R_W = {"front": 12e-6, "rear": 20e-6}, {"front": 5e-6, "rear": 15e-6}, 25e-6

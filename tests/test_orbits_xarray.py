@@ -1,4 +1,4 @@
-"""Orbits as xarray / netCDF (frbmodel.orbits.Orbits.to_xarray, .save, .load): closed-form circles in, the same
+"""Orbits as xarray / netCDF (frbmodel.signals.orbits.Orbits.to_xarray, .save, .load): closed-form circles in, the same
 numbers with their units out, and ``xarray.open_dataset`` reads the files the CLI writes."""
 import numpy as np
 import pytest
@@ -6,9 +6,9 @@ import xarray as xr
 from test_plot_cli import synthetic_run
 
 from frbmodel.cli import main
-from frbmodel.orbits import Orbits, orbits
-from frbmodel.recorder import RunupResult
-from frbmodel.results import decode_attr
+from frbmodel.core.results import decode_attr
+from frbmodel.nonlinear.recorder import RunupResult
+from frbmodel.signals.orbits import Orbits, orbits
 
 C = {"front": (30e-6, 50e-6), "rear": (40e-6, 60e-6)}  # inner, outer clearance [m]
 R_J, R_R, R_W = 12e-6, 20e-6, 25e-6  # journal-in-ring, ring, wheel orbit radii [m]

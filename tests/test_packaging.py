@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 import frbmodel as frb
+from frbmodel.core.units import rpm_to_rad_s
 from frbmodel.cosim.ssp import read_ssp
-from frbmodel.units import rpm_to_rad_s
 
 ROOT = Path(__file__).resolve().parents[1]
 SETS = ["co36", "co40", "co42", "co46"]

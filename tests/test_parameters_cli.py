@@ -206,7 +206,7 @@ def test_schema_lists_exactly_the_fields_of_the_classes():
     fields of its class, the required keys the fields without a default."""
     from dataclasses import MISSING, fields
 
-    from frbmodel.parameters import BEARING, DISC, FILM, ROTOR, SHAFT_ELEMENT, SYSTEM
+    from frbmodel.system.parameters import BEARING, DISC, FILM, ROTOR, SHAFT_ELEMENT, SYSTEM
 
     for section, cls in ((FILM, frb.Film), (SHAFT_ELEMENT, frb.ShaftElement), (DISC, frb.Disc),
                          (BEARING, frb.FloatingRingBearing), (ROTOR, frb.Rotor), (SYSTEM, frb.Turbocharger)):

@@ -1,4 +1,5 @@
-"""The rotor equation of motion, written once (frbmodel.rotor / frbmodel.dynamics), against matrices and solutions
+"""The rotor equation of motion, written once (frbmodel.system.rotor / frbmodel.physics.dynamics), against matrices and
+solutions
 built independently here.
 
 The reference matrices are not retyped from the code: they are integrated numerically (Gauss-Legendre) from the
@@ -15,11 +16,11 @@ import pytest
 import scipy.linalg as sla
 
 import frbmodel as frb
-from frbmodel.components import RotorComponent, ramp_speed, rotor_state_space
-from frbmodel.dynamics import add_unbalance_forces, monolithic_rhs, rotor_acceleration
-from frbmodel.linear import linear_system
-from frbmodel.rotor import Disc, Rotor, ShaftElement, first_order_state_matrix
-from frbmodel.units import rpm_to_rad_s
+from frbmodel.core.units import rpm_to_rad_s
+from frbmodel.linear.assembly import linear_system
+from frbmodel.nonlinear.components import RotorComponent, ramp_speed, rotor_state_space
+from frbmodel.physics.dynamics import add_unbalance_forces, monolithic_rhs, rotor_acceleration
+from frbmodel.system.rotor import Disc, Rotor, ShaftElement, first_order_state_matrix
 
 # --------------------------------------------------------------------------------------------------
 # independent reference: element matrices by quadrature of the shaft's energy densities

@@ -8,8 +8,8 @@ import pytest
 import scipy.linalg as sla
 
 import frbmodel as frb
-from frbmodel.linear import linear_system
-from frbmodel.plots import campbell_plotly
+from frbmodel.linear.assembly import linear_system
+from frbmodel.plots.figures import campbell_plotly
 
 LINE = re.compile(r"^(.+): (-?[\d.]+) ∠ (-?\d+)° (fwd|bwd)$")
 PHI = np.linspace(0.0, 2 * np.pi, 721)  # orbit sampled every 0.5°

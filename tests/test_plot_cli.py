@@ -105,7 +105,7 @@ def test_plot_orbit_time_windows_and_revolutions(run_dir):
 def test_orbit_figure_zooms_onto_small_film_orbits():
     import matplotlib.pyplot as plt
 
-    from frbmodel.orbits import Orbits
+    from frbmodel.signals.orbits import Orbits
 
     t = np.linspace(0.0, 0.04, 401)
     circle = np.column_stack([np.cos(2 * np.pi * 25.0 * t), np.sin(2 * np.pi * 25.0 * t)])
@@ -157,7 +157,7 @@ def test_plot_redraws_a_bifurcation_folder(tmp_path):
     """``frb plot DIR`` on a folder of ``frb bifurcation``: the diagram is drawn again from branch.nc (PNG and HTML);
     the HTML holds the branch points and the bifurcation points with their type, mode and film (read back from
     the file's plotly JSON)."""
-    from frbmodel.continuation import BifurcationDiagram, BranchPoint
+    from frbmodel.cycles.continuation import BifurcationDiagram, BranchPoint
 
     tc = frb.turbocharger(36e-6)
     pts = [BranchPoint(2e4 + 1e4 * i, 1 / (200.0 + 50 * i), np.array([1.0, 0.5 + 0.2 * i], dtype=complex), i < 2,

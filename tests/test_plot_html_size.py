@@ -4,7 +4,7 @@ they are."""
 import numpy as np
 from test_plot_cli import figure_data
 
-from frbmodel.spectral import SpectrogramResult
+from frbmodel.signals.spectral import SpectrogramResult
 
 LIMIT_BYTES = 1.5e6  # the issue's bound for an interactive composite
 SCREEN_COLUMNS, SCREEN_ROWS = 1000, 250  # a full-screen plot area: ~1000 px wide, rows of >= 2 px on ~500 px

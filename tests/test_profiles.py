@@ -11,8 +11,8 @@ import xarray as xr
 
 import frbmodel as frb
 from frbmodel.cli import main
-from frbmodel.errors import ParameterError
-from frbmodel.runup import MAX_PROFILE_POINTS, SEGMENT_STEPS, SpeedProfile
+from frbmodel.core.errors import ParameterError
+from frbmodel.nonlinear.runup import MAX_PROFILE_POINTS, SEGMENT_STEPS, SpeedProfile
 
 RPM = math.pi / 30.0  # rad/s per rpm, written out here (not taken from the package)
 

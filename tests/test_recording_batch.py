@@ -1,6 +1,6 @@
 """Run-up recording a solver call's worth of samples at a time (issue 13 item 1): the rows built in one compiled
-pass (:func:`frbmodel.runup.sample_rows`) and appended in one call (:meth:`Recorder.extend`) are the rows the
-per-sample path (:func:`frbmodel.runup.sample_row` + :meth:`Recorder.append`) records, bit for bit.
+pass (:func:`frbmodel.nonlinear.runup.sample_rows`) and appended in one call (:meth:`Recorder.extend`) are the rows the
+per-sample path (:func:`frbmodel.nonlinear.runup.sample_row` + :meth:`Recorder.append`) records, bit for bit.
 
 The reference is the per-sample code itself, applied to the same states: both evaluate the same compiled kernels
 (the monolithic RHS for the film eccentricities, ``bearing_loss_kernel`` for torques and powers) on the same
@@ -13,11 +13,20 @@ import numpy as np
 import pytest
 
 import frbmodel as frb
-from frbmodel.errors import RunupStopped
-from frbmodel.recorder import Recorder, RunupSchema
-from frbmodel.runup import MAX_SPEED_RPM, SpeedProfile, Unbalance, build_problem, initial_state, runup, sample_row
+from frbmodel.core.errors import RunupStopped
+from frbmodel.nonlinear.recorder import Recorder, RunupSchema
+from frbmodel.nonlinear.runup import (
+    MAX_SPEED_RPM,
+    SpeedProfile,
+    Unbalance,
+    build_problem,
+    initial_state,
+    runup,
+    sample_row,
+)
 
-RUNUP = importlib.import_module("frbmodel.runup")  # the module (frbmodel.runup is also the function's name)
+RUNUP = importlib.import_module("frbmodel.nonlinear.runup")  # the module (frbmodel.nonlinear.runup is also the
+# function's name)
 UNBALANCE = [Unbalance("turbine_wheel", 2e-6, 0.3), Unbalance("compressor_wheel", 1e-6, 1.0)]
 
 

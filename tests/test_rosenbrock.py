@@ -1,13 +1,23 @@
-"""The compiled Rosenbrock integrator (frbmodel.rosenbrock): linear algebra, Jacobian, and accuracy against the
+"""The compiled Rosenbrock integrator (frbmodel.nonlinear.rosenbrock): linear algebra, Jacobian, and accuracy against
+the
 matrix exponential of a linear model."""
 import numpy as np
 import pytest
 from scipy.linalg import expm
 
 import frbmodel as frb
-from frbmodel.linalg import lu_factor, lu_solve
-from frbmodel.rosenbrock import FD_TYPICAL_M, film_columns, jacobian, rodas_chunk
-from frbmodel.runup import RPM, SpeedProfile, Unbalance, atol_vector, build_problem, initial_state, runup, typical_sizes
+from frbmodel.core.linalg import lu_factor, lu_solve
+from frbmodel.nonlinear.rosenbrock import FD_TYPICAL_M, film_columns, jacobian, rodas_chunk
+from frbmodel.nonlinear.runup import (
+    RPM,
+    SpeedProfile,
+    Unbalance,
+    atol_vector,
+    build_problem,
+    initial_state,
+    runup,
+    typical_sizes,
+)
 
 
 def test_lu_solves_like_lapack():

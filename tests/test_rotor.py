@@ -7,7 +7,7 @@ from _reference import table2_bearing_loads
 from scipy.linalg import eigh
 
 import frbmodel as frb
-from frbmodel.rotor import Disc, Rotor, ShaftElement
+from frbmodel.system.rotor import Disc, Rotor, ShaftElement
 
 
 def test_matrices_symmetry_and_gyroscopic_skew():

@@ -11,9 +11,9 @@ import pytest
 
 import frbmodel as frb
 from frbmodel.cli import main
-from frbmodel.compare import associate, compare
-from frbmodel.sweep import build_case_system, grid, run_study, stability_map
-from frbmodel.tracking import NO_ONSET_PRESENT, ONSET_TURNING_POINT, Component
+from frbmodel.signals.tracking import NO_ONSET_PRESENT, ONSET_TURNING_POINT, Component
+from frbmodel.studies.compare import associate, compare
+from frbmodel.studies.sweep import build_case_system, grid, run_study, stability_map
 
 
 def _renamed(tc, bearings=("front", "rear"), discs=("impeller_a", "impeller_b")):
@@ -50,10 +50,10 @@ def test_workers_below_one_are_refused(tmp_path, capsys, workers):
 
 def test_unreachable_scheduler_fails_fast_naming_the_address(tmp_path, monkeypatch):
     pytest.importorskip("distributed")
-    import frbmodel.sweep
+    import frbmodel.studies.sweep
 
-    monkeypatch.setattr(frbmodel.sweep, "SCHEDULER_TIMEOUT_S", 1.0)  # the default 5 s, shortened for the suite
-    SCHEDULER_TIMEOUT_S = frbmodel.sweep.SCHEDULER_TIMEOUT_S
+    monkeypatch.setattr(frbmodel.studies.sweep, "SCHEDULER_TIMEOUT_S", 1.0)  # the default 5 s, shortened for the suite
+    SCHEDULER_TIMEOUT_S = frbmodel.studies.sweep.SCHEDULER_TIMEOUT_S
 
     address = f"tcp://127.0.0.1:{_free_port()}"  # a port nobody listens on
     cases = grid({"outer_clearance": [36e-6]}, "campbell", speeds_rpm=(1e3, 250e3, 5))

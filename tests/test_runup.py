@@ -9,9 +9,9 @@ import pytest
 from _reference import petroff, static_film_force, table2_bearing_loads
 
 import frbmodel as frb
-from frbmodel.finite_length import correction_polynomials
-from frbmodel.runup import RunupResult, RunupStopped, SpeedProfile, Unbalance, runup
-from frbmodel.spectral import spectrogram
+from frbmodel.nonlinear.runup import RunupResult, RunupStopped, SpeedProfile, Unbalance, runup
+from frbmodel.physics.finite_length import correction_polynomials
+from frbmodel.signals.spectral import spectrogram
 
 
 @pytest.fixture(scope="module")
@@ -221,7 +221,7 @@ def test_turning_point_finds_the_loss_of_stability_under_a_noise_floor():
 
 def test_cli_runup_and_compare_pipeline(tmp_path, capsys):
     from frbmodel.cli import main
-    from frbmodel.compare import compare
+    from frbmodel.studies.compare import compare
 
     assert main(["runup", "--speeds", "20000:30000", "--duration", "0.05", "--rate", "10000",
                  "--out", str(tmp_path / "r")]) == 0

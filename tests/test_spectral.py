@@ -1,4 +1,5 @@
-"""Spectrogram (ShortTimeFFT), component tracking (frbmodel.spectral, frbmodel.tracking) and the composite figures,
+"""Spectrogram (ShortTimeFFT), component tracking (frbmodel.signals.spectral, frbmodel.signals.tracking) and the
+composite figures,
 for run-ups and run-downs."""
 import math
 from types import SimpleNamespace
@@ -7,9 +8,9 @@ import numpy as np
 import pytest
 
 import frbmodel as frb
-import frbmodel.tracking as tracking
-from frbmodel.spectral import spectrogram
-from frbmodel.tracking import BACKWARD, FORWARD, Peak, Track, assign
+import frbmodel.signals.tracking as tracking
+from frbmodel.signals.spectral import spectrogram
+from frbmodel.signals.tracking import BACKWARD, FORWARD, Peak, Track, assign
 
 
 def _orbit_run(t, speed_rpm, z):
@@ -277,7 +278,7 @@ def test_composite_figures_of_a_run_down_with_renamed_bearings():
     import matplotlib.pyplot as plt
     from matplotlib.collections import QuadMesh
 
-    from frbmodel.plots import composite_figure, composite_plotly
+    from frbmodel.plots.figures import composite_figure, composite_plotly
 
     run = _synthetic_run("down", bearings=("front", "rear"), disc="impeller")
     sp = spectrogram(run, segment_s=0.025)  # default node: the run's first (here only) disc

@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("distributed")
 
-from frbmodel.sweep import grid, run_study, run_summary, stability_map  # noqa: E402
+from frbmodel.studies.sweep import grid, run_study, run_summary, stability_map  # noqa: E402
 
 SMALL_RUNUP = ["--analysis", "runup", "--speeds", "20000:30000", "--duration", "0.04"]
 
@@ -101,7 +101,7 @@ def test_workers_import_the_clients_frbmodel(tmp_path, monkeypatch):
     from pathlib import Path
 
     import frbmodel
-    from frbmodel.sweep import _client
+    from frbmodel.studies.sweep import _client
 
     decoy = tmp_path / "decoy" / "frbmodel"
     decoy.mkdir(parents=True)
@@ -109,7 +109,7 @@ def test_workers_import_the_clients_frbmodel(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(decoy.parent))
     client, cluster = _client(None, 1)
     try:
-        packages = client.run(lambda: __import__("frbmodel.sweep").sweep.worker_state()["package"])
+        packages = client.run(lambda: __import__("frbmodel.studies.sweep").studies.sweep.worker_state()["package"])
     finally:
         client.close()
         cluster.close()

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from frbmodel.sweep import (
+from frbmodel.studies.sweep import (
     COST_UNBALANCE_FACTOR,
     Case,
     estimated_cost_s,

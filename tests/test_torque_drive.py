@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import frbmodel as frb
-from frbmodel.components import BearingComponent, RotorComponent, ramp_speed
-from frbmodel.runup import SpeedProfile, build_problem, initial_state, runup
+from frbmodel.nonlinear.components import BearingComponent, RotorComponent, ramp_speed
+from frbmodel.nonlinear.runup import SpeedProfile, build_problem, initial_state, runup
 
 RPM0, DRIVE, T = 2000.0, 2e-3, 0.05  # a stable speed (first film onset ~11 krpm), drive ~4x the film friction
 

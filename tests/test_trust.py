@@ -13,8 +13,8 @@ import pytest
 
 import frbmodel as frb
 from frbmodel.cli import main
-from frbmodel.errors import ParameterError
-from frbmodel.runup import SpeedProfile
+from frbmodel.core.errors import ParameterError
+from frbmodel.nonlinear.runup import SpeedProfile
 
 
 def run_cli(capsys, *argv):
@@ -108,9 +108,9 @@ def test_cosim_refuses_a_macro_step_outside_the_validated_range(built):
 def test_linearization_works_over_the_speed_range_for_every_parameter_set(built):
     """`frb linearize --parameter-set co46 --speed-rpm 190000` used to fail with eps = 1.01: the bearing inputs kept
     the parameter set's start position (20 krpm) next to the operating point's ring position. The FMU eigenvalues
-    must equal the library's Campbell analysis of the same system (independent assembly: frbmodel.linear)."""
+    must equal the library's Campbell analysis of the same system (independent assembly: frbmodel.linear.assembly)."""
     from frbmodel.cosim.linearize import linearize
-    from frbmodel.modal import modes_from_state
+    from frbmodel.linear.modal import modes_from_state
 
     for pset in ("co36", "co40", "co42", "co46"):
         for rpm in (1000.0, 190e3, 250e3):
@@ -124,7 +124,7 @@ def test_linearization_works_over_the_speed_range_for_every_parameter_set(built)
 
 
 def _component(label, onset_rpm, f_hz, direction="forward"):
-    from frbmodel.tracking import Component
+    from frbmodel.signals.tracking import Component
 
     c = Component(label, np.array([onset_rpm, 1.1 * onset_rpm]), np.array([f_hz, 1.1 * f_hz]),
                   np.array([1e-6, 2e-6]), direction)
@@ -137,7 +137,7 @@ def test_convergence_check_labels_onsets_that_move_as_seeded_by_round_off():
     (the main job's sub4 between rtol 1e-7/atol 1e-10 and 1e-8/1e-11 moved 2.5 %, the old defaults 8 %) is not, and
     a component missing from the tightened run is not either; components are matched by direction, onset and
     f/f_rot, not by their labels (which depend on the order of onsets)."""
-    from frbmodel.convergence import convergence_table
+    from frbmodel.signals.convergence import convergence_table
 
     ref = [_component("sub1", 2000.0, 20.0), _component("sub2", 35000.0, 41.7, "backward"),
            _component("sub3", 100000.0, 180.0)]
@@ -155,7 +155,7 @@ def test_convergence_check_labels_onsets_that_move_as_seeded_by_round_off():
 def test_warmup_marks_the_kernels_ready_for_these_sources(tmp_path, monkeypatch):
     """frb warmup compiles/loads every kernel group and stamps a marker with the hash of the kernel sources: a
     changed kernel source means a new stamp (the next command compiles first and says so)."""
-    import frbmodel.warmup as w
+    import frbmodel.studies.warmup as w
 
     monkeypatch.setattr(w, "_marker", lambda: tmp_path / f"kernels-{w._stamp()}.ok")
     assert not w.kernels_ready()

@@ -10,14 +10,21 @@ import pandas as pd
 import pytest
 
 import frbmodel as frb
-from frbmodel.bearing import ring_torque
-from frbmodel.campbell import campbell_from_modes
-from frbmodel.errors import ParameterError
-from frbmodel.film import Film, film_coefficients, film_force, film_torques, static_eccentricity, static_position
-from frbmodel.linear import linear_system
-from frbmodel.modal import modes
-from frbmodel.parameters import Turbocharger
-from frbmodel.rotor import ShaftElement
+from frbmodel.core.errors import ParameterError
+from frbmodel.linear.assembly import linear_system
+from frbmodel.linear.campbell import campbell_from_modes
+from frbmodel.linear.modal import modes
+from frbmodel.physics.bearing import ring_torque
+from frbmodel.physics.film import (
+    Film,
+    film_coefficients,
+    film_force,
+    film_torques,
+    static_eccentricity,
+    static_position,
+)
+from frbmodel.system.parameters import Turbocharger
+from frbmodel.system.rotor import ShaftElement
 
 SWEEP = np.linspace(10e3, 250e3, 100)
 FILM = Film(radius=5.5e-3, length=6.5e-3, clearance=34e-6, viscosity=4.9e-3)
@@ -69,7 +76,7 @@ def test_neutral_modes_are_drawn_visibly_with_a_legend_entry():
     """The damping colour map is white at D = 0, on a white background: neutral modes get their own grey."""
     from matplotlib.colors import to_rgba
 
-    from frbmodel.plots import NEUTRAL_COLOR, NEUTRAL_COLOR_PLOTLY
+    from frbmodel.plots.figures import NEUTRAL_COLOR, NEUTRAL_COLOR_PLOTLY
 
     cd = frb.campbell(frb.turbocharger(), "B", SWEEP[::10], whirl=False)
     fig = cd.plot()
@@ -105,7 +112,7 @@ def test_descending_grid_gives_the_ascending_result():
 def test_result_built_from_a_descending_grid_is_sorted_consistently():
     """CampbellResult sorts at construction, whoever builds it (here the post-processing of the FMU path, fed the
     mode sets in descending order): every per-speed array moves with its speed."""
-    from frbmodel.modal import batch_modes
+    from frbmodel.linear.modal import batch_modes
 
     tc = frb.turbocharger()
     speeds = np.linspace(250e3, 20e3, 8)

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import frbmodel as frb
-from frbmodel.runup import SpeedProfile, runup
-from frbmodel.units import RPM
+from frbmodel.core.units import RPM
+from frbmodel.nonlinear.runup import SpeedProfile, runup
 
 fmpy = pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
@@ -60,7 +60,7 @@ def test_any_macro_step_gives_the_monolithic_run_up(built, tmp_path, reference, 
 def test_a_step_of_one_solver_call_is_the_run_up_bit_for_bit():
     """One physics: stepped by the run-up's own solver-call length (100 samples at 20 kHz = 5 ms) from the
     run-up's sample times, the component takes the run-up's integrator steps exactly: the same state, bit for bit."""
-    from frbmodel.turbocharger_component import TurbochargerComponent
+    from frbmodel.nonlinear.turbocharger_component import TurbochargerComponent
 
     tc = frb.turbocharger(C_O)
     run = runup(tc, profile=SpeedProfile.ramp(20e3, 250e3, 1.0), duration=0.02, output_rate_hz=20e3)
@@ -260,7 +260,7 @@ md = read_model_description(fmu)
 s = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu, unzipdir={str(tmp_path / 'k')!r}),
               modelIdentifier=md.coSimulation.modelIdentifier, instanceName="k")
 s.instantiate(); s.setupExperiment(startTime=0.0); s.enterInitializationMode(); s.exitInitializationMode()
-import frbmodel.rosenbrock as r
+import frbmodel.nonlinear.rosenbrock as r
 print(len(r.rodas_chunk.signatures))
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
@@ -268,8 +268,8 @@ print(len(r.rodas_chunk.signatures))
     assert int(out.stdout.split()[-1]) >= 1
     for name, kernel in (("FloatingRingBearing", "_ring_step"), ("TurbochargerRotor", "_rotor_macro_step")):
         split = code.replace(str(_fmu(built)), str(built / "fmus" / f"{name}.fmu")).replace(
-            "import frbmodel.rosenbrock as r\nprint(len(r.rodas_chunk.signatures))",
-            f"import frbmodel.components as r\nprint(len(r.{kernel}.signatures))")
+            "import frbmodel.nonlinear.rosenbrock as r\nprint(len(r.rodas_chunk.signatures))",
+            f"import frbmodel.nonlinear.components as r\nprint(len(r.{kernel}.signatures))")
         out = subprocess.run([sys.executable, "-c", split], capture_output=True, text=True, timeout=600)
         assert out.returncode == 0 and int(out.stdout.split()[-1]) >= 1, (name, out.stderr[-2000:])
 

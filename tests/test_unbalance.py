@@ -10,9 +10,9 @@ import scipy.linalg as sla
 
 import frbmodel as frb
 from frbmodel.cli import main
-from frbmodel.dynamics import add_unbalance_forces
-from frbmodel.runup import SpeedProfile, Unbalance
-from frbmodel.unbalance import UnbalanceResponse, critical_speeds, response_peaks, unbalance_force
+from frbmodel.linear.unbalance import UnbalanceResponse, critical_speeds, response_peaks, unbalance_force
+from frbmodel.nonlinear.runup import SpeedProfile, Unbalance
+from frbmodel.physics.dynamics import add_unbalance_forces
 
 # Stored peer results: ROSS's run_unbalance_response on the same rotor and springs, written by
 # tests/reference/make_ross_unbalance.py (which records the ROSS and Python versions and the date)
@@ -57,7 +57,7 @@ def test_methods_a_b_match_ross(tc, method):
 
 
 def test_force_is_the_run_up_unbalance_load():
-    """Re(F e^{iΩt}) equals the load that frbmodel.dynamics.add_unbalance_forces gives the run-up at constant
+    """Re(F e^{iΩt}) equals the load that frbmodel.physics.dynamics.add_unbalance_forces gives the run-up at constant
     speed (rotation angle Ωt), for two discs and phases."""
     unb = [("a", 0, 2e-6, 0.7), ("b", 3, 1e-6, -2.0)]
     omega = 3000.0
@@ -290,7 +290,7 @@ def test_a_jump_between_two_modes_is_not_taken_for_a_critical_speed(monkeypatch)
     interpolation (``refined`` False). A true crossing (one branch through 1X) is still refined to its closed form."""
     import types
 
-    import frbmodel.unbalance as unb
+    import frbmodel.linear.unbalance as unb
 
     def branch(offset_hz):
         return lambda n: 1j * 2 * math.pi * (n / 60.0 + offset_hz) - 10.0

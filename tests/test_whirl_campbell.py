@@ -8,9 +8,9 @@ from scipy.linalg import eig
 from scipy.optimize import linear_sum_assignment
 
 import frbmodel as frb
-from frbmodel.film import rt_coefficients
-from frbmodel.linear import linear_system
-from frbmodel.whirl import film_whirl_ratio, lund_threshold, routh_hurwitz_stable
+from frbmodel.linear.assembly import linear_system
+from frbmodel.linear.whirl import film_whirl_ratio, lund_threshold, routh_hurwitz_stable
+from frbmodel.physics.film import rt_coefficients
 
 # docs/theory/whirl.md#film-whirl table: ε -> (γ, K̄_eq/γ²)
 TABLE8 = [(0.01, 0.50003, 7.638), (0.1, 0.50294, 7.515), (0.3, 0.51942, 6.790), (0.5, 0.51464, 6.460),

@@ -11,9 +11,9 @@ import xarray as xr
 
 import frbmodel as frb
 from frbmodel.cli import main
-from frbmodel.recorder import RunupSchema
-from frbmodel.results import decode_attr
-from frbmodel.spectral import spectrogram
+from frbmodel.core.results import decode_attr
+from frbmodel.nonlinear.recorder import RunupSchema
+from frbmodel.signals.spectral import spectrogram
 
 #: variables whose values are labels (no physical unit)
 LABELS = {"stability", "precession", "kind", "mode", "bearing", "film", "disc", "axis"}

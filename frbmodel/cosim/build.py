@@ -15,7 +15,7 @@ from pathlib import Path
 
 import frbmodel
 
-from ..errors import FRBError, ParameterError
+from ..core.errors import FRBError, ParameterError
 
 #: build options inside each FMU's resources, read by the slaves (fmu_src/_fmu_common.py BUILD_OPTIONS)
 BUILD_OPTIONS = "frb_build.json"

@@ -26,7 +26,7 @@ import ctypes
 import time
 from pathlib import Path
 
-from ..errors import CosimStopped, ParameterError
+from ..core.errors import CosimStopped, ParameterError
 
 #: fmi2Status names by value
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")

@@ -17,7 +17,7 @@ import re
 import zipfile
 from pathlib import Path
 
-from ..errors import ParameterError
+from ..core.errors import ParameterError
 
 #: file name of the built-in system inside the rotor FMU's resources folder
 RESOURCE = "rotor_system.json"
@@ -26,7 +26,7 @@ _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 def as_system(system):
     """A Turbocharger from a Turbocharger or a system file path."""
-    from ..parameters import Turbocharger, load_system
+    from ..system.parameters import Turbocharger, load_system
 
     return system if isinstance(system, Turbocharger) else load_system(system)
 
@@ -91,10 +91,10 @@ def rotor_system(resources=None):
     -------
     Turbocharger
         The system of ``<resources>/rotor_system.json``; the paper's Table 2 system
-        (:func:`frbmodel.presets.turbocharger`) when there is no such file.
+        (:func:`frbmodel.system.presets.turbocharger`) when there is no such file.
     """
-    from ..parameters import load_system
-    from ..presets import turbocharger
+    from ..system.parameters import load_system
+    from ..system.presets import turbocharger
 
     path = Path(resources) / RESOURCE if resources else None
     return load_system(path) if path is not None and path.is_file() else turbocharger()
@@ -112,7 +112,7 @@ def rotor_system_of_fmu(fmu):
     Turbocharger
         As :func:`rotor_system`.
     """
-    from ..parameters import Turbocharger
+    from ..system.parameters import Turbocharger
 
     fmu = Path(fmu)
     if fmu.is_dir():

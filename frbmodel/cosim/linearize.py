@@ -1,5 +1,5 @@
 """Linearization mode: collect the FMUs' local state-space matrices at an operating point and interconnect them
-along the SSP connections into the global A matrix; modal analysis as in :func:`frbmodel.campbell`.
+along the SSP connections into the global A matrix; modal analysis as in :func:`frbmodel.linear.campbell`.
 
 Bearing FMU b: ẋ_b = A_b x_b + B_b u_b, F_b = C_b x_b + D_b u_b with x_b = ring (x, y, vx, vy), u_b = journal
 (x, y, vx, vy). Rotor FMU: ẋ_r = A_r x_r + B_r F, y_r = C_r x_r with F the bearing forces and y_r the journals.
@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ParameterError, check_speed
+from ..core.errors import ParameterError, check_speed
 from .master import CosimStopped, Master, operating_point_overrides, system_from_parameters
 
 
@@ -113,7 +113,7 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
     CosimStopped
         If an FMU fails (an :class:`~frbmodel.cosim.fmu.FmiCallFailed`).
     """
-    from ..methods import get_method
+    from ..system.methods import get_method
 
     m = get_method(method)
     if m.letter not in "FGIJ":
@@ -156,7 +156,7 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
 
 
 def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progress: bool = False):
-    """Holistic Campbell diagram from the FMUs alone (same result type as :func:`frbmodel.campbell`).
+    """Holistic Campbell diagram from the FMUs alone (same result type as :func:`frbmodel.linear.campbell`).
 
     The global state matrix at each speed comes from :func:`linearize` (the FMUs' local matrices, interconnected
     along the SSP's connections); the film whirl data and the exact whirl onsets are those of the library for the
@@ -181,7 +181,10 @@ def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progres
         Its ``meta`` records the SSP, the parameter set, the system read from it (``system.to_dict()``), the
         method and the film model.
     """
-    from ..campbell import (
+    from ..core.progress import counter_bar
+    from ..core.units import rpm_to_rad_s
+    from ..linear.assembly import mass_matrix
+    from ..linear.campbell import (
         campbell_from_modes,
         check_speeds,
         exact_onsets,
@@ -189,13 +192,10 @@ def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progres
         progress_enabled,
         speed_grid_order,
     )
-    from ..equilibrium import bearing_equilibrium
-    from ..linear import mass_matrix
-    from ..methods import get_method
-    from ..modal import modes_from_state
-    from ..progress import counter_bar
-    from ..units import rpm_to_rad_s
-    from ..whirl import film_names
+    from ..linear.equilibrium import bearing_equilibrium
+    from ..linear.modal import modes_from_state
+    from ..linear.whirl import film_names
+    from ..system.methods import get_method
 
     m = get_method(method)
     given = check_speeds(speeds_rpm, True, m.letter)
@@ -212,7 +212,7 @@ def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progres
                         for b, w in zip(system.bearings, system.bearing_loads)]
 
             eqs = equilibria(m.letter)
-            # RSR from the method's equilibria, film whirl from the method-J equilibria (as frbmodel.campbell)
+            # RSR from the method's equilibria, film whirl from the method-J equilibria (as frbmodel.linear.campbell)
             rows.append(([e.ring_speed_ratio for e in eqs],
                          *film_whirl_rows(system, eqs if m.letter == "J" else equilibria("J"))))
             bar.update(1)

@@ -8,12 +8,12 @@ getReal per FMU and direction, one setReal per FMU and step: the rotor's inputs 
 communication point, their end-of-step values, a profile's speed) are set together just before its doStep, and at a
 recorded point the recorded outputs come with the exchange's getReal calls (11 FMI calls per macro step, was 13).
 Every FMI call goes through :meth:`FmuInstance.call` (status checked, optional trace). Results stream through the
-:class:`~frbmodel.recorder.Recorder` in the same format as the monolithic run-up, so the same spectrogram and
+:class:`~frbmodel.nonlinear.recorder.Recorder` in the same format as the monolithic run-up, so the same spectrogram and
 composite figure apply. Optional rollback: an interval that an FMU discards (or whose new state gives non-finite
 outputs) is retried with half the step after restoring all FMU states. Optional error-controlled macro step
 (``adaptive``): each step's coupling error is the journal path defect (:meth:`Master.coupling_error`); steps above
 the tolerance are rolled back and retried shorter. The rotor speed can follow a
-:class:`~frbmodel.runup.SpeedProfile` through the rotor FMU's ``speed_in`` (``profile``).
+:class:`~frbmodel.nonlinear.runup.SpeedProfile` through the rotor FMU's ``speed_in`` (``profile``).
 """
 from __future__ import annotations
 
@@ -25,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CosimStopped, ParameterError
-from ..interrupt import deferred_signals
-from ..progress import simulation_bar
-from ..recorder import Recorder, RunupResult, RunupSchema
-from ..units import rad_s_to_rpm, rpm_to_rad_s
+from ..core.errors import CosimStopped, ParameterError
+from ..core.interrupt import deferred_signals
+from ..core.progress import simulation_bar
+from ..core.units import rad_s_to_rpm, rpm_to_rad_s
+from ..nonlinear.recorder import Recorder, RunupResult, RunupSchema
 from .fmu import FmiCallFailed, FmuInstance
 from .ssp import read_ssp
 
@@ -65,7 +65,7 @@ def _checked_profile(profile):
     if profile is None:
         return None
     if not all(hasattr(profile, a) for a in ("t", "omega", "description")) or not callable(profile):
-        raise ParameterError(f"profile = {profile!r} is invalid: use a frbmodel.runup.SpeedProfile (e.g. "
+        raise ParameterError(f"profile = {profile!r} is invalid: use a frbmodel.nonlinear.runup.SpeedProfile (e.g. "
                              "SpeedProfile.from_csv)")
     if getattr(profile, "torque_driven", False):
         raise ParameterError(f"profile = {profile.description!r} is torque-driven: a co-simulation takes a "
@@ -91,9 +91,9 @@ def system_from_parameters(params, default=None):
     the bearing component of the same name."""
     from dataclasses import replace
 
-    from ..film import Film
-    from ..parameters import load_system
-    from ..presets import turbocharger
+    from ..physics.film import Film
+    from ..system.parameters import load_system
+    from ..system.presets import turbocharger
 
     sys_file = params.get("rotor", {}).get("rotor_file", ("String", ""))[1]
     tc = load_system(sys_file) if sys_file else (default if default is not None else turbocharger())
@@ -132,7 +132,7 @@ class Master:
     unvalidated_step : bool
         Allow a macro step outside :data:`VALIDATED_STEP_S` (otherwise a ParameterError).
     profile : SpeedProfile, optional
-        Prescribed rotor speed (:class:`frbmodel.runup.SpeedProfile`, e.g. ``SpeedProfile.from_csv``; not
+        Prescribed rotor speed (:class:`frbmodel.nonlinear.runup.SpeedProfile`, e.g. ``SpeedProfile.from_csv``; not
         torque-driven). The rotor runs with ``speed_source = "input"``: ``speed_in`` is the profile's speed at
         t = 0 during initialization and the profile's speed at the start of every (sub)step before it is taken
         (again after a rollback). The rotor FMU takes the angular acceleration over a step from its last two speed
@@ -214,7 +214,7 @@ class Master:
 
     def _configure_adaptive(self, tolerance, min_step, max_step, unvalidated_step):
         """Check the adaptive step's tolerance and bounds (the first step is ``step_size``, clipped to them)."""
-        from ..errors import check_positive
+        from ..core.errors import check_positive
 
         if self.coupling != "jacobian":
             raise ParameterError("the adaptive macro step estimates the coupling error of the staggered Jacobian "
@@ -755,9 +755,9 @@ __all__ = ["Master", "cosimulate", "CosimStopped", "RunupResult", "operating_poi
 
 def operating_point_overrides(system, speed_rpm, end_rpm=None, ramp_time=1.0, method="J", perturbation=0.0):
     """Parameter overrides that start the SSP system at the ``method`` equilibrium at ``speed_rpm`` (plus the
-    same initial offset as :func:`frbmodel.runup.runup`'s ``perturbation``): rotor speed profile and initial
+    same initial offset as :func:`frbmodel.nonlinear.runup.runup`'s ``perturbation``): rotor speed profile and initial
     journal positions, ring positions and speeds."""
-    from ..equilibrium import equilibrium
+    from ..linear.equilibrium import equilibrium
 
     eq = equilibrium(system, method, speed_rpm)
     w0 = rpm_to_rad_s(speed_rpm)

@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from ..errors import ParameterError
-from ..units import rpm_to_rad_s
+from ..core.errors import ParameterError
+from ..core.units import rpm_to_rad_s
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -60,7 +60,7 @@ def _table2(system):
     """``system``, or the paper's Table 2 turbocharger when it is None."""
     if system is not None:
         return system
-    from ..presets import turbocharger
+    from ..system.presets import turbocharger
 
     return turbocharger()
 
@@ -132,7 +132,7 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
     """Parameter sets of the turbocharger FMUs, one per outer clearance.
 
     Initial states come from the method-J equilibrium at the start speed (journals and rings offset in +x by
-    ``perturbation`` × clearance, as in :func:`frbmodel.runup.runup`).
+    ``perturbation`` × clearance, as in :func:`frbmodel.nonlinear.runup.runup`).
 
     Parameters
     ----------
@@ -166,7 +166,7 @@ def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_
         comp = {"rotor": {"speed_start": ("Real", rpm_to_rad_s(start_rpm), "rad/s"),
                           "speed_end": ("Real", rpm_to_rad_s(end_rpm), "rad/s"),
                           "ramp_time": ("Real", ramp_time, "s"), "gravity": ("Real", tc.gravity, "m/s2")}}
-        from ..components import BearingComponent
+        from ..nonlinear.components import BearingComponent
 
         w0 = rpm_to_rad_s(start_rpm)
         for (inst, prefix), b, e in zip(bearing_components(tc), tc.bearings, eq.bearings):

@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CosimStopped, ParameterError
-from ..interrupt import deferred_signals
-from ..progress import simulation_bar
+from ..core.errors import CosimStopped, ParameterError
+from ..core.interrupt import deferred_signals
+from ..core.progress import simulation_bar
 from .fmu import FmuInstance
 from .ssp import read_ssp
 
@@ -200,9 +200,9 @@ class SystemMaster:
     def run(self, out_dir=None, progress=False):
         """Set up, initialize and step to the stop time. With ``out_dir``: the turbocharger FMU's record there
         (``runup.csv``, ``runup.json``) and ``signals.csv`` (time and connected values at every communication
-        point). Returns the turbocharger's record as a :class:`~frbmodel.recorder.RunupResult` (None without
+        point). Returns the turbocharger's record as a :class:`~frbmodel.nonlinear.recorder.RunupResult` (None without
         ``out_dir``); raises :class:`CosimStopped` (``.result``: the record so far) when an FMU fails."""
-        from ..recorder import RunupResult
+        from ..nonlinear.recorder import RunupResult
 
         H, T = self.step_size, self.stop_time
         n = int(round(T / H))

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 import frbmodel as frb
-from frbmodel.runup import SpeedProfile, Unbalance, build_problem, runup
+from frbmodel.nonlinear.runup import SpeedProfile, Unbalance, build_problem, runup
 
 #: (profile, unbalance) per case: a prescribed ramp with a rotating unbalance (every film, ring and unbalance term)
 #: and a torque-driven rotor (the spin equation, journal torques)

@@ -1,0 +1,2 @@
+"""Core services: exception types and range checks, units, progress, interruption, small dense linear algebra, the
+result base class."""

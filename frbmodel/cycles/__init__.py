@@ -1,0 +1,1 @@
+"""Periodic orbits: shooting, whirl limit cycles, continuation and bifurcations."""

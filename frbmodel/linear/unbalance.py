@@ -1,0 +1,1145 @@
+"""Unbalance response (the steady-state 1X forced response of the linearized system) and critical speeds.
+
+At each rotor speed Ω the linear system of a method (:func:`frbmodel.linear_system`: about the static equilibrium
+at that speed for the film methods C–J, ring DoFs included for E–J, ring speed per the method) is driven by the
+rotating unbalance forces. A disc with unbalance m e at angular position p (at rotation angle 0, from +x, CCW)
+loads its node with f_x = m e Ω² cos(Ωt + p), f_y = m e Ω² sin(Ωt + p) — the constant-speed case of
+:func:`frbmodel.physics.dynamics.add_unbalance_forces`, which the run-up uses. In complex form f = Re(F e^{iΩt}) with
+F_x = m e Ω² e^{ip}, F_y = −i F_x, and the response q = Re(Q e^{iΩt}) solves
+
+    (K(Ω) − Ω² M + i Ω C(Ω)) Q = F,
+
+C(Ω) holding the bearing damping and the gyroscopic Ω G. Every orbit x + i y = r_f e^{iΩt} + r_b e^{−iΩt} has a
+forward component r_f = (X + iY)/2 and a backward one r_b = (X̄ + iȲ)/2, semi-axes |r_f| + |r_b| and
+||r_f| − |r_b||.
+
+Critical speeds are where the 1X line f = Ω/2π crosses the damped Campbell branches (grid crossings refined by a
+root solve on the eigenvalue of the tracked mode), and where the response amplitudes peak.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import ParameterError, check_real, check_system
+from ..core.progress import counter_bar
+from ..core.results import Result, netcdf_attrs, variable
+from ..core.units import rpm_to_rad_s
+from ..system.methods import get_method
+from .assembly import linear_system
+from .campbell import campbell as campbell_diagram
+from .campbell import check_speeds, progress_enabled
+from .equilibrium import bearing_equilibrium
+
+#: default speed grid [rpm] (1 000 ... 250 000, 200 points)
+DEFAULT_SPEEDS_RPM = (1e3, 250e3, 200)
+#: the forcing, for the result files
+FORCE_RULE = ("F_x = m e W^2 exp(i p), F_y = -i F_x on the disc node (f = Re(F exp(i W t)): a forward-rotating "
+              "unbalance at angle W t + p from +x, CCW); response q = Re(Q exp(i W t)) of "
+              "(K(W) - W^2 M + i W C(W)) Q = F")
+#: columns of the critical-speed table
+CRITICAL_COLUMNS = ("source", "speed [rpm]", "frequency [Hz]", "mode", "kind", "precession", "damping [-]",
+                    "location", "amplitude [m]", "refined")
+_SIDES = ("inner", "outer")
+
+
+def check_unbalance(system, unbalance):
+    """Unbalances as ``(disc name, node, m e [kg m], phase [rad])`` tuples, or a :class:`ParameterError`.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    unbalance : dict or sequence of Unbalance
+        ``{disc_name: (m_e [kg m], phase [rad])}`` (a bare number is m e at phase 0), or
+        ``[frbmodel.Unbalance(disc, amount, phase), ...]``.
+
+    Returns
+    -------
+    tuple of (str, int, float, float)
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> check_unbalance(frb.turbocharger(), {"compressor_wheel": (2e-6, 0.5)})
+    (('compressor_wheel', 3, 2e-06, 0.5),)
+    """
+    if isinstance(unbalance, dict):
+        items = list(unbalance.items())
+    elif isinstance(unbalance, (list, tuple)) and all(hasattr(u, "disc") for u in unbalance):
+        items = [(u.disc, (u.amount, u.phase)) for u in unbalance]
+    else:
+        raise ParameterError(f"unbalance = {unbalance!r} is invalid: give a dict {{disc name: (m e [kg m], phase "
+                             "[rad])}, e.g. {'turbine_wheel': (1e-6, 0.0)}")
+    if not items:
+        raise ParameterError("unbalance = {} is invalid: give at least one disc, e.g. {'turbine_wheel': (1e-6, 0.0)}")
+    out = []
+    for name, value in items:
+        disc = system.rotor.disc(name)
+        me, phase = (value, 0.0) if not isinstance(value, (tuple, list)) else (tuple(value) + (0.0,))[:2]
+        if isinstance(value, (tuple, list)) and not 1 <= len(value) <= 2:
+            raise ParameterError(f"unbalance[{name!r}] = {value!r} is invalid: expected (m e [kg m], phase [rad])")
+        out.append((disc.name, disc.node, check_real(f"unbalance m e of {name}", me, "kg m", 0.0, inclusive=True),
+                    check_real(f"unbalance phase of {name}", phase, "rad")))
+    if not any(u[2] > 0 for u in out):
+        raise ParameterError(f"unbalance = {unbalance!r} is invalid: every m e is 0 (no response); valid range of "
+                             "at least one m e: > 0 kg m")
+    return tuple(out)
+
+
+def unbalance_force(n_dof, unbalance, omega):
+    """Complex amplitude F [N] of the rotating unbalance load, f(t) = Re(F e^{iΩt}).
+
+    Parameters
+    ----------
+    n_dof : int
+        Size of the system (rotor DoFs first, 4 per node).
+    unbalance : sequence of (name, node, m e [kg m], phase [rad])
+        As returned by :func:`check_unbalance`.
+    omega : float
+        Rotor speed Ω [rad/s].
+
+    Returns
+    -------
+    ndarray (n_dof,) complex
+
+    Examples
+    --------
+    >>> F = unbalance_force(8, [("w", 1, 1e-6, 0.0)], 1000.0)     # 1 g mm at 1000 rad/s: 1 N
+    >>> F[4:6]
+    array([1.+0.j, 0.-1.j])
+    """
+    F = np.zeros(n_dof, dtype=complex)
+    for _, node, me, phase in unbalance:
+        f = me * omega ** 2 * np.exp(1j * phase)
+        F[4 * node] += f
+        F[4 * node + 1] += -1j * f
+    return F
+
+
+def forced_response(ls, F, omega):
+    """Steady-state complex amplitudes Q of ``M q̈ + C q̇ + K q = Re(F e^{iΩt})``.
+
+    Parameters
+    ----------
+    ls : LinearSystem
+        M, C, K at the speed Ω (C includes Ω G).
+    F : ndarray (n,) complex
+        Force amplitude [N, N m].
+    omega : float
+        Forcing (= rotor) angular frequency Ω [rad/s].
+
+    Returns
+    -------
+    ndarray (n,) complex
+        Q [m, rad]; inf where the dynamic stiffness is singular (an undamped system exactly at resonance).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ls = frb.linear_system(frb.turbocharger(), "A", 0.0)
+    >>> Q = forced_response(ls, unbalance_force(ls.M.shape[0], [("w", 0, 1e-6, 0.0)], 0.0), 0.0)
+    >>> float(abs(Q).max())
+    0.0
+    """
+    Z = ls.K - omega ** 2 * ls.M + 1j * omega * ls.C
+    try:
+        return np.linalg.solve(Z, F)
+    except np.linalg.LinAlgError:
+        return np.full(F.shape, np.inf + 0j)
+
+
+def _linear_at(system, m, speed_rpm, kw):
+    """The method's linear system at one speed (equilibria solved for the film methods)."""
+    eqs = None
+    if m.needs_films:
+        omega = rpm_to_rad_s(speed_rpm)
+        eqs = tuple(bearing_equilibrium(b, system.bearing_loads[k], omega, m.letter, system.film_model,
+                                        system.gravity) for k, b in enumerate(system.bearings))
+    return linear_system(system, m.letter, speed_rpm, equilibria=eqs, **kw)
+
+
+def response_at(system, method, speed_rpm, unbalance, **kw):
+    """Complex amplitudes of all DoFs at one speed.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    method : str
+        One of A, B, C, D, E, F, G, I, J.
+    speed_rpm : float
+        Rotor speed [rpm].
+    unbalance : dict or sequence of Unbalance
+        See :func:`check_unbalance`.
+    **kw
+        Spring stiffnesses of A, B, E [N/m].
+
+    Returns
+    -------
+    Q : ndarray (n,) complex
+        [m, rad], in the DoF order of ``ls``.
+    ls : LinearSystem
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> Q, ls = response_at(frb.turbocharger(), "J", 100e3, {"turbine_wheel": (1e-6, 0.0)})
+    >>> ls.dof_labels[16], Q.shape
+    ('ring_turbine.x', (20,))
+    """
+    m = get_method(method)
+    unb = check_unbalance(system, unbalance)
+    ls = _linear_at(system, m, speed_rpm, kw)
+    omega = rpm_to_rad_s(speed_rpm)
+    return forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega), ls
+
+
+def location_names(system, method="J"):
+    """The locations an :class:`UnbalanceResponse` of ``system`` knows (its :attr:`UnbalanceResponse.names`).
+
+    Parameters
+    ----------
+    system : Turbocharger
+    method : str
+        Method letter (checked; the names are the same for all methods, rings and films are NaN where undefined).
+
+    Returns
+    -------
+    tuple of str
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> location_names(frb.turbocharger())[:6]
+    ('turbine_wheel', 'compressor_wheel', 'node0', 'node1', 'node2', 'node3')
+    """
+    get_method(method)
+    return _names(_layout(system, None))
+
+
+def _layout(system, ring_dofs):
+    """Where things are in the DoF vector: discs, bearings (node, ring DoFs, clearances), for the metadata."""
+    return {"n_nodes": system.rotor.n_nodes,
+            "discs": [{"name": d.name, "node": d.node} for d in system.rotor.discs],
+            "bearings": [{"name": b.name, "node": b.node,
+                          "ring_dofs": None if ring_dofs is None else [int(i) for i in ring_dofs[k]],
+                          "inner_clearance_m": b.inner.clearance, "outer_clearance_m": b.outer.clearance}
+                         for k, b in enumerate(system.bearings)]}
+
+
+def _names(layout):
+    """Location names of a layout: discs, nodes, then per bearing journal, ring, inner and outer film."""
+    out = [d["name"] for d in layout["discs"]] + [f"node{i}" for i in range(layout["n_nodes"])]
+    for b in layout["bearings"]:
+        out += [f"{b['name']} {w}" for w in ("journal", "ring") + _SIDES]
+    return tuple(out)
+
+
+@dataclass
+class UnbalanceResponse(Result):
+    """Result of :func:`unbalance_response`: complex 1X amplitudes of every DoF at every speed.
+
+    Locations (``names``): the discs (e.g. ``"turbine_wheel"``), the nodes ``"node<i>"``, per bearing
+    ``"<bearing> journal"`` and ``"<bearing> ring"`` (relative to the housing), and the films ``"<bearing> inner"``
+    (journal relative to ring) and ``"<bearing> outer"`` (ring relative to housing). Without ring DoFs the ring
+    moves with the journal for method C (inner film rigid: its orbit is 0) and is undefined (NaN) for A, B (no
+    films) and D (films in series).
+
+    Attributes
+    ----------
+    method : str
+    speeds_rpm : ndarray (n,)
+        Rotor speeds [rpm], ascending.
+    response : ndarray (n, n_dof) complex
+        Q [m, rad]: q(t) = Re(Q e^{iΩt}) for each DoF of ``dof_labels``.
+    dof_labels : list of str
+    unbalance : list of dict
+        ``{"disc", "node", "m e [kg m]", "phase [rad]"}`` per unbalanced disc.
+    meta : dict
+        System, method and options, layout of the DoFs (``meta["layout"]``), the forcing rule.
+    critical : list of dict, optional
+        Rows of the critical-speed table (read it with :meth:`critical_speeds`); None if not computed.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ur = frb.unbalance_response(frb.turbocharger(), "A", [30e3, 60e3], {"turbine_wheel": (1e-6, 0.0)},
+    ...                             critical=False)
+    >>> [round(float(a) * 1e6, 3) for a in ur.major_axis("turbine_wheel")]      # [µm]
+    [3.428, 2.973]
+    >>> bool(np.allclose(ur.minor_axis("turbine_wheel"), ur.major_axis("turbine_wheel")))   # isotropic: circles
+    True
+    """
+
+    method: str
+    speeds_rpm: np.ndarray
+    response: np.ndarray
+    dof_labels: list
+    unbalance: list
+    meta: dict = field(default_factory=dict)
+    critical: object = None
+
+    def __post_init__(self):
+        self.speeds_rpm = np.asarray(self.speeds_rpm, dtype=float).ravel()
+        self.response = np.asarray(self.response, dtype=complex).reshape(self.speeds_rpm.size, -1)
+        self.dof_labels = list(self.dof_labels)
+        if self.response.shape[1] != len(self.dof_labels):
+            raise ParameterError(f"UnbalanceResponse.response has {self.response.shape[1]} DoFs; dof_labels has "
+                                 f"{len(self.dof_labels)}")
+
+    # ------------------------------------------------------------------ locations
+    @property
+    def layout(self) -> dict:
+        """Discs, nodes and bearings (node, ring DoFs, clearances [m]) of the analysed system."""
+        return self.meta["layout"]
+
+    @property
+    def names(self) -> tuple:
+        """Every location :meth:`orbit` knows: discs, nodes, journals, rings and films."""
+        return _names(self.layout)
+
+    @property
+    def film_names(self) -> tuple:
+        """The films, ``"<bearing> inner"`` / ``"<bearing> outer"`` per bearing."""
+        return tuple(f"{b['name']} {s}" for b in self.layout["bearings"] for s in _SIDES)
+
+    def _node_xy(self, node):
+        return self.response[:, 4 * node], self.response[:, 4 * node + 1]
+
+    def _bearing_xy(self, b, what):
+        journal = self._node_xy(b["node"])
+        nan = np.full(self.speeds_rpm.size, complex(math.nan, math.nan))
+        zero = np.zeros(self.speeds_rpm.size, complex)
+        if b["ring_dofs"] is not None:
+            ring = (self.response[:, b["ring_dofs"][0]], self.response[:, b["ring_dofs"][1]])
+        else:
+            ring = journal if self.method == "C" else (nan, nan)
+        if what == "journal":
+            return journal
+        if what in ("ring", "outer"):
+            return ring
+        if b["ring_dofs"] is not None:
+            return journal[0] - ring[0], journal[1] - ring[1]
+        return (zero, zero) if self.method == "C" else (nan, nan)
+
+    def orbit(self, name):
+        """Complex amplitudes (X, Y) of a location: x(t) = Re(X e^{iΩt}), y(t) = Re(Y e^{iΩt}).
+
+        Parameters
+        ----------
+        name : str
+            One of :attr:`names`.
+
+        Returns
+        -------
+        X, Y : ndarray (n,) complex
+            [m] per speed (film locations: relative motion [m]).
+        """
+        lay = self.layout
+        for d in lay["discs"]:
+            if d["name"] == name:
+                return self._node_xy(d["node"])
+        if isinstance(name, str) and name.startswith("node") and name[4:].isdigit() and \
+                int(name[4:]) < lay["n_nodes"]:
+            return self._node_xy(int(name[4:]))
+        for b in lay["bearings"]:
+            for what in ("journal", "ring") + _SIDES:
+                if name == f"{b['name']} {what}":
+                    return self._bearing_xy(b, what)
+        raise ParameterError(f"location name = {name!r} is unknown; valid: {', '.join(self.names)}")
+
+    def forward(self, name):
+        """Forward-whirl component r_f = (X + iY)/2 [m] (complex, per speed) of ``name``'s orbit."""
+        X, Y = self.orbit(name)
+        return (X + 1j * Y) / 2
+
+    def backward(self, name):
+        """Backward-whirl component r_b = (X̄ + iȲ)/2 [m] of ``name``'s orbit: x + iy = r_f e^{iΩt} + r_b e^{−iΩt}."""
+        X, Y = self.orbit(name)
+        return (np.conj(X) + 1j * np.conj(Y)) / 2
+
+    def major_axis(self, name):
+        """Semi-major axis |r_f| + |r_b| [m] of the orbit of ``name`` (its largest radius), per speed."""
+        return np.abs(self.forward(name)) + np.abs(self.backward(name))
+
+    def minor_axis(self, name):
+        """Semi-minor axis ||r_f| − |r_b|| [m] of the orbit of ``name``, per speed (0: a line)."""
+        return np.abs(np.abs(self.forward(name)) - np.abs(self.backward(name)))
+
+    def precession(self, name):
+        """"forward" (|r_f| > |r_b|), "backward" or "" (line or undefined) per speed."""
+        f, b = np.abs(self.forward(name)), np.abs(self.backward(name))
+        return np.where(f > b, "forward", np.where(b > f, "backward", "")).astype(object)
+
+    def phase(self, name, probe="x"):
+        """Phase φ [rad] of a probe signal |A| cos(Ωt + φ), t = 0 when the rotation angle is 0.
+
+        Parameters
+        ----------
+        name : str
+        probe : {"x", "y", "forward"}
+            The x or y displacement, or the forward component (the angle of the orbit point at t = 0).
+
+        Returns
+        -------
+        ndarray (n,)
+            In (−π, π] [rad].
+        """
+        X, Y = self.orbit(name)
+        signals = {"x": X, "y": Y, "forward": (X + 1j * Y) / 2}
+        if probe not in signals:
+            raise ParameterError(f"probe = {probe!r} is invalid: 'x', 'y' or 'forward'")
+        return np.angle(signals[probe])
+
+    def clearance_fraction(self, film):
+        """Semi-major axis of a film's relative orbit over its radial clearance [-], per speed.
+
+        Parameters
+        ----------
+        film : str
+            ``"<bearing> inner"`` (journal relative to ring, over c_i) or ``"<bearing> outer"`` (ring relative to
+            the housing, over c_o).
+        """
+        for b in self.layout["bearings"]:
+            for side in _SIDES:
+                if film == f"{b['name']} {side}":
+                    return self.major_axis(film) / b[f"{side}_clearance_m"]
+        raise ParameterError(f"film = {film!r} is unknown; valid: {', '.join(self.film_names)}")
+
+    def critical_speeds(self):
+        """The critical-speed table (see :func:`critical_speeds` and :func:`response_peaks`).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per 1X crossing of a Campbell branch (``source`` "1X crossing") and per response peak
+            (``source`` "response peak"), sorted by speed; columns :data:`CRITICAL_COLUMNS`.
+        """
+        import pandas as pd
+
+        if self.critical is None:
+            raise ParameterError("this unbalance response was computed with critical=False: no critical speeds")
+        return pd.DataFrame(self.critical, columns=list(CRITICAL_COLUMNS))
+
+    # ------------------------------------------------------------------ tables and files
+    def to_dataframe(self, names=None):
+        """One row per speed: amplitudes, phases, semi-axes and whirl components of each location.
+
+        Parameters
+        ----------
+        names : sequence of str, optional
+            Locations (default: every one of :attr:`names`).
+
+        Returns
+        -------
+        pandas.DataFrame
+            ``speed [rpm]``, then per location ``<name> x amplitude [m]``, ``x phase [rad]``, ``y amplitude [m]``,
+            ``y phase [rad]``, ``major semi-axis [m]``, ``minor semi-axis [m]``, ``forward [m]``, ``backward [m]``,
+            and for the films ``major semi-axis / clearance [-]``.
+        """
+        import pandas as pd
+
+        d = {"speed [rpm]": self.speeds_rpm}
+        for name in names or self.names:
+            X, Y = self.orbit(name)
+            d.update({f"{name} x amplitude [m]": np.abs(X), f"{name} x phase [rad]": np.angle(X),
+                      f"{name} y amplitude [m]": np.abs(Y), f"{name} y phase [rad]": np.angle(Y),
+                      f"{name} major semi-axis [m]": self.major_axis(name),
+                      f"{name} minor semi-axis [m]": self.minor_axis(name),
+                      f"{name} forward [m]": np.abs(self.forward(name)),
+                      f"{name} backward [m]": np.abs(self.backward(name))})
+            if name in self.film_names:
+                d[f"{name} major semi-axis / clearance [-]"] = self.clearance_fraction(name)
+        return pd.DataFrame(d)
+
+    def dofs_dataframe(self):
+        """The raw complex amplitudes: ``speed [rpm]`` and ``<dof> re [m|rad]``, ``<dof> im [m|rad]`` per DoF."""
+        import pandas as pd
+
+        d = {"speed [rpm]": self.speeds_rpm}
+        for k, lab in enumerate(self.dof_labels):
+            unit = "rad" if lab.endswith((".thx", ".thy")) else "m"
+            d[f"{lab} re [{unit}]"] = self.response[:, k].real
+            d[f"{lab} im [{unit}]"] = self.response[:, k].imag
+        return pd.DataFrame(d)
+
+    def to_xarray(self):
+        """The result as an :class:`xarray.Dataset` over speed × location (units in the attributes).
+
+        Returns
+        -------
+        xarray.Dataset
+            ``x_re``, ``x_im``, ``y_re``, ``y_im``, ``major_semi_axis``, ``minor_semi_axis``, ``forward``,
+            ``backward`` [m]; ``clearance_fraction`` [-] over speed × film.
+        """
+        import xarray as xr
+
+        names = list(self.names)
+        orb = [self.orbit(n) for n in names]
+        dims = ("speed", "location")
+        data = {"x_re": (np.stack([o[0].real for o in orb], 1), "x amplitude, real part"),
+                "x_im": (np.stack([o[0].imag for o in orb], 1), "x amplitude, imaginary part"),
+                "y_re": (np.stack([o[1].real for o in orb], 1), "y amplitude, real part"),
+                "y_im": (np.stack([o[1].imag for o in orb], 1), "y amplitude, imaginary part"),
+                "major_semi_axis": (np.stack([self.major_axis(n) for n in names], 1), "orbit semi-major axis"),
+                "minor_semi_axis": (np.stack([self.minor_axis(n) for n in names], 1), "orbit semi-minor axis"),
+                "forward": (np.stack([np.abs(self.forward(n)) for n in names], 1), "forward whirl radius"),
+                "backward": (np.stack([np.abs(self.backward(n)) for n in names], 1), "backward whirl radius")}
+        ds = {k: variable(dims, v, "m", text) for k, (v, text) in data.items()}
+        ds["clearance_fraction"] = variable(("speed", "film"), np.stack(
+            [self.clearance_fraction(f) for f in self.film_names], 1), "-", "film orbit semi-major axis / clearance")
+        coords = {"speed": ("speed", self.speeds_rpm, {"units": "rpm", "long_name": "rotor speed"}),
+                  "location": names, "film": list(self.film_names)}
+        return xr.Dataset(ds, coords=coords, attrs=netcdf_attrs(self.metadata()))
+
+    def metadata(self) -> dict:
+        """What the result was computed with, JSON-ready (the content of :meth:`save`'s JSON)."""
+        from .. import __version__
+
+        meta = dict(self.meta)
+        meta.update({"method": self.method, "speeds_rpm": [float(s) for s in self.speeds_rpm],
+                     "unbalance": self.unbalance, "dof_labels": self.dof_labels, "force_rule": FORCE_RULE,
+                     "frbmodel_version": __version__,
+                     "units": {"speed": "rpm", "amplitude": "m", "phase": "rad", "clearance fraction": "-"}})
+        return meta
+
+    def plot(self, names=None, films=None, title=None):
+        """Bode (semi-major axis [µm], log scale; phase of x), film orbits over clearance, and polar plot.
+
+        Parameters
+        ----------
+        names : sequence of str, optional
+            Locations (default: the discs).
+        films : sequence of str, optional
+            Films for the clearance panel (default: those with a defined, non-zero orbit).
+        title : str, optional
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        return response_figure(self, names, films, title)
+
+    def plot_html(self, path=None, names=None, films=None, include_plotlyjs="directory"):
+        """Interactive plotly Bode, clearance and polar plot (hover: speed, amplitude, phase).
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            Write the figure there as HTML.
+        names, films : sequence of str, optional
+            As for :meth:`plot`.
+        include_plotlyjs : {"directory", True}
+            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
+            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
+            :func:`frbmodel.plots.figures.write_html`.
+
+        Returns
+        -------
+        plotly.graph_objects.Figure
+        """
+        from ..plots.figures import write_html
+
+        fig = response_plotly(self, names, films)
+        if path is not None:
+            write_html(fig, path, include_plotlyjs)
+        return fig
+
+    def save(self, out_dir, stem=None, png=True, html=True, netcdf=True, names=None):
+        """Write the tables, the metadata and the figures into ``out_dir``.
+
+        Parameters
+        ----------
+        out_dir : str or Path
+            Folder (created if missing).
+        stem : str, optional
+            File name stem (default ``unbalance_<method>``).
+        png, html, netcdf : bool
+            Write the PNG figure, the HTML figure, the netCDF dataset (:meth:`to_xarray`).
+        names : sequence of str, optional
+            Locations drawn in the figures (default: the discs).
+
+        Returns
+        -------
+        list of Path
+            ``<stem>.csv`` (:meth:`to_dataframe`), ``<stem>_dofs.csv`` (:meth:`dofs_dataframe`, read by
+            :meth:`load`), ``<stem>_critical.csv``, ``<stem>.json`` and the figures / dataset.
+        """
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        stem = stem or f"unbalance_{self.method}"
+        paths = [out / f"{stem}.csv", out / f"{stem}_dofs.csv"]
+        self.to_dataframe().to_csv(paths[0], index=False)
+        self.dofs_dataframe().to_csv(paths[1], index=False)
+        if self.critical is not None:
+            paths.append(out / f"{stem}_critical.csv")
+            self.critical_speeds().to_csv(paths[-1], index=False)
+        paths.append(out / f"{stem}.json")
+        paths[-1].write_text(json.dumps(self.metadata(), indent=2, default=str))
+        if png:
+            import matplotlib.pyplot as plt
+
+            fig = self.plot(names)
+            paths.append(out / f"{stem}.png")
+            fig.savefig(paths[-1], dpi=130, bbox_inches="tight")
+            plt.close(fig)
+        if html:
+            paths.append(out / f"{stem}.html")
+            self.plot_html(paths[-1], names)
+        if netcdf:
+            paths.append(self.to_netcdf(out / f"{stem}.nc"))
+        return paths
+
+    @classmethod
+    def load(cls, out_dir, stem=None):
+        """Read a result written by :meth:`save`.
+
+        Parameters
+        ----------
+        out_dir : str or Path
+            The folder.
+        stem : str, optional
+            File name stem (default: the only ``unbalance_*.json`` in the folder).
+
+        Returns
+        -------
+        UnbalanceResponse
+
+        Examples
+        --------
+        >>> import tempfile, frbmodel as frb
+        >>> ur = frb.unbalance_response(frb.turbocharger(), "B", [20e3, 40e3], {"turbine_wheel": 1e-6},
+        ...                             critical=False)
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     _ = ur.save(tmp, png=False, html=False, netcdf=False)
+        ...     back = UnbalanceResponse.load(tmp)
+        >>> bool(np.array_equal(back.response, ur.response)), back.method
+        (True, 'B')
+        """
+        import pandas as pd
+
+        out = Path(out_dir)
+        if stem is None:
+            found = sorted(p.stem for p in out.glob("unbalance_*.json"))
+            if len(found) != 1:
+                raise ParameterError(f"folder = {str(out_dir)!r} holds {len(found)} unbalance_*.json files; expected "
+                                     "one (give stem=...)")
+            stem = found[0]
+        meta = json.loads((out / f"{stem}.json").read_text())
+        df = pd.read_csv(out / f"{stem}_dofs.csv")
+        labels = meta.pop("dof_labels")
+        resp = np.column_stack([df[c].to_numpy() + 1j * df[c.replace(" re [", " im [")].to_numpy()
+                                for c in df.columns if " re [" in c])
+        crit = out / f"{stem}_critical.csv"
+        critical = None
+        if crit.exists():  # empty cells: NaN numbers, empty labels
+            critical = pd.read_csv(crit)
+            critical[["source", "kind", "precession", "location"]] = \
+                critical[["source", "kind", "precession", "location"]].fillna("").astype(str)
+        for k in ("speeds_rpm", "force_rule", "frbmodel_version", "units"):
+            meta.pop(k, None)
+        return cls(meta.pop("method"), df["speed [rpm]"].to_numpy(), resp, labels, meta.pop("unbalance"), meta,
+                   critical=None if critical is None else critical.to_dict("records"))
+
+
+def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, critical=True, peak_names=None,
+                       progress: bool = False, **kw) -> UnbalanceResponse:
+    """Steady-state 1X response of ``system`` to rotating unbalances, per speed, for bearing model ``method``.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    method : {"A", "B", "C", "D", "E", "F", "G", "I", "J"}
+    speeds_rpm : array_like, optional
+        Rotor speeds [rpm] in any order (the result is ascending); default 1 000 ... 250 000, 200 points. > 0 for
+        the film methods.
+    unbalance : dict or sequence of Unbalance
+        ``{disc_name: (m_e [kg m], phase [rad])}``, e.g. ``{"turbine_wheel": (1e-6, 0.0)}`` (1 g mm); default
+        that one.
+    critical : bool
+        Also compute the critical-speed table: Campbell 1X crossings (:func:`critical_speeds`, refined) and
+        response peaks (:func:`response_peaks`, refined).
+    peak_names : sequence of str, optional
+        Locations whose response peaks enter the table (default: the discs).
+    progress : bool
+        Show a progress bar over the speeds.
+    **kw
+        Spring stiffnesses of A, B, E: ``k``, ``kx``, ``ky`` [N/m].
+
+    Returns
+    -------
+    UnbalanceResponse
+
+    Raises
+    ------
+    ParameterError
+        Not a system, an unknown method, option or disc, invalid speeds or unbalance.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ur = frb.unbalance_response(frb.turbocharger(), "J", [60e3, 120e3], {"turbine_wheel": (1e-6, 0.0)},
+    ...                             critical=False)
+    >>> [round(float(a), 4) for a in ur.clearance_fraction("turbine outer")]
+    [0.0078, 0.0131]
+    """
+    check_system(system)
+    m = get_method(method)
+    unb = check_unbalance(system, {"turbine_wheel": (1e-6, 0.0)} if unbalance is None else unbalance)
+    speeds = np.sort(check_speeds(np.linspace(*DEFAULT_SPEEDS_RPM) if speeds_rpm is None else speeds_rpm,
+                                  m.needs_films, m.letter))
+    m.options(**kw)  # validate early
+    t0 = time.perf_counter()
+    rows, ls = [], None
+    with counter_bar(speeds.size, f"unbalance {m.letter}", progress_enabled(progress), unit="speed") as bar:
+        for s in speeds:
+            ls = _linear_at(system, m, s, kw)
+            omega = rpm_to_rad_s(s)
+            rows.append(forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega))
+            bar.update(1)
+    meta = {"system_name": system.name, "system": system.to_dict(), "film_model": system.film_model,
+            "method_title": m.title, "method_options": m.options(**kw), "layout": _layout(system, ls.ring_dofs),
+            "source": "frbmodel.unbalance_response"}
+    ur = UnbalanceResponse(m.letter, speeds, np.array(rows), ls.dof_labels,
+                           [{"disc": n, "node": node, "m e [kg m]": me, "phase [rad]": p} for n, node, me, p in unb],
+                           meta)
+    if critical:
+        cd = campbell_diagram(system, m.letter, speeds, whirl=False, **kw)
+        rows = critical_speeds(cd, system, **kw).to_dict("records")
+        rows += response_peaks(ur, cd, system, peak_names, **kw).to_dict("records")
+        ur.critical = sorted(rows, key=lambda r: r["speed [rpm]"])
+    ur.meta["cpu_time_s"] = time.perf_counter() - t0
+    return ur
+
+
+# ---------------------------------------------------------------------- critical speeds
+def _system_of(cd, system):
+    """The system a Campbell result was computed for: ``system``, else rebuilt from ``cd.meta["system"]``."""
+    if system is not None:
+        return system
+    if isinstance(cd.meta.get("system"), dict):
+        from ..system.parameters import Turbocharger
+
+        return Turbocharger.from_dict(cd.meta["system"])
+    return None
+
+
+def _eigenvalue_near(system, m, speed_rpm, guess, kw):
+    """The eigenvalue (Im > 0) of the method's linear system at ``speed_rpm`` nearest to ``guess`` [1/s]."""
+    from .modal import state_matrix
+
+    ls = _linear_at(system, m, speed_rpm, kw)
+    lam = np.linalg.eigvals(state_matrix(ls.M, ls.C, ls.K))
+    lam = lam[lam.imag > 0]
+    return lam[np.argmin(np.abs(lam - guess))]
+
+
+def _refine_crossing(system, m, cd, i, j, kw):
+    """Root of Im λ_j(Ω)/2π − Ω/2π between grid speeds i and i+1 (Brent), λ_j followed as the eigenvalue
+    nearest to the linear interpolation of the tracked one; None if the bracket does not hold, or if the root
+    Brent returns is not one: the nearest eigenvalue can switch to another mode inside the interval (where two
+    branches veer), a jump of the function across zero that Brent takes for a root, so the root is kept only
+    where the function vanishes (|f − n/60| <= 1e-6 of n/60; Brent's own tolerance leaves ~1e-9)."""
+    from scipy.optimize import brentq
+
+    s = cd.speeds_rpm
+    la, lb = cd.eigenvalues[i, j], cd.eigenvalues[i + 1, j]
+
+    def lam(x):
+        t = (x - s[i]) / (s[i + 1] - s[i])
+        return _eigenvalue_near(system, m, x, la + t * (lb - la), kw)
+
+    def g(x):
+        return lam(x).imag / (2 * math.pi) - x / 60.0
+
+    ga, gb = g(s[i]), g(s[i + 1])
+    if ga == 0.0 or gb == 0.0:
+        x = s[i] if ga == 0.0 else s[i + 1]
+        return x, lam(x)
+    if ga * gb > 0:
+        return None
+    x = brentq(g, s[i], s[i + 1], xtol=1e-9 * s[i + 1], rtol=1e-12)
+    if abs(g(x)) > 1e-6 * x / 60.0:
+        return None  # a jump between two modes, not a crossing (the grid's linear interpolation stands)
+    return x, lam(x)
+
+
+def critical_speeds(cd, system=None, refine=True, **kw):
+    """Speeds where the 1X line f = n/60 crosses the damped Campbell branches of ``cd``.
+
+    Crossings are found between grid speeds (sign change of f_mode − n/60, linear interpolation) and, with
+    ``refine``, solved by a Brent root search on the eigenvalue of the tracked mode (to ~1e-9 relative).
+
+    Parameters
+    ----------
+    cd : CampbellResult
+    system : Turbocharger, optional
+        The system ``cd`` was computed for (default: rebuilt from ``cd.meta["system"]``); needed to refine.
+    refine : bool
+        Root-solve each crossing (else: linear interpolation on the grid).
+    **kw
+        Spring stiffnesses of A, B, E [N/m] (default: ``cd.meta["method_options"]``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns :data:`CRITICAL_COLUMNS` with ``source`` "1X crossing": speed [rpm], frequency [Hz] (= speed/60),
+        mode (Campbell column), kind, precession (at the nearer grid speed), damping [-] (at the crossing),
+        ``refined``; sorted by speed.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> cd = frb.campbell(frb.turbocharger(), "A", np.linspace(1e3, 40e3, 40), whirl=False)
+    >>> cs = critical_speeds(cd)
+    >>> cs[["speed [rpm]", "precession"]].round(0).values.tolist()
+    [[6550.0, 'backward'], [7159.0, 'forward'], [18878.0, 'backward'], [19417.0, 'forward']]
+    """
+    import pandas as pd
+
+    m = get_method(cd.method)
+    opts = {**cd.meta.get("method_options", {}), **kw} if m.parameters else {}
+    system = _system_of(cd, system) if refine else None
+    s, f = cd.speeds_rpm, cd.frequencies_hz
+    g = f - s[:, None] / 60.0
+    rows = []
+    for j in range(cd.n_modes):
+        with np.errstate(invalid="ignore"):
+            idx = np.flatnonzero((g[:-1, j] * g[1:, j] < 0) | ((g[:-1, j] == 0) & np.isfinite(g[1:, j])))
+        for i in idx:
+            t = g[i, j] / (g[i, j] - g[i + 1, j])
+            speed, lam = s[i] + t * (s[i + 1] - s[i]), cd.eigenvalues[i, j] + t * np.diff(cd.eigenvalues[i:i + 2, j])[0]
+            root = _refine_crossing(system, m, cd, i, j, opts) if system is not None else None
+            if root is not None:
+                speed, lam = root
+            k = i if speed - s[i] <= s[i + 1] - speed else i + 1
+            rows.append({"source": "1X crossing", "speed [rpm]": float(speed), "frequency [Hz]": float(speed) / 60.0,
+                         "mode": int(j), "kind": cd.mode_kind[k, j], "precession": cd.precession[k, j],
+                         "damping [-]": float(-lam.real / abs(lam)), "location": "", "amplitude [m]": math.nan,
+                         "refined": root is not None})
+    return pd.DataFrame(rows, columns=list(CRITICAL_COLUMNS)).sort_values("speed [rpm]", kind="stable") \
+        .reset_index(drop=True)
+
+
+def _amplitude_at(ur, system, m, name, unb, kw):
+    """Semi-major axis [m] of ``name`` at one speed, as a function of the speed [rpm]."""
+    def amp(speed_rpm):
+        ls = _linear_at(system, m, speed_rpm, kw)
+        omega = rpm_to_rad_s(speed_rpm)
+        Q = forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega)
+        one = UnbalanceResponse(ur.method, [speed_rpm], Q[None, :], ur.dof_labels, ur.unbalance, ur.meta)
+        return float(one.major_axis(name)[0])
+    return amp
+
+
+def _refine_peak(amp, lo, hi):
+    """(speed [rpm], amplitude [m]) of the maximum of ``amp`` on [lo, hi] (bounded Brent on −log amp)."""
+    from scipy.optimize import minimize_scalar
+
+    r = minimize_scalar(lambda x: -math.log(max(amp(x), 1e-300)), bounds=(lo, hi), method="bounded",
+                        options={"xatol": 1e-9 * hi})
+    return float(r.x), amp(float(r.x))
+
+
+def _nearest_mode(cd, speed_rpm):
+    """(mode, kind, precession, damping) of the Campbell branch nearest to 1X at the grid speed nearest
+    ``speed_rpm``; -1 and empty labels without a Campbell result."""
+    if cd is None:
+        return -1, "", "", math.nan
+    k = int(np.argmin(np.abs(cd.speeds_rpm - speed_rpm)))
+    d = np.abs(cd.frequencies_hz[k] - speed_rpm / 60.0)
+    if not np.isfinite(d).any():
+        return -1, "", "", math.nan
+    j = int(np.nanargmin(d))
+    return j, cd.mode_kind[k, j], cd.precession[k, j], float(cd.damping[k, j])
+
+
+def response_peaks(ur, cd=None, system=None, names=None, refine=True, **kw):
+    """Local maxima over speed of the orbit semi-major axes of an unbalance response.
+
+    Parameters
+    ----------
+    ur : UnbalanceResponse
+    cd : CampbellResult, optional
+        Campbell diagram of the same system and method: each peak is labelled with the branch nearest to 1X.
+    system : Turbocharger, optional
+        Needed to refine (default: rebuilt from ``ur.meta["system"]``).
+    names : sequence of str, optional
+        Locations (default: the discs).
+    refine : bool
+        Refine each grid maximum by a bounded scalar search between its neighbouring grid speeds.
+    **kw
+        Spring stiffnesses of A, B, E [N/m] (default: ``ur.meta["method_options"]``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns :data:`CRITICAL_COLUMNS` with ``source`` "response peak", ``location`` and ``amplitude [m]``.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ur = frb.unbalance_response(frb.turbocharger(), "A", np.linspace(1e3, 40e3, 40), critical=False)
+    >>> pk = response_peaks(ur)                 # at the forward crossings of critical_speeds' example
+    >>> sorted(set(pk["speed [rpm]"].round(0))), sorted(set(pk["location"]))
+    ([7159.0, 19417.0], ['compressor_wheel', 'turbine_wheel'])
+    """
+    import pandas as pd
+
+    m = get_method(ur.method)
+    opts = {**ur.meta.get("method_options", {}), **kw} if m.parameters else {}
+    system = _system_of(ur, system) if refine else None
+    unb = tuple((u["disc"], u["node"], u["m e [kg m]"], u["phase [rad]"]) for u in ur.unbalance)
+    s, rows = ur.speeds_rpm, []
+    for name in names or [d["name"] for d in ur.layout["discs"]]:
+        a = ur.major_axis(name)
+        with np.errstate(invalid="ignore"):
+            idx = np.flatnonzero((a[1:-1] > a[:-2]) & (a[1:-1] >= a[2:])) + 1
+        for k in idx:
+            speed, amp_k, refined = s[k], a[k], False
+            if system is not None:
+                x, amp_x = _refine_peak(_amplitude_at(ur, system, m, name, unb, opts), s[k - 1], s[k + 1])
+                if amp_x >= amp_k:
+                    speed, amp_k, refined = x, amp_x, True
+            j, kind, prec, damp = _nearest_mode(cd, speed)
+            rows.append({"source": "response peak", "speed [rpm]": float(speed), "frequency [Hz]": float(speed) / 60,
+                         "mode": j, "kind": kind, "precession": prec, "damping [-]": damp, "location": name,
+                         "amplitude [m]": float(amp_k), "refined": refined})
+    return pd.DataFrame(rows, columns=list(CRITICAL_COLUMNS)).sort_values("speed [rpm]", kind="stable") \
+        .reset_index(drop=True)
+
+
+# ---------------------------------------------------------------------- figures
+#: line styles of the results overlaid by :func:`bode_figure` (one per result)
+RESULT_STYLES = ("-", "--", ":", "-.")
+#: phase curves are broken where the phase jumps by this much or more between two speeds [deg]
+PHASE_BREAK_DEG = 179.0
+#: the polar plot's radius is clipped at this multiple of the median amplitude (undamped peaks are unbounded)
+POLAR_CLIP = 20.0
+
+
+def default_films(ur):
+    """The films of ``ur`` whose relative orbit is defined and not identically zero (method C's inner film is).
+
+    Parameters
+    ----------
+    ur : UnbalanceResponse
+
+    Returns
+    -------
+    list of str
+    """
+    out = []
+    for f in ur.film_names:
+        c = ur.clearance_fraction(f)
+        if np.isfinite(c).all() and np.any(c > 0):
+            out.append(f)
+    return out
+
+
+def _disc_names(ur):
+    return [d["name"] for d in ur.layout["discs"]]
+
+
+def phase_curve(ur, name):
+    """Speeds [krpm] and x phase [deg] of ``name`` for plotting: the phase in [−270°, 90°) (so that a phase of
+    ±180° is drawn at one place, −180°), NaN inserted where it jumps by :data:`PHASE_BREAK_DEG` or more (the
+    undamped methods jump by exactly 180° at each resonance and anti-resonance; the wrap point lies outside most
+    damped curves).
+
+    Parameters
+    ----------
+    ur : UnbalanceResponse
+    name : str
+
+    Returns
+    -------
+    x_krpm, phase_deg : ndarray
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> ur = frb.unbalance_response(frb.turbocharger(), "A", [5e3, 6e3, 8e3, 9e3], critical=False)
+    >>> x, ph = phase_curve(ur, "turbine_wheel")      # through the 6.9 krpm resonance: 0° to -180°, broken
+    >>> x.tolist(), [round(float(p)) for p in ph if p == p]
+    ([5.0, 6.0, nan, 8.0, 9.0], [0, 0, -180, -180])
+    """
+    x = ur.speeds_rpm / 1e3
+    ph = (np.degrees(ur.phase(name)) + 270.0) % 360.0 - 270.0
+    cut = np.flatnonzero(np.abs(np.diff(ph)) >= PHASE_BREAK_DEG) + 1
+    return np.insert(x, cut, np.nan), np.insert(ph, cut, np.nan)
+
+
+def _bode_lines(ax_amp, ax_phase, ur, names, style="-", prefix=""):
+    """Semi-major axis [µm] (log) and x phase [deg] (:func:`phase_curve`) of each location vs speed [krpm]."""
+    x = ur.speeds_rpm / 1e3
+    for c, name in enumerate(names):
+        color = f"C{c}"
+        ax_amp.semilogy(x, ur.major_axis(name) * 1e6, ls=style, color=color, label=f"{prefix}{name}")
+        ax_phase.plot(*phase_curve(ur, name), ls=style, color=color)
+    ax_phase.set_yticks([-270, -180, -90, 0, 90])
+
+
+def _mark_crossings(ax, ur):
+    """Dotted vertical lines at the 1X crossings (forward: darker)."""
+    if ur.critical is None:
+        return
+    for r in ur.critical_speeds().itertuples(index=False):
+        if r.source == "1X crossing":
+            ax.axvline(r[1] / 1e3, color="0.35" if r.precession == "forward" else "0.75", ls=":", lw=0.9)
+
+
+def _polar(ax, ur, names):
+    """Polar plot of the x response: radius |X| [µm], angle φ (speeds marked in krpm along the first curve)."""
+    r_all = np.concatenate([np.abs(ur.orbit(n)[0]) for n in names]) * 1e6
+    r_all = r_all[np.isfinite(r_all)]
+    rmax = min(r_all.max(), POLAR_CLIP * np.median(r_all)) * 1.05 if r_all.size else 1.0
+    for c, name in enumerate(names):
+        X = ur.orbit(name)[0]
+        ax.plot(np.angle(X), np.abs(X) * 1e6, color=f"C{c}", lw=1.2)
+    X = ur.orbit(names[0])[0]
+    for k in np.linspace(0, X.size - 1, min(6, X.size)).astype(int):
+        if np.abs(X[k]) * 1e6 <= rmax:
+            ax.annotate(f"{ur.speeds_rpm[k] / 1e3:.0f}", (np.angle(X[k]), abs(X[k]) * 1e6), fontsize=7)
+    ax.set_rlim(0, rmax)
+    clipped = " (clipped)" if r_all.size and r_all.max() > rmax else ""
+    ax.set_title(f"polar: x amplitude [µm]{clipped}, phase; labels krpm", fontsize=9)
+
+
+def response_figure(ur, names=None, films=None, title=None):
+    """Bode plot (semi-major axis [µm], log; x phase [deg]), film orbits / clearance, and polar plot.
+
+    Parameters
+    ----------
+    ur : UnbalanceResponse
+    names : sequence of str, optional
+        Locations (default: the discs).
+    films : sequence of str, optional
+        Films of the clearance panel (default: :func:`default_films`).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    names = list(names or _disc_names(ur))
+    films = default_films(ur) if films is None else list(films)
+    rows = 3 if films else 2
+    fig = plt.figure(figsize=(12.5, 2.9 * rows + 0.8))
+    gs = fig.add_gridspec(rows, 2, width_ratios=(1.7, 1.0))
+    ax_a = fig.add_subplot(gs[0, 0])
+    ax_p = fig.add_subplot(gs[1, 0], sharex=ax_a)
+    _bode_lines(ax_a, ax_p, ur, names)
+    axes = [ax_a, ax_p]
+    if films:
+        ax_f = fig.add_subplot(gs[2, 0], sharex=ax_a)
+        for k, f in enumerate(films):
+            ax_f.semilogy(ur.speeds_rpm / 1e3, ur.clearance_fraction(f), color=f"C{k + len(names)}", label=f)
+        ax_f.set_ylabel("film orbit semi-major\naxis / clearance [-]")
+        ax_f.legend(fontsize=8, ncol=2)
+        axes.append(ax_f)
+    for ax in axes:
+        _mark_crossings(ax, ur)
+        ax.grid(True, which="both", alpha=0.3)
+    ax_a.set_ylabel("semi-major axis [µm]")
+    ax_a.legend(fontsize=8)
+    ax_p.set_ylabel("phase of x [deg]")
+    axes[-1].set_xlabel("rotor speed [krpm] (dotted: 1X crossings of the Campbell branches)")
+    _polar(fig.add_subplot(gs[:, 1], projection="polar"), ur, names)
+    unb = ", ".join(f"{u['disc']} {u['m e [kg m]'] * 1e6:g} g mm at {u['phase [rad]']:g} rad" for u in ur.unbalance)
+    fig.suptitle(title or f"Unbalance response, method {ur.method} ({unb})", fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def bode_figure(results, names=None, title=None):
+    """Bode plots of several unbalance responses (e.g. methods A and J) in one figure.
+
+    Parameters
+    ----------
+    results : sequence of UnbalanceResponse
+        Drawn with the line styles :data:`RESULT_STYLES`, colours per location.
+    names : sequence of str, optional
+        Locations (default: the discs of the first result).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> tc = frb.turbocharger()
+    >>> rs = [frb.unbalance_response(tc, m, [20e3, 40e3], critical=False) for m in "AJ"]
+    >>> len(bode_figure(rs).axes)
+    2
+    """
+    import matplotlib.pyplot as plt
+
+    names = list(names or _disc_names(results[0]))
+    fig, (ax_a, ax_p) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    for k, ur in enumerate(results):
+        _bode_lines(ax_a, ax_p, ur, names, RESULT_STYLES[k % len(RESULT_STYLES)], prefix=f"{ur.method}: ")
+    for ax in (ax_a, ax_p):
+        ax.grid(True, which="both", alpha=0.3)
+    ax_a.set_ylabel("semi-major axis [µm]")
+    ax_a.legend(fontsize=8, ncol=len(results))
+    ax_p.set_ylabel("phase of x [deg]")
+    ax_p.set_xlabel("rotor speed [krpm]")
+    unb = ", ".join(f"{u['disc']} {u['m e [kg m]'] * 1e6:g} g mm" for u in results[0].unbalance)
+    fig.suptitle(title or f"Unbalance response, methods {', '.join(r.method for r in results)} ({unb})")
+    fig.tight_layout()
+    return fig
+
+
+def response_plotly(ur, names=None, films=None):
+    """Interactive version of :func:`response_figure` (plotly).
+
+    Parameters
+    ----------
+    ur : UnbalanceResponse
+    names, films : sequence of str, optional
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+    """
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    names = list(names or _disc_names(ur))
+    films = default_films(ur) if films is None else list(films)
+    rows = 3 if films else 2
+    specs = [[{}, {"type": "polar", "rowspan": rows}]] + [[{}, None] for _ in range(rows - 1)]
+    fig = make_subplots(rows=rows, cols=2, specs=specs, column_widths=[0.62, 0.38], shared_xaxes=True,
+                        vertical_spacing=0.06)
+    x = ur.speeds_rpm / 1e3
+    for c, name in enumerate(names):
+        X = ur.orbit(name)[0]
+        amp, (xp, ph) = ur.major_axis(name) * 1e6, phase_curve(ur, name)
+        color = f"hsl({(c * 137) % 360}, 65%, 40%)"
+        fig.add_trace(go.Scatter(x=x, y=amp, name=name, legendgroup=name, line={"color": color},
+                                 hovertemplate="%{x:.1f} krpm: %{y:.4g} µm<extra>" + name + "</extra>"), 1, 1)
+        fig.add_trace(go.Scatter(x=xp, y=ph, name=name, legendgroup=name, showlegend=False, line={"color": color},
+                                 hovertemplate="%{x:.1f} krpm: %{y:.1f} deg<extra>" + name + "</extra>"), 2, 1)
+        fig.add_trace(go.Scatterpolar(r=np.abs(X) * 1e6, theta=np.degrees(np.angle(X)), name=name, legendgroup=name,
+                                      showlegend=False, line={"color": color}, text=[f"{s:.1f} krpm" for s in x],
+                                      hovertemplate="%{text}: %{r:.4g} µm, %{theta:.1f} deg<extra>" + name
+                                                    + "</extra>"), 1, 2)
+    for f in films:
+        fig.add_trace(go.Scatter(x=x, y=ur.clearance_fraction(f), name=f,
+                                 hovertemplate="%{x:.1f} krpm: %{y:.4g}<extra>" + f + "</extra>"), 3, 1)
+    fig.update_yaxes(type="log", title_text="semi-major axis [µm]", row=1, col=1)
+    fig.update_yaxes(title_text="phase of x [deg]", row=2, col=1)
+    if films:
+        fig.update_yaxes(type="log", title_text="film orbit / clearance [-]", row=3, col=1)
+    fig.update_xaxes(title_text="rotor speed [krpm]", row=rows, col=1)
+    fig.update_layout(title=f"Unbalance response, method {ur.method}", height=300 * rows + 120)
+    return fig

@@ -1,0 +1,1 @@
+"""Figures: they take results and arrays and never compute physics."""

@@ -1,0 +1,954 @@
+"""Figures: holistic Campbell diagram (matplotlib PNG and plotly HTML), RSR and equilibrium-cost figures, the
+run-up / run-down composite (spectrogram with Campbell overlay and RSR).
+
+Bearing and film names come from the results (``RunupResult.bearing_names``, the system in the run's metadata,
+the Campbell result's films), never from the Table 2 preset.
+
+matplotlib and plotly are imported inside the functions that draw, so ``import frbmodel`` needs neither; the
+matplotlib backend is the caller's choice (the CLI and the tests select Agg), never switched here.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..linear.whirl import FILM_NAMES
+
+MARKERS = {"forward": ("^", "triangle-up"), "backward": ("v", "triangle-down"), "mixed": ("o", "circle")}
+#: colour range of modal damping, as in the paper's figures
+D_MIN, D_MAX = -1.0, 0.7
+#: colour of neutral modes (|D| within its round-off bound), which the damping colour map would draw white
+NEUTRAL_COLOR, NEUTRAL_COLOR_PLOTLY = "0.45", "rgb(115, 115, 115)"
+NEUTRAL_LABEL = "neutral (|D| <= round-off bound)"
+WHIRL_STYLES = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a")
+
+
+def film_names(cd):
+    """Names of the films of a Campbell result, in the order of its whirl columns: its ``film_labels`` if it has
+    them, else the ``"films"`` of its metadata, else the module's default order; "film k" for any further column.
+
+    Parameters
+    ----------
+    cd : CampbellResult
+
+    Returns
+    -------
+    tuple of str
+    """
+    n = cd.whirl_hz.shape[1]
+    names = tuple(getattr(cd, "film_labels", None) or cd.meta.get("films") or FILM_NAMES)
+    return tuple(names[k] if k < len(names) else f"film {k}" for k in range(n))
+
+
+def whirl_curves(cd):
+    """Film whirl curves of a Campbell sweep, for the films that are past their onset somewhere in it.
+
+    Parameters
+    ----------
+    cd : CampbellResult
+
+    Returns
+    -------
+    list of tuple
+        ``(film index, film name, speeds [rpm], whirl frequency [Hz] — NaN below the film's onset)``.
+    """
+    out = []
+    for k, name in enumerate(film_names(cd)):
+        w = np.where(cd.whirl_margin[:, k] > 0, cd.whirl_hz[:, k], np.nan)
+        if np.isfinite(w).any():
+            out.append((k, name, cd.speeds_rpm, w))
+    return out
+
+
+def _whirl_style(k):
+    """Colour and line style of film ``k`` (films come in inner/outer pairs per bearing)."""
+    return WHIRL_STYLES[k % len(WHIRL_STYLES)], "--" if (k // 2) % 2 == 0 else (0, (6, 2, 1, 2))
+
+
+def _plot_whirl(ax, cd, lw=1.3):
+    for k, name, s, w in whirl_curves(cd):
+        color, ls = _whirl_style(k)
+        ax.plot(s / 1e3, w, ls=ls, lw=lw, color=color, label=f"whirl {name}")
+
+
+def _default_fmax(cd):
+    f1x = cd.speeds_rpm.max() / 60.0
+    return float(max(1.15 * f1x, 500.0))
+
+
+def _mark_critical_speeds(ax, cd, fmax):
+    """Critical speeds (1X crossings of the damped branches, interpolated on the grid) as stars on the 1X line."""
+    if cd.speeds_rpm.size < 2:
+        return
+    from ..linear.unbalance import critical_speeds
+
+    cs = critical_speeds(cd, refine=False)
+    cs = cs[cs["frequency [Hz]"] <= fmax]
+    if len(cs):
+        ax.scatter(cs["speed [rpm]"] / 1e3, cs["frequency [Hz]"], marker="*", s=110, color="gold",
+                   edgecolors="k", linewidths=0.7, zorder=4, label="critical speeds (1X crossings)")
+
+
+def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None):
+    """Holistic Campbell diagram: frequency vs speed, colour = modal damping (diverging, centred at 0),
+    marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge, neutral modes
+    (|D| within its round-off bound, e.g. every mode of the undamped methods A, B, E) grey; dashed film whirl curves
+    above their onset; optional 1X line with the critical speeds (its crossings with the damped branches) starred.
+
+    Parameters
+    ----------
+    cd : CampbellResult
+    fmax_hz : float, optional
+        Upper frequency limit [Hz] (default: 1.15 × the highest rotor frequency, at least 500 Hz).
+    whirl, one_x : bool
+        Draw the film whirl curves and the 1X line (with the critical speeds).
+    ax : matplotlib.axes.Axes, optional
+        Draw into these axes (default: a new figure).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import TwoSlopeNorm
+
+    fmax = fmax_hz or _default_fmax(cd)
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(9, 6))
+    else:
+        fig = ax.figure
+    norm = TwoSlopeNorm(vcenter=0.0, vmin=D_MIN, vmax=D_MAX)
+    cmap = plt.get_cmap("RdBu")
+    S = np.repeat(cd.speeds_rpm[:, None], cd.n_modes, axis=1) / 1e3
+    F, D, P = cd.frequencies_hz, cd.damping, cd.precession
+    state = cd.stability
+    shown = np.isfinite(F) & (F <= fmax)
+    sc = None
+    for prec, (mk, _) in MARKERS.items():
+        for unstable in (False, True):
+            sel = shown & (P == prec) & (state == ("unstable" if unstable else "stable"))
+            if not sel.any():
+                continue
+            sc = ax.scatter(S[sel], F[sel], c=np.clip(D[sel], D_MIN, D_MAX), cmap=cmap, norm=norm, marker=mk,
+                            s=46 if unstable else 16, edgecolors="k" if unstable else "none",
+                            linewidths=0.8 if unstable else 0, zorder=3 if unstable else 2)
+        sel = shown & (P == prec) & (state == "neutral")
+        if sel.any():
+            ax.scatter(S[sel], F[sel], color=NEUTRAL_COLOR, marker=mk, s=16, linewidths=0, zorder=2)
+    if whirl:
+        _plot_whirl(ax, cd)
+    if one_x:
+        ax.plot(cd.speeds_rpm / 1e3, cd.speeds_rpm / 60.0, color="0.4", lw=1, ls=":", label="1X")
+        _mark_critical_speeds(ax, cd, fmax)
+    for prec, (mk, _) in MARKERS.items():  # shape = precession (hollow: the fill is the damping colour)
+        ax.scatter([], [], marker=mk, facecolors="none", edgecolors="0.2", s=25, label=prec)
+    ax.scatter([], [], marker="o", color=cmap(norm(-0.5)), edgecolors="k", linewidths=0.8, s=46,
+               label="unstable (D < -round-off bound)")
+    if (shown & (state == "neutral")).any():
+        ax.scatter([], [], marker="s", color=NEUTRAL_COLOR, s=25, label=NEUTRAL_LABEL)
+    lo, hi = cd.speeds_rpm.min() / 1e3, cd.speeds_rpm.max() / 1e3
+    ax.set_xlim(lo - 0.05 * max(hi, 1.0) if hi == lo else lo, hi + 0.05 * max(hi, 1.0) if hi == lo else hi)
+    ax.set_ylim(0, fmax)
+    ax.set_xlabel("rotor speed [krpm]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title(title or f"Holistic Campbell diagram, method {cd.method} ({cd.system_name})", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", ncol=2)
+    if sc is not None:
+        cb = fig.colorbar(sc, ax=ax, pad=0.01)
+        cb.set_label("modal damping D = -Re(λ)/|λ| [-]")
+    return fig
+
+
+def _shape_items(system, ring_dofs):
+    """The places a hover lists, along the shaft (by node; a disc before a journal at the same node, each ring after
+    its journal): (label, x index, y index) in the displacement vector."""
+    items = [(d.node, 0, d.name, 4 * d.node, 4 * d.node + 1) for d in system.rotor.discs]
+    for k, b in enumerate(system.bearings):
+        items.append((b.node, 1, f"{b.name} journal", 4 * b.node, 4 * b.node + 1))
+        if ring_dofs:
+            items.append((b.node, 2, f"{b.name} ring", int(ring_dofs[k][0]), int(ring_dofs[k][1])))
+    return [(label, ix, iy) for _, _, label, ix, iy in sorted(items, key=lambda it: it[:2])]
+
+
+def shape_hover_text(cd, shown=None):
+    """Hover text of the mode shapes of a Campbell diagram's points: per disc, journal and ring (along the shaft)
+    the orbit's semi-major axis (the largest orbit of the mode = 1), the phase of x [deg] relative to it and the
+    whirl direction.
+
+    The linear system of the diagram (its system, method and options from ``cd.meta``) is solved again at each
+    grid speed (:func:`frbmodel.linear.assembly.linear_system`, :func:`frbmodel.linear.modal.modes`); each tracked mode
+    is the
+    eigenvalue equal to the diagram's, its eigenvector normalised by :func:`frbmodel.linear.modeshape.normalise`.
+
+    Parameters
+    ----------
+    cd : CampbellResult
+        With the system in ``cd.meta`` (from :func:`frbmodel.linear.campbell`).
+    shown : (n, m) bool ndarray, optional
+        Points that need a text (default: every present mode).
+
+    Returns
+    -------
+    (n, m) ndarray of str or None
+        ``"<br>"``-separated lines (``""`` where a mode is absent or not shown); None without a system.
+    """
+    if "system" not in (cd.meta or {}):
+        return None
+    from ..linear.assembly import linear_system
+    from ..linear.modal import modes
+    from ..linear.modeshape import ellipse, normalise
+    from ..system.parameters import Turbocharger
+
+    system = Turbocharger.from_dict(cd.meta["system"])
+    opts = cd.meta.get("method_options", {})
+    shown = np.isfinite(cd.eigenvalues) if shown is None else shown & np.isfinite(cd.eigenvalues)
+    out = np.full(cd.eigenvalues.shape, "", dtype=object)
+    for i in np.flatnonzero(shown.any(axis=1)):
+        ls = linear_system(system, cd.method, float(cd.speeds_rpm[i]), **opts)
+        md = modes(ls.M, ls.C, ls.K)
+        items = _shape_items(system, ls.ring_dofs)
+        for j in np.flatnonzero(shown[i]):
+            k = int(np.argmin(np.abs(md.eigenvalues - cd.eigenvalues[i, j])))
+            u = normalise(md.shapes[:, k], system.rotor.n_nodes, list(ls.ring_dofs or []))
+            lines = []
+            for label, ix, iy in items:
+                major, _, fwd = ellipse(u[ix], u[iy])
+                lines.append(f"{label}: {float(major):.2f} ∠ {np.degrees(np.angle(u[ix])):.0f}° "
+                             f"{'fwd' if fwd else 'bwd'}")
+            out[i, j] = "<br>".join(lines)
+    return out
+
+
+def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True, shapes=True):
+    """Interactive holistic Campbell diagram (plotly); hover shows speed, frequency, D, its stability, the
+    precession, the mode's kind and — with ``shapes`` — its shape (:func:`shape_hover_text`: orbit size, phase of x
+    and whirl direction at every disc, journal and ring). Neutral modes (|D| within its round-off bound) are one
+    grey trace of their own.
+
+    Parameters
+    ----------
+    cd, fmax_hz, whirl, one_x
+        As for :func:`campbell_figure`.
+    shapes : bool
+        List the mode shape in the hover text (needs the system in ``cd.meta``; solves the diagram's linear system
+        once more at each grid speed: 0.13 s for 100 speeds of method J).
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+    """
+    import plotly.graph_objects as go
+
+    fmax = fmax_hz or _default_fmax(cd)
+    fig = go.Figure()
+    S = np.repeat(cd.speeds_rpm[:, None], cd.n_modes, axis=1)
+    F, D, P, Kd = cd.frequencies_hz, cd.damping, cd.precession, cd.mode_kind
+    modes = np.repeat(np.arange(cd.n_modes)[None, :], cd.speeds_rpm.size, axis=0)
+    state = cd.stability
+    shown = np.isfinite(F) & (F <= fmax)
+    text = shape_hover_text(cd, shown) if shapes else None
+    shape_line = "" if text is None else "<br>shape (orbit semi-major axis, phase of x, whirl):<br>%{text}"
+    first = True
+    for prec, (_, sym) in MARKERS.items():
+        sel = shown & (P == prec) & (state != "neutral")
+        if not sel.any():
+            continue
+        uns = state[sel] == "unstable"
+        fig.add_trace(go.Scatter(
+            x=S[sel], y=F[sel], mode="markers", name=prec,
+            marker=dict(symbol=sym, size=np.where(uns, 10, 6), color=np.clip(D[sel], D_MIN, D_MAX),
+                        colorscale="RdBu", cmin=D_MIN, cmax=D_MAX, cmid=0.0,
+                        line=dict(width=np.where(uns, 1.2, 0), color="black"),
+                        colorbar=dict(title="D [-]") if first else None, showscale=first),
+            customdata=np.stack([D[sel], modes[sel], Kd[sel]], axis=-1),
+            text=None if text is None else text[sel],
+            hovertemplate=("speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>D %{customdata[0]:.4f}<br>" + prec +
+                           " precession<br>mode %{customdata[1]} (%{customdata[2]})" + shape_line
+                           + "<extra></extra>")))
+        first = False
+    sel = shown & (state == "neutral")
+    if sel.any():
+        symbols = np.array([MARKERS.get(p, MARKERS["mixed"])[1] for p in P[sel]], dtype=object)
+        fig.add_trace(go.Scatter(
+            x=S[sel], y=F[sel], mode="markers", name=NEUTRAL_LABEL,
+            marker=dict(symbol=symbols, size=6, color=NEUTRAL_COLOR_PLOTLY),
+            customdata=np.stack([D[sel], modes[sel], Kd[sel], P[sel]], axis=-1),
+            text=None if text is None else text[sel],
+            hovertemplate=("speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>D %{customdata[0]:.2e} (neutral)<br>"
+                           "%{customdata[3]} precession<br>mode %{customdata[1]} (%{customdata[2]})" + shape_line
+                           + "<extra></extra>")))
+    if whirl:
+        for k, name, sp_, w in whirl_curves(cd):
+            fig.add_trace(go.Scatter(x=sp_, y=w, mode="lines", name=f"whirl {name}",
+                                     line=dict(dash="dash" if (k // 2) % 2 == 0 else "dashdot",
+                                               color=_whirl_style(k)[0]),
+                                     hovertemplate="speed %{x:.0f} rpm<br>whirl %{y:.1f} Hz<extra>" + name +
+                                     "</extra>"))
+    if one_x:
+        fig.add_trace(go.Scatter(x=cd.speeds_rpm, y=cd.speeds_rpm / 60, mode="lines", name="1X",
+                                 line=dict(dash="dot", color="gray")))
+    fig.update_layout(title=f"Holistic Campbell diagram, method {cd.method} ({cd.system_name})",
+                      xaxis_title="rotor speed [rpm]", yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
+                      template="plotly_white", legend=dict(x=1.12))
+    return fig
+
+
+def rsr_figure(results, title="Ring-speed ratio", bearing_names=None):
+    """Ring-speed ratio vs speed for several Campbell/equilibrium sweeps, one panel per bearing side by side.
+
+    Parameters
+    ----------
+    results : dict
+        Label (method letter) -> ``(speeds [rpm] (n,), RSR [-] (n, nb))``, bearings in the system's order.
+    title : str
+    bearing_names : sequence of str, optional
+        Bearing names, e.g. ``[b.name for b in system.bearings]``: panel titles "<name> bearing" (default
+        "bearing 1", "bearing 2", ...).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    nb = np.asarray(next(iter(results.values()))[1]).shape[1]
+    titles = [f"{n} bearing" for n in bearing_names] if bearing_names is not None else \
+        [f"bearing {j + 1}" for j in range(nb)]
+    fig, axes = plt.subplots(1, nb, figsize=(5 * nb, 4), sharey=True, squeeze=False)
+    axes = axes[0]
+    styles = ["-", "--", "-.", ":"]
+    for k, (label, (s, r)) in enumerate(results.items()):
+        for j, ax in enumerate(axes):
+            ax.plot(np.asarray(s) / 1e3, np.asarray(r)[:, j], ls=styles[k % 4], lw=1.6, label=f"method {label}")
+    for j, ax in enumerate(axes):
+        ax.set_title(titles[j], fontsize=10)
+        ax.set_xlabel("rotor speed [krpm]")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("RSR = ω_FR / ω_R [-]")
+    axes[0].legend()
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def equilibrium_cost_figure(stats, title="Equilibrium cost per speed"):
+    """Bar chart of CPU time [ms], iterations and film evaluations per equilibrium for several methods (mean and
+    standard deviation over speeds).
+
+    Parameters
+    ----------
+    stats : dict
+        Method letter -> dict with keys ``time_ms``, ``iterations``, ``evaluations`` (arrays over speeds).
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(11, 3.6))
+    letters = list(stats)
+    for ax, key, lab in zip(axes, ("time_ms", "iterations", "evaluations"),
+                            ("CPU time per equilibrium [ms]", "iterations [-]", "film evaluations [-]")):
+        vals = [np.mean(stats[k][key]) for k in letters]
+        err = [np.std(stats[k][key]) for k in letters]
+        ax.bar(letters, vals, yerr=err, color=["#4c72b0", "#55a868", "#c44e52", "#8172b2"][:len(letters)])
+        ax.set_title(lab, fontsize=10)
+        ax.grid(alpha=0.3, axis="y")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def _unstable_lines(cd, fmax):
+    """(speed_krpm, f_hz) arrays per mode, NaN where the mode is stable."""
+    out = []
+    for j in range(cd.n_modes):
+        f = np.where(cd.unstable[:, j], cd.frequencies_hz[:, j], np.nan)  # D < -round-off bound
+        if np.isfinite(f).any() and np.nanmin(f) < fmax:
+            out.append((cd.speeds_rpm / 1e3, f, j))
+    return out
+
+
+def linear_rsr(system, speeds_rpm, methods="FIJ"):
+    """Ring-speed ratios of the linear methods' equilibria.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    speeds_rpm : (n,) array_like
+        Rotor speeds [rpm].
+    methods : str
+        Method letters.
+
+    Returns
+    -------
+    dict
+        Method letter -> RSR [-] (n, nb), bearings in the system's order.
+    """
+    from ..linear.equilibrium import equilibrium
+
+    return {m: np.array([[b.ring_speed_ratio for b in equilibrium(system, m, s).bearings] for s in speeds_rpm])
+            for m in methods}
+
+
+def _bearing_names(run):
+    """Bearing names of a run-up result, in the column order of its ring-speed ratio."""
+    names = getattr(run, "bearing_names", None)
+    return tuple(names) if names is not None else tuple(run.journal)
+
+
+def _rsr_panel(ax, run, xscale):
+    """Ring-speed ratios of the run and, with the system in ``run.meta``, of the linear methods F, I, J; one line
+    per bearing, named as in the run."""
+    names = _bearing_names(run)
+    rr = run.ring_speed_ratio
+    kind = "run-down" if run.speed_rpm[-1] < run.speed_rpm[0] else "run-up"
+    for j, name in enumerate(names):
+        ax.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"{kind}, {name}")
+    sys_d = (run.meta or {}).get("system")
+    if sys_d:
+        from ..system.parameters import Turbocharger
+
+        tc = Turbocharger.from_dict(sys_d)
+        speeds = np.linspace(max(run.speed_rpm.min(), 1e3), run.speed_rpm.max(), 25)
+        styles = {"F": "-", "I": "-.", "J": "--"}
+        greys = ("k", "0.55", "0.3", "0.75")
+        for m, arr in linear_rsr(tc, speeds).items():
+            for j, b in enumerate(tc.bearings):
+                ax.plot(speeds / 1e3, arr[:, j], styles[m], color=greys[j % len(greys)], lw=1.2,
+                        label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {b.name}")
+    ax.set_xscale(xscale)
+    ax.set_xlabel(_speed_label(kind))
+    ax.set_ylabel("RSR = ω_FR / ω_R [-]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title("ring-speed ratio", fontsize=10)
+
+
+def _speed_label(kind, unit="krpm"):
+    """Speed-axis label; a run-down's axis still increases to the right, so the label says time runs leftwards."""
+    return f"rotor speed [{unit}]" + (" (run-down: time runs right to left)" if kind == "run-down" else "")
+
+
+def _kind(sp):
+    """The kind of run of a spectrogram: "run-down", else "run-up" (also at constant speed)."""
+    return "run-down" if sp.speeds_rpm[-1] < sp.speeds_rpm[0] else "run-up"
+
+
+def _speed_order(sp):
+    """Segment order by increasing speed (a run-down's segments reversed), stable for equal speeds: the
+    spectrogram drawn against an increasing speed axis whatever the direction of the run."""
+    return np.argsort(sp.speeds_rpm, kind="stable")
+
+
+def content_fmax(sp, db_range=None, margin=1.2):
+    """Default upper frequency of the spectrogram figures [Hz]: ``margin`` × the highest frequency whose amplitude
+    (forward or backward, any segment) lies within ``db_range`` of the largest, at most the Nyquist frequency.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    db_range : float, optional
+        Colour range [dB] (default ``sp.db_range``).
+    margin : float
+        Factor on the highest visible frequency.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> f = np.arange(0.0, 5000.0, 10.0)
+    >>> a = np.where(f <= 800.0, 1e-6, 1e-9)[:, None] * np.ones((1, 3))
+    >>> sp = SimpleNamespace(freqs_hz=f, amplitude=a, db_range=25.0)
+    >>> content_fmax(sp)
+    960.0
+    """
+    rng = sp.db_range if db_range is None else db_range
+    a = sp.amplitude.max(axis=1)
+    vis = np.flatnonzero(a >= a.max() * 10 ** (-rng / 20.0))
+    top = sp.freqs_hz[vis[-1]] if vis.size else sp.freqs_hz[-1]
+    return float(min(sp.freqs_hz[-1], margin * max(top, sp.freqs_hz[1])))
+
+
+def order_label(k):
+    """Label of the order line k × f_rot: ``"1X"``, ``"0.5X"``, ``"2X"``."""
+    return f"{k:g}X"
+
+
+def spectrogram_colour(sp, amplitude="db_max"):
+    """Colour data, limits and colour-bar label of a spectrogram figure.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    amplitude : {"db_max", "um", "db_um"}
+        dB relative to the largest amplitude (the paper's figures), orbit amplitude in µm (linear), or dB re 1 µm;
+        each over ``sp.db_range`` below the largest amplitude (µm: from 0).
+
+    Returns
+    -------
+    z : (f, k) ndarray
+    vmin, vmax : float
+    label : str
+    """
+    a = sp.amplitude
+    top = float(a.max())
+    if amplitude == "db_max":
+        return sp.db(), -sp.db_range, 0.0, f"orbit amplitude [dB re max], {sp.db_range:g} dB range"
+    if amplitude == "um":
+        return a * 1e6, 0.0, top * 1e6, "orbit amplitude [µm]"
+    if amplitude == "db_um":
+        hi = 20 * np.log10(top / 1e-6)
+        return (20 * np.log10(np.maximum(a, 1e-300) / 1e-6), hi - sp.db_range, hi,
+                f"orbit amplitude [dB re 1 µm], {sp.db_range:g} dB range")
+    raise ValueError(f"amplitude = {amplitude!r} is invalid: valid 'db_max', 'um', 'db_um'")
+
+
+def _label_components(ax, sp):
+    """Component labels at their onset, or at their first detection marked "(from start)" if they have none;
+    a cross where a component vanishes before the end of the run. Only components whose largest amplitude lies
+    within the colour range (``sp.db_range`` below the largest amplitude of the spectrogram) are labelled."""
+    first = True
+    down = _kind(sp) == "run-down"
+    floor = sp.amplitude.max() * 10 ** (-sp.db_range / 20.0)
+    for c in sp.components():
+        if np.max(c.amplitude_m) < floor:
+            continue
+        if np.isfinite(c.onset_rpm):
+            xy, text = (c.onset_rpm / 1e3, c.onset_hz), c.label
+        else:
+            xy, text = (c.detected_from_rpm / 1e3, c.first_detection_hz), f"{c.label} (from start)"
+        # a run-down starts at the right edge: its labels extend to the left, into the axes
+        ax.annotate(text, xy, color="w", fontsize=9, fontweight="bold", xytext=(-3 if down else 3, 4),
+                    textcoords="offset points", ha="right" if down else "left")
+        if np.isfinite(c.end_rpm):
+            ax.plot(c.end_rpm / 1e3, c.end_hz, "x", color="w", ms=7, mew=1.5,
+                    label="component vanishes" if first else None)
+            first = False
+
+
+def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None,
+                     xscale="linear", amplitude="db_max", orders=(1.0,)):
+    """The paper's Figs. 12–14: spectrogram (25 dB, log) with unstable Campbell modes (solid), film whirl
+    curves (dashed), 1X (dotted), component labels; RSR of the run vs the linear methods beside it.
+
+    The speed axis increases to the right for run-ups and run-downs alike (so the Campbell overlay reads as
+    usual); a run-down is titled and labelled as one, its components are labelled at their onset (or "(from
+    start)" at their first detection) and a cross marks where one vanishes.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    campbell : CampbellResult, optional
+        Method-J Campbell diagram for the overlay.
+    whirl : bool
+        Draw the film whirl curves of ``campbell``.
+    rsr : bool
+        Add the RSR panel (needs ``sp.run``; the linear methods' RSR needs the system in ``sp.run.meta``).
+    fmax_hz : float, optional
+        Upper frequency limit [Hz] (default: :func:`content_fmax`, the content within the colour range).
+    components : bool
+        Label the tracked components (those within the colour range).
+    title : str, optional
+    xscale : {"linear", "log"}
+    amplitude : {"db_max", "um", "db_um"}
+        Colour scale (:func:`spectrogram_colour`).
+    orders : sequence of float
+        Order lines k × f_rot drawn dotted (1X by default; e.g. ``(0.5, 1, 2)``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    run = sp.run
+    kind = _kind(sp)
+    fmax = fmax_hz or content_fmax(sp)
+    if rsr and run is not None:
+        fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6), gridspec_kw={"width_ratios": [2.3, 1]})
+    else:
+        fig, ax = plt.subplots(figsize=(10, 6))
+        ax2 = None
+    sel = sp.freqs_hz <= fmax
+    order = _speed_order(sp)
+    s_all = sp.speeds_rpm[order]
+    z, vmin, vmax, clabel = spectrogram_colour(sp, amplitude)
+    mesh = ax.pcolormesh(s_all / 1e3, sp.freqs_hz[sel], z[sel][:, order], shading="nearest", cmap="magma",
+                         vmin=vmin, vmax=vmax, rasterized=True)
+    cb = fig.colorbar(mesh, ax=ax, pad=0.01)
+    cb.set_label(clabel)
+    for k in orders:
+        ax.plot(s_all / 1e3, k * s_all / 60.0, ":", color="w" if k == 1 else "#bbbbbb", lw=1, label=order_label(k))
+    if campbell is not None:
+        first = True
+        for sk, f, _ in _unstable_lines(campbell, fmax):
+            ax.plot(sk, f, "-", color="#00e5ff", lw=1.6,
+                    label=f"unstable modes, method {campbell.method}" if first else None)
+            first = False
+        if whirl:
+            _plot_whirl(ax, campbell, lw=1.2)
+    if components:
+        _label_components(ax, sp)
+    ax.set_xlim(s_all.min() / 1e3, s_all.max() / 1e3)
+    ax.set_ylim(0, fmax)
+    ax.set_xscale(xscale)
+    ax.set_xlabel(_speed_label(kind))
+    ax.set_ylabel("frequency [Hz]")
+    ax.legend(fontsize=7, loc="upper left", framealpha=0.6)
+    ax.set_title(title or f"{kind.capitalize()} spectrogram, {sp.node} (orbit x + iy)", fontsize=10)
+    if ax2 is not None:
+        _rsr_panel(ax2, run, xscale)
+    fig.tight_layout()
+    return fig
+
+
+#: the largest heatmap an interactive spectrogram file keeps (``compact``): columns (speeds) × rows (frequencies),
+#: about the pixels of a full-screen plot area. Nothing is lost that the data holds: the segments overlap by 75 %
+#: and the spectrum is zero padded 4× (4 columns and 4 rows per independent value), and blocks keep their maximum.
+HTML_MAX_COLUMNS, HTML_MAX_ROWS = 1000, 250
+
+
+def peak_decimate(z, coord, max_n, axis):
+    """Merge consecutive entries of ``z`` along ``axis`` into blocks so that at most ``max_n`` remain, each block
+    keeping its largest value (so no peak is lost) at the mean coordinate of the block.
+
+    Parameters
+    ----------
+    z : ndarray
+        Values (e.g. a spectrogram, frequency × speed).
+    coord : (n,) ndarray
+        Coordinates of the entries along ``axis`` (increasing).
+    max_n : int
+        Largest number of blocks.
+    axis : int
+
+    Returns
+    -------
+    z : ndarray
+        Block maxima (NaN ignored).
+    coord : ndarray
+        Block mean coordinates.
+
+    Examples
+    --------
+    >>> z, c = peak_decimate(np.array([[1.0, 5.0, 2.0, 0.0, 3.0]]), np.arange(5.0), 3, axis=1)
+    >>> z.tolist(), c.tolist()
+    ([[5.0, 2.0, 3.0]], [0.5, 2.5, 4.0])
+    """
+    n = coord.size
+    size = -(-n // max(1, int(max_n)))
+    if size <= 1:
+        return z, coord
+    starts = np.arange(0, n, size)
+    counts = np.diff(np.append(starts, n))
+    return np.fmax.reduceat(z, starts, axis=axis), np.add.reduceat(coord, starts) / counts
+
+
+def _compact_heatmap(speeds, freqs, z):
+    """The heatmap of an interactive file: peak-decimated to the screen, in single precision."""
+    z, speeds = peak_decimate(z, speeds, HTML_MAX_COLUMNS, axis=1)
+    z, freqs = peak_decimate(z, freqs, HTML_MAX_ROWS, axis=0)
+    return speeds.astype(np.float32), freqs.astype(np.float32), z.astype(np.float32)
+
+
+def composite_plotly(sp, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,), compact=False):
+    """Interactive spectrogram (plotly heatmap) with unstable modes, whirl curves and order lines; the speed axis
+    increases to the right for run-ups and run-downs alike (a run-down is titled as one).
+
+    Parameters
+    ----------
+    sp, campbell, fmax_hz, amplitude, orders
+        As for :func:`composite_figure`.
+    compact : bool
+        For a file: at most :data:`HTML_MAX_COLUMNS` × :data:`HTML_MAX_ROWS` heatmap cells (blocks of segments /
+        frequencies merged by :func:`peak_decimate`, which keeps every peak's value), arrays in single precision
+        (7 digits), order lines by their end points (they are straight). Default: the full arrays.
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+    """
+    import plotly.graph_objects as go
+
+    kind = _kind(sp)
+    fmax = fmax_hz or content_fmax(sp)
+    sel = sp.freqs_hz <= fmax
+    order = _speed_order(sp)
+    s_all = sp.speeds_rpm[order]
+    z, vmin, vmax, _ = spectrogram_colour(sp, amplitude)
+    x, y, z = s_all, sp.freqs_hz[sel], z[sel][:, order]
+    num = (lambda a: np.asarray(a, dtype=np.float32)) if compact else np.asarray
+    if compact:
+        x, y, z = _compact_heatmap(x, y, z)
+    unit = "µm" if amplitude == "um" else "dB"
+    fig = go.Figure(go.Heatmap(x=x, y=y, z=z, zmin=vmin, zmax=vmax, colorscale="Magma", colorbar=dict(title=unit),
+                               hovertemplate="speed %{x:.0f} rpm<br>f %{y:.1f} Hz<br>%{z:.3g} " + unit
+                               + "<extra></extra>"))
+    s_line = s_all[[0, -1]] if compact else s_all
+    for k in orders:
+        fig.add_trace(go.Scatter(x=num(s_line), y=num(k * s_line / 60), mode="lines", name=order_label(k),
+                                 line=dict(dash="dot", color="white")))
+    if campbell is not None:
+        for sk, f, j in _unstable_lines(campbell, fmax):
+            fig.add_trace(go.Scatter(x=num(sk * 1e3), y=num(f), mode="lines", name=f"unstable mode {j}",
+                                     line=dict(color="#00e5ff")))
+        for k, name, sp_, w in whirl_curves(campbell):
+            if not np.nanmin(w) <= fmax:  # above the frequency axis: invisible
+                continue
+            fig.add_trace(go.Scatter(x=num(sp_), y=num(w), mode="lines", name=f"whirl {name}",
+                                     line=dict(dash="dash", color=_whirl_style(k)[0])))
+    fig.update_layout(xaxis_title=_speed_label(kind, "rpm"), yaxis_title="frequency [Hz]", yaxis_range=[0, fmax],
+                      title=f"{kind.capitalize()} spectrogram, {sp.node}")
+    return fig
+
+
+def waterfall_lines(sp, fmax_hz=None, amplitude="um", n_lines=40):
+    """The spectra drawn in a waterfall: up to ``n_lines`` segments, evenly spread in speed order.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    fmax_hz : float, optional
+        Upper frequency [Hz] (default :func:`content_fmax`).
+    amplitude : {"um", "db_um"}
+        Orbit amplitude (max of forward and backward) in µm, or in dB re 1 µm clipped at ``sp.db_range`` below
+        the largest.
+    n_lines : int
+        Largest number of spectra.
+
+    Returns
+    -------
+    freqs_hz : (f,) ndarray
+    speeds_rpm : (m,) ndarray
+        Increasing.
+    z : (f, m) ndarray
+        Amplitudes of the spectra in the unit of ``amplitude``.
+    """
+    fmax = fmax_hz or content_fmax(sp)
+    sel = sp.freqs_hz <= fmax
+    order = _speed_order(sp)
+    pick = order[np.unique(np.linspace(0, order.size - 1, min(n_lines, order.size)).round().astype(int))]
+    z, vmin, _, _ = spectrogram_colour(sp, amplitude)
+    z = np.maximum(z[sel][:, pick], vmin) if amplitude == "db_um" else z[sel][:, pick]
+    return sp.freqs_hz[sel], sp.speeds_rpm[pick], z
+
+
+def waterfall_figure(sp, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40, title=None):
+    """3-D waterfall (cascade): spectra of the orbit (frequency × amplitude) stacked along the rotor speed, with
+    order lines k × f_rot on the floor.
+
+    Parameters
+    ----------
+    sp : SpectrogramResult
+    fmax_hz, amplitude, n_lines
+        As for :func:`waterfall_lines`.
+    orders : sequence of float
+        Order lines (1X by default).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    f, s, z = waterfall_lines(sp, fmax_hz, amplitude, n_lines)
+    fig = plt.figure(figsize=(10, 7))
+    ax = fig.add_subplot(projection="3d")
+    cmap = plt.get_cmap("viridis")
+    base = float(z.min())
+    for j in range(s.size):
+        ax.plot(f, np.full(f.size, s[j] / 1e3), z[:, j], lw=0.8, color=cmap(j / max(1, s.size - 1)))
+    for k in orders:
+        fk = k * s / 60.0
+        ok = fk <= f[-1]
+        ax.plot(fk[ok], s[ok] / 1e3, np.full(ok.sum(), base), "--", color="C3" if k == 1 else "0.4", lw=1,
+                label=f"{order_label(k)} (k × f_rot)")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(_speed_label(_kind(sp)).replace(" (run-down: time runs right to left)", ""))
+    ax.set_zlabel("orbit amplitude [µm]" if amplitude == "um" else "orbit amplitude [dB re 1 µm]")
+    ax.view_init(elev=28, azim=-60)
+    ax.legend(fontsize=8, loc="upper left")
+    ax.set_title(title or f"Waterfall, {_kind(sp)}, {sp.node} (orbit x + iy, max of forward/backward)",
+                 fontsize=10)
+    return fig
+
+
+def waterfall_plotly(sp, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40, title=None):
+    """Interactive 3-D waterfall (plotly), as :func:`waterfall_figure`.
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+    """
+    import plotly.graph_objects as go
+
+    f, s, z = waterfall_lines(sp, fmax_hz, amplitude, n_lines)
+    unit = "µm" if amplitude == "um" else "dB re 1 µm"
+    fig = go.Figure()
+    for j in range(s.size):
+        fig.add_trace(go.Scatter3d(x=f, y=np.full(f.size, s[j]), z=z[:, j], mode="lines", showlegend=False,
+                                   line=dict(width=2, color=z[:, j], colorscale="Viridis", cmin=z.min(),
+                                             cmax=z.max()),
+                                   hovertemplate=f"{s[j]:.0f} rpm<br>%{{x:.1f}} Hz<br>%{{z:.3g}} {unit}"
+                                   "<extra></extra>"))
+    for k in orders:
+        fk = k * s / 60.0
+        ok = fk <= f[-1]
+        fig.add_trace(go.Scatter3d(x=fk[ok], y=s[ok], z=np.full(ok.sum(), float(z.min())), mode="lines",
+                                   name=order_label(k), line=dict(dash="dash", color="red", width=3)))
+    fig.update_layout(title=title or f"Waterfall, {_kind(sp)}, {sp.node}",
+                      scene=dict(xaxis_title="frequency [Hz]", yaxis_title="rotor speed [rpm]",
+                                 zaxis_title=f"orbit amplitude [{unit}]"))
+    return fig
+
+
+#: the plotly.js bundle that the HTML figures of a folder share (the name plotly's ``include_plotlyjs="directory"``
+#: refers to, whatever the figure)
+PLOTLY_JS = "plotly.min.js"
+#: how interactive figures get plotly.js by default: from :data:`PLOTLY_JS` beside them (offline, small files)
+HTML_PLOTLYJS = "directory"
+
+
+def _plotlyjs_source():
+    from plotly.offline import get_plotlyjs
+
+    return get_plotlyjs()
+
+
+def plotly_bundle(folder):
+    """Make sure ``folder`` holds the installed plotly.js as :data:`PLOTLY_JS` (one copy per folder).
+
+    The file is written when missing or when its header (which names the plotly.js version) differs from the
+    installed one, so figures written by a newer plotly never load an older bundle. It is written to a temporary
+    name first and then renamed, so a reader never sees half a file.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The folder of the HTML figures (must exist).
+
+    Returns
+    -------
+    Path
+        The bundle.
+    """
+    import os
+    from pathlib import Path
+
+    path = Path(folder) / PLOTLY_JS
+    source = _plotlyjs_source()
+    head = source[:200].encode("utf-8")
+    if path.exists():
+        with open(path, "rb") as f:
+            if f.read(len(head)) == head:
+                return path
+    tmp = path.with_name(f".{PLOTLY_JS}.{os.getpid()}.tmp")
+    tmp.write_text(source, encoding="utf-8")
+    os.replace(tmp, path)
+    return path
+
+
+def write_html(fig, path, include_plotlyjs=HTML_PLOTLYJS):
+    """Write an interactive (plotly) figure as an HTML file: small, and shown offline.
+
+    Every interactive figure of the package is written here. By default (``"directory"``) the page loads plotly.js
+    from :data:`PLOTLY_JS` in its own folder, written there once (:func:`plotly_bundle`, 4.8 MB) and shared by all
+    figures of the folder: the figures open without a network and each file holds only its data. Copy or move the
+    folder as a whole (or a figure together with :data:`PLOTLY_JS`).
+
+    Parameters
+    ----------
+    fig : plotly.graph_objects.Figure or sequence of them
+        The figure; several figures are written one below the other into one page (plotly.js loaded once).
+    path : str or Path
+        The HTML file (its folder must exist).
+    include_plotlyjs : {"directory", True}
+        ``"directory"``: :data:`PLOTLY_JS` beside the file (default); ``True``: plotly.js embedded in the file (a
+        self-contained file, 4.8 MB larger). Any other value of :meth:`plotly.graph_objects.Figure.write_html` is
+        passed on as it is.
+
+    Returns
+    -------
+    Path
+        The HTML file.
+    """
+    from pathlib import Path
+
+    path = Path(path)
+    if include_plotlyjs == "directory":
+        plotly_bundle(path.parent)
+    if not isinstance(fig, (list, tuple)):
+        fig.write_html(str(path), include_plotlyjs=include_plotlyjs)
+        return path
+    divs = [f.to_html(full_html=False, include_plotlyjs=include_plotlyjs if k == 0 else False)
+            for k, f in enumerate(fig)]
+    path.write_text("<html><head><meta charset='utf-8'></head><body>" + "\n".join(divs) + "</body></html>",
+                    encoding="utf-8")
+    return path
+
+
+def system_run_figure(run, signals=None, title=None, orbit_windows_s=0.01):
+    """A run of the turbocharger FMU in a system (e.g. ``frb cosim build/engine_turbocharger.ssp``): rotor speed
+    and the drive torque the system passed, the bearings' power loss, and the turbine wheel's orbit over the last
+    ``orbit_windows_s`` [s] of the first and second half of the run.
+
+    Parameters
+    ----------
+    run : RunupResult
+        The turbocharger FMU's record (its ``record_folder``).
+    signals : pandas.DataFrame, optional
+        The master's ``signals.csv`` (time and connected values at the communication points).
+    title : str, optional
+    orbit_windows_s : float
+        Length of each orbit window [s].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    t = run.time
+    ax = axes[0]
+    ax.plot(t, run.speed_rpm / 1e3, color="k", lw=1.4, label="rotor speed")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("rotor speed [krpm]")
+    torque = [c for c in (signals.columns if signals is not None else []) if "drive_torque" in c]
+    if torque:
+        tw = ax.twinx()
+        tw.plot(signals["time [s]"], signals[torque[0]], color="tab:red", lw=0.6, alpha=0.7)
+        tw.set_ylabel(f"{torque[0]} (at the communication points)", color="tab:red")
+    ax.set_title("speed and drive torque")
+    ax = axes[1]
+    for name, p in run.power_loss.items():
+        ax.plot(t, p, lw=0.8, label=f"{name} bearing")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("power loss [W]")
+    ax.legend(frameon=False)
+    ax.set_title("bearing power loss (both films)")
+    ax = axes[2]
+    disc = "turbine_wheel" if "turbine_wheel" in run.displacement else next(iter(run.displacement))
+    xy = run.displacement[disc] * 1e6
+    for end, style in ((t[-1] / 2, "tab:blue"), (t[-1], "tab:orange")):
+        sel = (t > end - orbit_windows_s) & (t <= end)
+        rpm = float(np.interp(end, t, run.speed_rpm))
+        ax.plot(xy[sel, 0], xy[sel, 1], color=style, lw=0.8, label=f"{end - orbit_windows_s:.3g}-{end:.3g} s, "
+                f"{rpm / 1e3:.0f} krpm")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{disc} x [µm]")
+    ax.set_ylabel(f"{disc} y [µm]")
+    ax.legend(frameon=False, fontsize=8)
+    ax.set_title("orbit (relative to the housing)")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,1 @@
+"""Signals of a run: spectrogram, component tracking, tolerance convergence, orbits and waterfalls."""
