@@ -494,7 +494,7 @@ class FrbSlaveMixin:
 
         bundled = None
         if self.resources:
-            init = Path(self.resources) / "frbmodel" / "__init__.py"
+            init = Path(self.resources) / "frbmodel" / "core" / "version.py"
             if init.exists():
                 m = re.search(r'__version__\s*=\s*"([^"]+)"', init.read_text(encoding="utf-8"))
                 bundled = m.group(1) if m else None
@@ -552,7 +552,7 @@ def import_bundled_package_from_stable_copy(name="frbmodel", resources=None):
         return h.hexdigest()[:16]
 
     try:
-        m = re.search(r'__version__\s*=\s*"([^"]+)"', (src / "__init__.py").read_text(encoding="utf-8"))
+        m = re.search(r'__version__\s*=\s*"([^"]+)"', (src / "core" / "version.py").read_text(encoding="utf-8"))
         content = digest(src)
         cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "frbmodel" / "fmu-pkg"
         dest = cache / f"{m.group(1) if m else 'unknown'}-{content}"

@@ -10,8 +10,6 @@ Quick start::
 
 Every name below is importable from the top level; plotting libraries are imported only when a figure is made.
 """
-__version__ = "0.1.0"
-
 from .core.errors import (
     ConvergenceError,
     CosimStopped,
@@ -23,10 +21,12 @@ from .core.errors import (
     RunupStopped,
 )
 from .core.units import rad_s_to_rpm, rpm_to_rad_s
+from .core.version import __version__
 from .cycles.limitcycle import LimitCycle, limit_cycle
 from .linear.assembly import LinearSystem, linear_system
 from .linear.campbell import CampbellResult, campbell
 from .linear.equilibrium import BearingEquilibrium, EquilibriumResult, equilibrium
+from .linear.losses import bearing_losses
 from .linear.modal import Modes, modes
 from .linear.unbalance import UnbalanceResponse, unbalance_response
 from .linear.whirl import film_onset_speeds
@@ -42,7 +42,7 @@ from .physics.film import (
     static_eccentricity,
     static_position,
 )
-from .physics.losses import bearing_loss, bearing_losses
+from .physics.losses import bearing_loss
 from .signals.spectral import SpectrogramResult, spectrogram
 from .signals.tracking import Component
 from .system.methods import METHODS, Method, get_method

@@ -870,8 +870,9 @@ def cmd_losses(args):
     the recorded losses of a run-up / co-simulation folder."""
     import matplotlib.pyplot as plt
 
+    from .linear.losses import bearing_losses
     from .nonlinear.recorder import RunupResult
-    from .physics.losses import bearing_losses, plot_bearing_losses
+    from .plots.losses import plot_bearing_losses
 
     tc = load_from_args(args)
     out = writable_dir(args.out)
@@ -1408,7 +1409,7 @@ def build_parser():
     >>> args.command, args.speeds, args.duration, args.func.__name__
     ('runup', '250000:20000', 2.0, 'cmd_runup')
     """
-    from . import __version__
+    from .core.version import __version__
 
     p = argparse.ArgumentParser(prog="frb", description="Rotordynamics of turbochargers on floating-ring bearings "
                                 "(SI units inside; speeds on the command line in rpm).")

@@ -415,7 +415,7 @@ def test_a_reused_state_handle_is_not_leaked_and_restores(built, tmp_path):
 def test_version_mismatch_is_refused(built, tmp_path):
     fmu = built / "fmus" / "FloatingRingBearing.fmu"
     s, vr, d = _slave(fmu, "ver", tmp_path)
-    init = Path(d) / "resources" / "frbmodel" / "__init__.py"
+    init = Path(d) / "resources" / "frbmodel" / "core" / "version.py"
     init.write_text(init.read_text().replace(f'__version__ = "{frb.__version__}"', '__version__ = "0.0.0-other"'))
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()

@@ -9,9 +9,10 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import frbmodel as frb
+from frbmodel.linear.losses import bearing_losses
 from frbmodel.nonlinear.recorder import RunupResult, RunupSchema
 from frbmodel.physics.bearing import ring_rhs_kernel
-from frbmodel.physics.losses import bearing_loss, bearing_losses, film_arrays
+from frbmodel.physics.losses import bearing_loss, film_arrays
 
 
 def _petroff(film):

@@ -9,7 +9,6 @@ import scipy.linalg as sla
 
 import frbmodel as frb
 from frbmodel.linear.assembly import linear_system
-from frbmodel.plots.figures import campbell_plotly
 
 LINE = re.compile(r"^(.+): (-?[\d.]+) ∠ (-?\d+)° (fwd|bwd)$")
 PHI = np.linspace(0.0, 2 * np.pi, 721)  # orbit sampled every 0.5°
@@ -61,7 +60,7 @@ def _places(tc, ring_dofs):
 def test_hover_shape_equals_an_independent_eigenvector(method, speeds):
     tc = frb.turbocharger()
     cd = frb.campbell(tc, method, speeds, whirl=False)
-    points = _hover_points(campbell_plotly(cd, fmax_hz=3000.0, whirl=False))
+    points = _hover_points(cd.plot_html(fmax_hz=3000.0, whirl=False))
     assert len(points) == np.sum(np.isfinite(cd.frequencies_hz) & (cd.frequencies_hz <= 3000.0))
     for speed, j, shape in points:
         i = int(np.argmin(np.abs(cd.speeds_rpm - speed)))
@@ -93,7 +92,7 @@ def test_conical_and_cylindrical_wheel_phases_in_the_hover():
     # method A at 30 krpm: a conical mode has the wheels in counter-phase, a cylindrical one in phase (rigid rotor)
     cd = frb.campbell(frb.turbocharger(), "A", [30e3], whirl=False)
     seen = set()
-    for _, j, shape in _hover_points(campbell_plotly(cd, fmax_hz=1000.0)):
+    for _, j, shape in _hover_points(cd.plot_html(fmax_hz=1000.0)):
         kind = cd.mode_kind[0, j]
         dphi = (shape["turbine_wheel"][1] - shape["compressor_wheel"][1]) % 360.0
         if kind == "conical":
@@ -106,7 +105,7 @@ def test_conical_and_cylindrical_wheel_phases_in_the_hover():
 
 def test_no_system_no_shape_in_the_hover():
     cd = frb.campbell(frb.turbocharger(), "A", [30e3], whirl=False)
-    fig = campbell_plotly(dataclasses.replace(cd, meta={}))
+    fig = dataclasses.replace(cd, meta={}).plot_html()
     assert all(tr.text is None and "%{text}" not in (tr.hovertemplate or "") for tr in fig.data)
-    fig = campbell_plotly(cd, shapes=False)
+    fig = cd.plot_html(shapes=False)
     assert all(tr.text is None for tr in fig.data)

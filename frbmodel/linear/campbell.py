@@ -369,8 +369,11 @@ class CampbellResult(Result):
         matplotlib.figure.Figure
         """
         from ..plots.figures import campbell_figure
+        from .unbalance import critical_speeds
 
-        return campbell_figure(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, ax=ax, title=title)
+        critical = critical_speeds(self, refine=False) if one_x and self.speeds_rpm.size >= 2 else None
+        return campbell_figure(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, ax=ax, title=title,
+                               critical=critical)
 
     def plot_html(self, path=None, fmax_hz=None, whirl=True, one_x=True, shapes=True, include_plotlyjs="directory"):
         """Interactive plotly figure (hover: speed, frequency, D, stability, precession, mode kind and shape).
@@ -385,8 +388,8 @@ class CampbellResult(Result):
             Draw the film whirl curves and the 1X line.
         shapes : bool
             List each point's mode shape in its hover text: orbit semi-major axis (largest = 1), phase of x and
-            whirl direction at every disc, journal and ring (:func:`frbmodel.plots.figures.shape_hover_text`; needs the
-            system in :attr:`meta`).
+            whirl direction at every disc, journal and ring (:func:`frbmodel.linear.modeshape.shape_hover_text`;
+            needs the system in :attr:`meta`).
         include_plotlyjs : {"directory", True}
             ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
             file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
@@ -396,9 +399,12 @@ class CampbellResult(Result):
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import campbell_plotly, write_html
+        from ..plots.figures import _default_fmax, campbell_plotly, write_html
+        from .modeshape import shape_hover_text
 
-        fig = campbell_plotly(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, shapes=shapes)
+        shown = np.isfinite(self.frequencies_hz) & (self.frequencies_hz <= (fmax_hz or _default_fmax(self)))
+        hover = shape_hover_text(self, shown) if shapes else None
+        fig = campbell_plotly(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, hover=hover)
         if path is not None:
             write_html(fig, path, include_plotlyjs)
         return fig
@@ -413,7 +419,7 @@ class CampbellResult(Result):
             the speed grid [rpm], the whirl onsets [rpm] and their source, the film names, the stability rule and
             the units.
         """
-        from .. import __version__
+        from ..core.version import __version__
 
         meta = dict(self.meta)
         meta.update({

@@ -345,3 +345,32 @@ def equilibrium(system, method="J", speed_rpm=150e3) -> EquilibriumResult:
     res = tuple(bearing_equilibrium(b, loads[i], rpm_to_rad_s(speed_rpm), m.letter, system.film_model, system.gravity)
                 for i, b in enumerate(system.bearings))
     return EquilibriumResult(m.letter, speed_rpm, res, time.perf_counter() - t0)
+
+
+def linear_rsr(system, speeds_rpm, methods="FIJ"):
+    """Ring-speed ratios of the linear methods' equilibria, as the composite figure's RSR panel draws them.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    speeds_rpm : (n,) array_like
+        Rotor speeds [rpm].
+    methods : str
+        Method letters.
+
+    Returns
+    -------
+    tuple
+        (speeds [rpm] (n,), {method letter: RSR [-] (n, nb)}, bearing names), bearings in the system's order.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> s, rsr, names = linear_rsr(frb.turbocharger(), [50e3], "F")
+    >>> names, round(float(rsr["F"][0, 0]), 5)
+    (('turbine', 'compressor'), 0.19903)
+    """
+    speeds = np.asarray(speeds_rpm, dtype=float)
+    by_method = {m: np.array([[b.ring_speed_ratio for b in equilibrium(system, m, s).bearings] for s in speeds])
+                 for m in methods}
+    return speeds, by_method, tuple(b.name for b in system.bearings)

@@ -573,3 +573,62 @@ def unstable_mode_shapes(cd, precession="forward"):
         i = np.flatnonzero(inside)[np.nanargmin(cd.damping[inside, j])]
         out.append(mode_shape(cd, cd.speeds_rpm[i], j))
     return out
+
+
+def _shape_items(system, ring_dofs):
+    """The places a hover lists, along the shaft (by node; a disc before a journal at the same node, each ring after
+    its journal): (label, x index, y index) in the displacement vector."""
+    items = [(d.node, 0, d.name, 4 * d.node, 4 * d.node + 1) for d in system.rotor.discs]
+    for k, b in enumerate(system.bearings):
+        items.append((b.node, 1, f"{b.name} journal", 4 * b.node, 4 * b.node + 1))
+        if ring_dofs:
+            items.append((b.node, 2, f"{b.name} ring", int(ring_dofs[k][0]), int(ring_dofs[k][1])))
+    return [(label, ix, iy) for _, _, label, ix, iy in sorted(items, key=lambda it: it[:2])]
+
+
+def shape_hover_text(cd, shown=None):
+    """Hover text of the mode shapes of a Campbell diagram's points: per disc, journal and ring (along the shaft)
+    the orbit's semi-major axis (the largest orbit of the mode = 1), the phase of x [deg] relative to it and the
+    whirl direction.
+
+    The linear system of the diagram (its system, method and options from ``cd.meta``) is solved again at each
+    grid speed (:func:`frbmodel.linear.assembly.linear_system`, :func:`frbmodel.linear.modal.modes`); each tracked mode
+    is the
+    eigenvalue equal to the diagram's, its eigenvector normalised by :func:`frbmodel.linear.modeshape.normalise`.
+
+    Parameters
+    ----------
+    cd : CampbellResult
+        With the system in ``cd.meta`` (from :func:`frbmodel.linear.campbell`).
+    shown : (n, m) bool ndarray, optional
+        Points that need a text (default: every present mode).
+
+    Returns
+    -------
+    (n, m) ndarray of str or None
+        ``"<br>"``-separated lines (``""`` where a mode is absent or not shown); None without a system.
+    """
+    if "system" not in (cd.meta or {}):
+        return None
+    from ..system.parameters import Turbocharger
+    from .assembly import linear_system
+    from .modal import modes
+
+    system = Turbocharger.from_dict(cd.meta["system"])
+    opts = cd.meta.get("method_options", {})
+    shown = np.isfinite(cd.eigenvalues) if shown is None else shown & np.isfinite(cd.eigenvalues)
+    out = np.full(cd.eigenvalues.shape, "", dtype=object)
+    for i in np.flatnonzero(shown.any(axis=1)):
+        ls = linear_system(system, cd.method, float(cd.speeds_rpm[i]), **opts)
+        md = modes(ls.M, ls.C, ls.K)
+        items = _shape_items(system, ls.ring_dofs)
+        for j in np.flatnonzero(shown[i]):
+            k = int(np.argmin(np.abs(md.eigenvalues - cd.eigenvalues[i, j])))
+            u = normalise(md.shapes[:, k], system.rotor.n_nodes, list(ls.ring_dofs or []))
+            lines = []
+            for label, ix, iy in items:
+                major, _, fwd = ellipse(u[ix], u[iy])
+                lines.append(f"{label}: {float(major):.2f} ∠ {np.degrees(np.angle(u[ix])):.0f}° "
+                             f"{'fwd' if fwd else 'bwd'}")
+            out[i, j] = "<br>".join(lines)
+    return out

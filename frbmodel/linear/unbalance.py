@@ -498,7 +498,7 @@ class UnbalanceResponse(Result):
 
     def metadata(self) -> dict:
         """What the result was computed with, JSON-ready (the content of :meth:`save`'s JSON)."""
-        from .. import __version__
+        from ..core.version import __version__
 
         meta = dict(self.meta)
         meta.update({"method": self.method, "speeds_rpm": [float(s) for s in self.speeds_rpm],

@@ -13,12 +13,11 @@ import numpy as np
 from ..core.errors import ParameterError, check_real, check_system
 from ..core.units import rpm_to_rad_s
 from ..physics.film import check_model, rt_coefficients, static_load
+from ..system.films import FILM_NAMES  # noqa: F401  (the default order of the whirl columns, see film_names)
 from ..system.methods import get_method
 from ..system.rotor import GRAVITY
 from .equilibrium import bearing_equilibrium
 
-#: film names of the Table 2 system (the default order of the whirl columns); see :func:`film_names`
-FILM_NAMES = ("turbine inner", "turbine outer", "compressor inner", "compressor outer")
 #: default search range [rpm] of :func:`film_onset_speeds`
 ONSET_SEARCH_RPM = (500.0, 400e3)
 

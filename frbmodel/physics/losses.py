@@ -25,11 +25,8 @@ docs/theory/films.md#reynolds-equation-and-pressure–2.4): never negative,
 and A_I (ω_R − ω_FR)² + A_O ω_FR² with centred members (Petroff). In a steady state with the ring torque balanced
 (method J) the total is −T_J ω_R.
 
->>> import frbmodel as frb
->>> from frbmodel.physics.losses import bearing_losses
->>> df = bearing_losses(frb.turbocharger(36e-6), 100e3)
->>> df["bearing"].tolist()
-['turbine', 'compressor']
+The losses at the equilibria over speed are :func:`frbmodel.linear.losses.bearing_losses` (an analysis, one layer
+up); their figure is :func:`frbmodel.plots.losses.plot_bearing_losses`.
 """
 from __future__ import annotations
 
@@ -39,11 +36,9 @@ import numpy as np
 from numba import njit
 
 from ..core.errors import ParameterError
-from ..core.units import RPM
 from .film import check_model, correction_polys, film_force_kernel, film_torques_kernel
 
-__all__ = ["bearing_loss", "bearing_loss_kernel", "bearing_losses", "film_arrays", "journal_torque_kernel",
-           "plot_bearing_losses"]
+__all__ = ["bearing_loss", "bearing_loss_kernel", "film_arrays", "journal_torque_kernel"]
 
 
 def film_arrays(bearing, film_model="short"):
@@ -227,90 +222,3 @@ def bearing_loss(bearing, journal, ring, omega_rotor, film_model="short"):
         raise ParameterError(f"{bearing.name} bearing: a film eccentricity ratio is >= 1 (a member at its wall); "
                              "valid range 0 <= eps < 1")
     return tuple(out[:, k].reshape(shape) for k in range(3))
-
-
-def bearing_losses(system, speed_rpm, method="J"):
-    """Journal torque and power loss of every bearing at the static equilibrium of ``method``.
-
-    Parameters
-    ----------
-    system : Turbocharger
-        The system (e.g. :func:`frbmodel.turbocharger`).
-    speed_rpm : float or sequence of float
-        Rotor speed(s) [rpm], > 0.
-    method : {"C", "D", "F", "G", "I", "J"}
-        Equilibrium method (:func:`frbmodel.linear.equilibrium`); "J" balances the ring torque, so that the power loss
-        equals −T_J ω_R.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per speed and bearing: ``speed [rpm]``, ``bearing``, ``method``, ``journal torque [N m]``,
-        ``power loss [W]``, ``power loss inner [W]``, ``power loss outer [W]``, ``ring speed [rad/s]``,
-        ``eps inner [-]``, ``eps outer [-]``.
-
-    Examples
-    --------
-    >>> import frbmodel as frb
-    >>> df = bearing_losses(frb.turbocharger(36e-6), [50e3, 100e3])
-    >>> len(df), bool((df["power loss [W]"] > 0).all() and (df["journal torque [N m]"] < 0).all())
-    (4, True)
-    """
-    import pandas as pd
-
-    from ..linear.equilibrium import equilibrium
-
-    rows = []
-    for rpm in np.atleast_1d(np.asarray(speed_rpm, dtype=float)):
-        eq = equilibrium(system, method, float(rpm))
-        w = float(rpm) * RPM
-        for b, e in zip(system.bearings, eq.bearings):
-            journal = [e.ring[0] + e.r_inner[0], e.ring[1] + e.r_inner[1], 0.0, 0.0]
-            t_j, p_i, p_o = bearing_loss(b, journal, [e.ring[0], e.ring[1], 0.0, 0.0, e.ring_speed], w,
-                                         system.film_model)
-            rows.append({"speed [rpm]": float(rpm), "bearing": b.name, "method": eq.method,
-                         "journal torque [N m]": float(t_j),
-                         "power loss [W]": float(p_i + p_o), "power loss inner [W]": float(p_i),
-                         "power loss outer [W]": float(p_o), "ring speed [rad/s]": e.ring_speed,
-                         "eps inner [-]": e.eps_inner, "eps outer [-]": e.eps_outer})
-    return pd.DataFrame(rows)
-
-
-def plot_bearing_losses(table, run=None, title=None):
-    """Power loss vs rotor speed per bearing: the equilibrium curve of :func:`bearing_losses` and, optionally,
-    the recorded power loss of a run-up or co-simulation (:class:`~frbmodel.nonlinear.recorder.RunupResult`).
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        A :func:`bearing_losses` table (columns ``bearing``, ``speed [rpm]``, ``power loss [W]``, ``method``).
-    run : RunupResult, optional
-        A run whose ``power_loss[bearing]`` [W] is drawn over its ``speed_rpm`` [rpm]; bearings it does not
-        record are skipped.
-    title : str, optional
-        Figure title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure (the backend is left to the caller; matplotlib is imported only here).
-    """
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.0, 4.2))
-    for k, (name, grp) in enumerate(table.groupby("bearing", sort=False)):
-        color = f"C{k}"
-        method = grp["method"].iloc[0] if "method" in grp else "?"
-        ax.plot(grp["speed [rpm]"] / 1e3, grp["power loss [W]"], "o-", color=color, ms=3, lw=1.5,
-                label=f"{name}: method-{method} static equilibrium")
-        if run is not None and name in run.power_loss:
-            ax.plot(run.speed_rpm / 1e3, run.power_loss[name], color=color, lw=0.6, alpha=0.6,
-                    label=f"{name}: {run.meta.get('profile', 'run-up')}")
-    ax.set_xlabel("rotor speed [krpm]")
-    ax.set_ylabel("bearing power loss [W]")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    if title:
-        ax.set_title(title)
-    fig.tight_layout()
-    return fig

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..linear.whirl import FILM_NAMES
+from ..system.films import FILM_NAMES
 
 MARKERS = {"forward": ("^", "triangle-up"), "backward": ("v", "triangle-down"), "mixed": ("o", "circle")}
 #: colour range of modal damping, as in the paper's figures
@@ -75,20 +75,18 @@ def _default_fmax(cd):
     return float(max(1.15 * f1x, 500.0))
 
 
-def _mark_critical_speeds(ax, cd, fmax):
-    """Critical speeds (1X crossings of the damped branches, interpolated on the grid) as stars on the 1X line."""
-    if cd.speeds_rpm.size < 2:
+def _mark_critical_speeds(ax, cs, fmax):
+    """Critical speeds (a table with ``speed [rpm]`` and ``frequency [Hz]``: the 1X crossings the analysis found) as
+    stars on the 1X line."""
+    if cs is None:
         return
-    from ..linear.unbalance import critical_speeds
-
-    cs = critical_speeds(cd, refine=False)
     cs = cs[cs["frequency [Hz]"] <= fmax]
     if len(cs):
         ax.scatter(cs["speed [rpm]"] / 1e3, cs["frequency [Hz]"], marker="*", s=110, color="gold",
                    edgecolors="k", linewidths=0.7, zorder=4, label="critical speeds (1X crossings)")
 
 
-def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None):
+def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None, critical=None):
     """Holistic Campbell diagram: frequency vs speed, colour = modal damping (diverging, centred at 0),
     marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge, neutral modes
     (|D| within its round-off bound, e.g. every mode of the undamped methods A, B, E) grey; dashed film whirl curves
@@ -104,6 +102,10 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
     ax : matplotlib.axes.Axes, optional
         Draw into these axes (default: a new figure).
     title : str, optional
+
+    critical : pandas.DataFrame, optional
+        Critical speeds to mark on the 1X line (``speed [rpm]``, ``frequency [Hz]``;
+        :func:`frbmodel.linear.unbalance.critical_speeds`, as :meth:`CampbellResult.plot` passes them).
 
     Returns
     -------
@@ -139,7 +141,7 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
         _plot_whirl(ax, cd)
     if one_x:
         ax.plot(cd.speeds_rpm / 1e3, cd.speeds_rpm / 60.0, color="0.4", lw=1, ls=":", label="1X")
-        _mark_critical_speeds(ax, cd, fmax)
+        _mark_critical_speeds(ax, critical, fmax)
     for prec, (mk, _) in MARKERS.items():  # shape = precession (hollow: the fill is the damping colour)
         ax.scatter([], [], marker=mk, facecolors="none", edgecolors="0.2", s=25, label=prec)
     ax.scatter([], [], marker="o", color=cmap(norm(-0.5)), edgecolors="k", linewidths=0.8, s=46,
@@ -160,79 +162,19 @@ def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=Non
     return fig
 
 
-def _shape_items(system, ring_dofs):
-    """The places a hover lists, along the shaft (by node; a disc before a journal at the same node, each ring after
-    its journal): (label, x index, y index) in the displacement vector."""
-    items = [(d.node, 0, d.name, 4 * d.node, 4 * d.node + 1) for d in system.rotor.discs]
-    for k, b in enumerate(system.bearings):
-        items.append((b.node, 1, f"{b.name} journal", 4 * b.node, 4 * b.node + 1))
-        if ring_dofs:
-            items.append((b.node, 2, f"{b.name} ring", int(ring_dofs[k][0]), int(ring_dofs[k][1])))
-    return [(label, ix, iy) for _, _, label, ix, iy in sorted(items, key=lambda it: it[:2])]
-
-
-def shape_hover_text(cd, shown=None):
-    """Hover text of the mode shapes of a Campbell diagram's points: per disc, journal and ring (along the shaft)
-    the orbit's semi-major axis (the largest orbit of the mode = 1), the phase of x [deg] relative to it and the
-    whirl direction.
-
-    The linear system of the diagram (its system, method and options from ``cd.meta``) is solved again at each
-    grid speed (:func:`frbmodel.linear.assembly.linear_system`, :func:`frbmodel.linear.modal.modes`); each tracked mode
-    is the
-    eigenvalue equal to the diagram's, its eigenvector normalised by :func:`frbmodel.linear.modeshape.normalise`.
-
-    Parameters
-    ----------
-    cd : CampbellResult
-        With the system in ``cd.meta`` (from :func:`frbmodel.linear.campbell`).
-    shown : (n, m) bool ndarray, optional
-        Points that need a text (default: every present mode).
-
-    Returns
-    -------
-    (n, m) ndarray of str or None
-        ``"<br>"``-separated lines (``""`` where a mode is absent or not shown); None without a system.
-    """
-    if "system" not in (cd.meta or {}):
-        return None
-    from ..linear.assembly import linear_system
-    from ..linear.modal import modes
-    from ..linear.modeshape import ellipse, normalise
-    from ..system.parameters import Turbocharger
-
-    system = Turbocharger.from_dict(cd.meta["system"])
-    opts = cd.meta.get("method_options", {})
-    shown = np.isfinite(cd.eigenvalues) if shown is None else shown & np.isfinite(cd.eigenvalues)
-    out = np.full(cd.eigenvalues.shape, "", dtype=object)
-    for i in np.flatnonzero(shown.any(axis=1)):
-        ls = linear_system(system, cd.method, float(cd.speeds_rpm[i]), **opts)
-        md = modes(ls.M, ls.C, ls.K)
-        items = _shape_items(system, ls.ring_dofs)
-        for j in np.flatnonzero(shown[i]):
-            k = int(np.argmin(np.abs(md.eigenvalues - cd.eigenvalues[i, j])))
-            u = normalise(md.shapes[:, k], system.rotor.n_nodes, list(ls.ring_dofs or []))
-            lines = []
-            for label, ix, iy in items:
-                major, _, fwd = ellipse(u[ix], u[iy])
-                lines.append(f"{label}: {float(major):.2f} ∠ {np.degrees(np.angle(u[ix])):.0f}° "
-                             f"{'fwd' if fwd else 'bwd'}")
-            out[i, j] = "<br>".join(lines)
-    return out
-
-
-def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True, shapes=True):
+def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True, hover=None):
     """Interactive holistic Campbell diagram (plotly); hover shows speed, frequency, D, its stability, the
-    precession, the mode's kind and — with ``shapes`` — its shape (:func:`shape_hover_text`: orbit size, phase of x
-    and whirl direction at every disc, journal and ring). Neutral modes (|D| within its round-off bound) are one
+    precession, the mode's kind and — with ``hover`` — its shape (the texts of
+    :func:`frbmodel.linear.modeshape.shape_hover_text`: orbit size, phase of x and whirl direction at every disc,
+    journal and ring). Neutral modes (|D| within its round-off bound) are one
     grey trace of their own.
 
     Parameters
     ----------
     cd, fmax_hz, whirl, one_x
         As for :func:`campbell_figure`.
-    shapes : bool
-        List the mode shape in the hover text (needs the system in ``cd.meta``; solves the diagram's linear system
-        once more at each grid speed: 0.13 s for 100 speeds of method J).
+    hover : (n, m) ndarray of str, optional
+        Mode-shape text per point (``""`` for none), e.g. :func:`frbmodel.linear.modeshape.shape_hover_text`.
 
     Returns
     -------
@@ -247,7 +189,7 @@ def campbell_plotly(cd, fmax_hz=None, whirl=True, one_x=True, shapes=True):
     modes = np.repeat(np.arange(cd.n_modes)[None, :], cd.speeds_rpm.size, axis=0)
     state = cd.stability
     shown = np.isfinite(F) & (F <= fmax)
-    text = shape_hover_text(cd, shown) if shapes else None
+    text = hover
     shape_line = "" if text is None else "<br>shape (orbit semi-major axis, phase of x, whirl):<br>%{text}"
     first = True
     for prec, (_, sym) in MARKERS.items():
@@ -372,54 +314,29 @@ def _unstable_lines(cd, fmax):
     return out
 
 
-def linear_rsr(system, speeds_rpm, methods="FIJ"):
-    """Ring-speed ratios of the linear methods' equilibria.
-
-    Parameters
-    ----------
-    system : Turbocharger
-    speeds_rpm : (n,) array_like
-        Rotor speeds [rpm].
-    methods : str
-        Method letters.
-
-    Returns
-    -------
-    dict
-        Method letter -> RSR [-] (n, nb), bearings in the system's order.
-    """
-    from ..linear.equilibrium import equilibrium
-
-    return {m: np.array([[b.ring_speed_ratio for b in equilibrium(system, m, s).bearings] for s in speeds_rpm])
-            for m in methods}
-
-
 def _bearing_names(run):
     """Bearing names of a run-up result, in the column order of its ring-speed ratio."""
     names = getattr(run, "bearing_names", None)
     return tuple(names) if names is not None else tuple(run.journal)
 
 
-def _rsr_panel(ax, run, xscale):
-    """Ring-speed ratios of the run and, with the system in ``run.meta``, of the linear methods F, I, J; one line
-    per bearing, named as in the run."""
+def _rsr_panel(ax, run, xscale, linear=None):
+    """Ring-speed ratios of the run and, if given, of the linear methods' equilibria (``linear``: (speeds [rpm],
+    {method letter: RSR (n, nb)}, bearing names), :func:`frbmodel.linear.equilibrium.linear_rsr`); one line per
+    bearing, named as in the run."""
     names = _bearing_names(run)
     rr = run.ring_speed_ratio
     kind = "run-down" if run.speed_rpm[-1] < run.speed_rpm[0] else "run-up"
     for j, name in enumerate(names):
         ax.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"{kind}, {name}")
-    sys_d = (run.meta or {}).get("system")
-    if sys_d:
-        from ..system.parameters import Turbocharger
-
-        tc = Turbocharger.from_dict(sys_d)
-        speeds = np.linspace(max(run.speed_rpm.min(), 1e3), run.speed_rpm.max(), 25)
+    if linear is not None:
+        speeds, by_method, bearing_names = linear
         styles = {"F": "-", "I": "-.", "J": "--"}
         greys = ("k", "0.55", "0.3", "0.75")
-        for m, arr in linear_rsr(tc, speeds).items():
-            for j, b in enumerate(tc.bearings):
-                ax.plot(speeds / 1e3, arr[:, j], styles[m], color=greys[j % len(greys)], lw=1.2,
-                        label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {b.name}")
+        for m, arr in by_method.items():
+            for j, b in enumerate(bearing_names):
+                ax.plot(speeds / 1e3, arr[:, j], styles.get(m, ":"), color=greys[j % len(greys)], lw=1.2,
+                        label=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {b}")
     ax.set_xscale(xscale)
     ax.set_xlabel(_speed_label(kind))
     ax.set_ylabel("RSR = ω_FR / ω_R [-]")
@@ -534,7 +451,7 @@ def _label_components(ax, sp):
 
 
 def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None,
-                     xscale="linear", amplitude="db_max", orders=(1.0,)):
+                     xscale="linear", amplitude="db_max", orders=(1.0,), linear_rsr=None):
     """The paper's Figs. 12–14: spectrogram (25 dB, log) with unstable Campbell modes (solid), film whirl
     curves (dashed), 1X (dotted), component labels; RSR of the run vs the linear methods beside it.
 
@@ -550,7 +467,11 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     whirl : bool
         Draw the film whirl curves of ``campbell``.
     rsr : bool
-        Add the RSR panel (needs ``sp.run``; the linear methods' RSR needs the system in ``sp.run.meta``).
+        Add the RSR panel (needs ``sp.run``).
+    linear_rsr : tuple, optional
+        The linear methods' RSR drawn in that panel: (speeds [rpm], {method letter: RSR (n, nb)}, bearing names),
+        e.g. :func:`frbmodel.linear.equilibrium.linear_rsr` (:meth:`SpectrogramResult.plot` computes it when the
+        run carries its system).
     fmax_hz : float, optional
         Upper frequency limit [Hz] (default: :func:`content_fmax`, the content within the colour range).
     components : bool
@@ -604,7 +525,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     ax.legend(fontsize=7, loc="upper left", framealpha=0.6)
     ax.set_title(title or f"{kind.capitalize()} spectrogram, {sp.node} (orbit x + iy)", fontsize=10)
     if ax2 is not None:
-        _rsr_panel(ax2, run, xscale)
+        _rsr_panel(ax2, run, xscale, linear_rsr)
     fig.tight_layout()
     return fig
 

@@ -183,9 +183,17 @@ class SpectrogramResult(Result):
         """
         from ..plots.figures import composite_figure
 
+        lin = None
+        sys_d = (getattr(self.run, "meta", None) or {}).get("system") if rsr and self.run is not None else None
+        if sys_d:
+            from ..linear.equilibrium import linear_rsr
+            from ..system.parameters import Turbocharger
+
+            speed = self.run.speed_rpm
+            lin = linear_rsr(Turbocharger.from_dict(sys_d), np.linspace(max(speed.min(), 1e3), speed.max(), 25))
         return composite_figure(self, campbell=campbell, whirl=whirl, rsr=rsr, fmax_hz=fmax_hz,
                                 components=components, title=title, xscale=xscale, amplitude=amplitude,
-                                orders=orders)
+                                orders=orders, linear_rsr=lin)
 
     def plot_html(self, path=None, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,), compact=True,
                   include_plotlyjs="directory"):

@@ -34,7 +34,7 @@ def _stamp():
 def _marker():
     import numba
 
-    from .. import __version__
+    from ..core.version import __version__
 
     name = f"frbmodel-kernels-{__version__}-numba{numba.__version__}-{_stamp()}.ok"
     pkg_cache = Path(__file__).resolve().parents[1] / "__pycache__"
@@ -61,10 +61,10 @@ def _tasks():
     import numpy as np
 
     from ..linear.equilibrium import equilibrium
+    from ..linear.losses import bearing_losses
     from ..nonlinear.components import BearingComponent, RotorComponent, ramp_speed
     from ..nonlinear.runup import INTEGRATORS, SpeedProfile, runup
     from ..physics.film import film_coefficients, film_force
-    from ..physics.losses import bearing_losses
     from ..system.presets import turbocharger
 
     tc = turbocharger()

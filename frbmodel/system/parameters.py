@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError, check_positive
-from ..physics.film import Film, check_model
+from .films import Film, check_model
 from .rotor import GRAVITY, Disc, Rotor, ShaftElement
 
 # ------------------------------------------------------------------ the schema of a system file

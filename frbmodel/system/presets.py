@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..core.errors import check_real
-from ..physics.film import Film, check_model
+from .films import Film, check_model
 from .parameters import FloatingRingBearing, Turbocharger
 from .rotor import Disc, Rotor, ShaftElement
 
