@@ -164,7 +164,7 @@ def test_find_source_takes_the_checkout_and_rejects_a_bad_src(tmp_path):
 def test_build_fmus_without_sources_names_what_is_missing_and_the_fix(tmp_path, monkeypatch, capsys):
     """A broken install (no package data) used outside a checkout: `frb build-fmus` exits 2 naming the missing
     folders, where it looked, and the two fixes (reinstall, --src)."""
-    import frbmodel.cosim.build as build
+    import frbmodel.cosim.sources as build  # (where the FMU sources are looked up)
     from frbmodel.cli import main
 
     package = tmp_path / "site-packages" / "frbmodel"  # an installed package: no pyproject.toml above it

@@ -290,7 +290,7 @@ def test_a_jump_between_two_modes_is_not_taken_for_a_critical_speed(monkeypatch)
     interpolation (``refined`` False). A true crossing (one branch through 1X) is still refined to its closed form."""
     import types
 
-    import frbmodel.linear.unbalance as unb
+    import frbmodel.linear.critical as unb  # (the critical-speed search)
 
     def branch(offset_hz):
         return lambda n: 1j * 2 * math.pi * (n / 60.0 + offset_hz) - 10.0

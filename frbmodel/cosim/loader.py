@@ -66,7 +66,7 @@ def loader_source(src=None) -> Path:
     -------
     Path
     """
-    from .build import find_source
+    from .sources import find_source
 
     return find_source(src) / "fmu_src" / "loader" / "frb_fmu_loader.c"
 

@@ -369,7 +369,7 @@ class CampbellResult(Result):
         matplotlib.figure.Figure
         """
         from ..plots.figures import campbell_figure
-        from .unbalance import critical_speeds
+        from .critical import critical_speeds
 
         critical = critical_speeds(self, refine=False) if one_x and self.speeds_rpm.size >= 2 else None
         return campbell_figure(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, ax=ax, title=title,

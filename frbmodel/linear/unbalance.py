@@ -31,10 +31,9 @@ from ..core.progress import counter_bar
 from ..core.results import Result, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
 from ..system.methods import get_method
-from .assembly import linear_system
 from .campbell import campbell as campbell_diagram
 from .campbell import check_speeds, progress_enabled
-from .equilibrium import bearing_equilibrium
+from .critical import CRITICAL_COLUMNS, critical_speeds, linear_at, system_of  # noqa: F401  (re-exported)
 
 #: default speed grid [rpm] (1 000 ... 250 000, 200 points)
 DEFAULT_SPEEDS_RPM = (1e3, 250e3, 200)
@@ -42,9 +41,6 @@ DEFAULT_SPEEDS_RPM = (1e3, 250e3, 200)
 FORCE_RULE = ("F_x = m e W^2 exp(i p), F_y = -i F_x on the disc node (f = Re(F exp(i W t)): a forward-rotating "
               "unbalance at angle W t + p from +x, CCW); response q = Re(Q exp(i W t)) of "
               "(K(W) - W^2 M + i W C(W)) Q = F")
-#: columns of the critical-speed table
-CRITICAL_COLUMNS = ("source", "speed [rpm]", "frequency [Hz]", "mode", "kind", "precession", "damping [-]",
-                    "location", "amplitude [m]", "refined")
 _SIDES = ("inner", "outer")
 
 
@@ -153,16 +149,6 @@ def forced_response(ls, F, omega):
         return np.full(F.shape, np.inf + 0j)
 
 
-def _linear_at(system, m, speed_rpm, kw):
-    """The method's linear system at one speed (equilibria solved for the film methods)."""
-    eqs = None
-    if m.needs_films:
-        omega = rpm_to_rad_s(speed_rpm)
-        eqs = tuple(bearing_equilibrium(b, system.bearing_loads[k], omega, m.letter, system.film_model,
-                                        system.gravity) for k, b in enumerate(system.bearings))
-    return linear_system(system, m.letter, speed_rpm, equilibria=eqs, **kw)
-
-
 def response_at(system, method, speed_rpm, unbalance, **kw):
     """Complex amplitudes of all DoFs at one speed.
 
@@ -193,7 +179,7 @@ def response_at(system, method, speed_rpm, unbalance, **kw):
     """
     m = get_method(method)
     unb = check_unbalance(system, unbalance)
-    ls = _linear_at(system, m, speed_rpm, kw)
+    ls = linear_at(system, m, speed_rpm, kw)
     omega = rpm_to_rad_s(speed_rpm)
     return forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega), ls
 
@@ -697,7 +683,7 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     rows, ls = [], None
     with counter_bar(speeds.size, f"unbalance {m.letter}", progress_enabled(progress), unit="speed") as bar:
         for s in speeds:
-            ls = _linear_at(system, m, s, kw)
+            ls = linear_at(system, m, s, kw)
             omega = rpm_to_rad_s(s)
             rows.append(forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega))
             bar.update(1)
@@ -717,118 +703,10 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
 
 
 # ---------------------------------------------------------------------- critical speeds
-def _system_of(cd, system):
-    """The system a Campbell result was computed for: ``system``, else rebuilt from ``cd.meta["system"]``."""
-    if system is not None:
-        return system
-    if isinstance(cd.meta.get("system"), dict):
-        from ..system.parameters import Turbocharger
-
-        return Turbocharger.from_dict(cd.meta["system"])
-    return None
-
-
-def _eigenvalue_near(system, m, speed_rpm, guess, kw):
-    """The eigenvalue (Im > 0) of the method's linear system at ``speed_rpm`` nearest to ``guess`` [1/s]."""
-    from .modal import state_matrix
-
-    ls = _linear_at(system, m, speed_rpm, kw)
-    lam = np.linalg.eigvals(state_matrix(ls.M, ls.C, ls.K))
-    lam = lam[lam.imag > 0]
-    return lam[np.argmin(np.abs(lam - guess))]
-
-
-def _refine_crossing(system, m, cd, i, j, kw):
-    """Root of Im λ_j(Ω)/2π − Ω/2π between grid speeds i and i+1 (Brent), λ_j followed as the eigenvalue
-    nearest to the linear interpolation of the tracked one; None if the bracket does not hold, or if the root
-    Brent returns is not one: the nearest eigenvalue can switch to another mode inside the interval (where two
-    branches veer), a jump of the function across zero that Brent takes for a root, so the root is kept only
-    where the function vanishes (|f − n/60| <= 1e-6 of n/60; Brent's own tolerance leaves ~1e-9)."""
-    from scipy.optimize import brentq
-
-    s = cd.speeds_rpm
-    la, lb = cd.eigenvalues[i, j], cd.eigenvalues[i + 1, j]
-
-    def lam(x):
-        t = (x - s[i]) / (s[i + 1] - s[i])
-        return _eigenvalue_near(system, m, x, la + t * (lb - la), kw)
-
-    def g(x):
-        return lam(x).imag / (2 * math.pi) - x / 60.0
-
-    ga, gb = g(s[i]), g(s[i + 1])
-    if ga == 0.0 or gb == 0.0:
-        x = s[i] if ga == 0.0 else s[i + 1]
-        return x, lam(x)
-    if ga * gb > 0:
-        return None
-    x = brentq(g, s[i], s[i + 1], xtol=1e-9 * s[i + 1], rtol=1e-12)
-    if abs(g(x)) > 1e-6 * x / 60.0:
-        return None  # a jump between two modes, not a crossing (the grid's linear interpolation stands)
-    return x, lam(x)
-
-
-def critical_speeds(cd, system=None, refine=True, **kw):
-    """Speeds where the 1X line f = n/60 crosses the damped Campbell branches of ``cd``.
-
-    Crossings are found between grid speeds (sign change of f_mode − n/60, linear interpolation) and, with
-    ``refine``, solved by a Brent root search on the eigenvalue of the tracked mode (to ~1e-9 relative).
-
-    Parameters
-    ----------
-    cd : CampbellResult
-    system : Turbocharger, optional
-        The system ``cd`` was computed for (default: rebuilt from ``cd.meta["system"]``); needed to refine.
-    refine : bool
-        Root-solve each crossing (else: linear interpolation on the grid).
-    **kw
-        Spring stiffnesses of A, B, E [N/m] (default: ``cd.meta["method_options"]``).
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns :data:`CRITICAL_COLUMNS` with ``source`` "1X crossing": speed [rpm], frequency [Hz] (= speed/60),
-        mode (Campbell column), kind, precession (at the nearer grid speed), damping [-] (at the crossing),
-        ``refined``; sorted by speed.
-
-    Examples
-    --------
-    >>> import frbmodel as frb
-    >>> cd = frb.campbell(frb.turbocharger(), "A", np.linspace(1e3, 40e3, 40), whirl=False)
-    >>> cs = critical_speeds(cd)
-    >>> cs[["speed [rpm]", "precession"]].round(0).values.tolist()
-    [[6550.0, 'backward'], [7159.0, 'forward'], [18878.0, 'backward'], [19417.0, 'forward']]
-    """
-    import pandas as pd
-
-    m = get_method(cd.method)
-    opts = {**cd.meta.get("method_options", {}), **kw} if m.parameters else {}
-    system = _system_of(cd, system) if refine else None
-    s, f = cd.speeds_rpm, cd.frequencies_hz
-    g = f - s[:, None] / 60.0
-    rows = []
-    for j in range(cd.n_modes):
-        with np.errstate(invalid="ignore"):
-            idx = np.flatnonzero((g[:-1, j] * g[1:, j] < 0) | ((g[:-1, j] == 0) & np.isfinite(g[1:, j])))
-        for i in idx:
-            t = g[i, j] / (g[i, j] - g[i + 1, j])
-            speed, lam = s[i] + t * (s[i + 1] - s[i]), cd.eigenvalues[i, j] + t * np.diff(cd.eigenvalues[i:i + 2, j])[0]
-            root = _refine_crossing(system, m, cd, i, j, opts) if system is not None else None
-            if root is not None:
-                speed, lam = root
-            k = i if speed - s[i] <= s[i + 1] - speed else i + 1
-            rows.append({"source": "1X crossing", "speed [rpm]": float(speed), "frequency [Hz]": float(speed) / 60.0,
-                         "mode": int(j), "kind": cd.mode_kind[k, j], "precession": cd.precession[k, j],
-                         "damping [-]": float(-lam.real / abs(lam)), "location": "", "amplitude [m]": math.nan,
-                         "refined": root is not None})
-    return pd.DataFrame(rows, columns=list(CRITICAL_COLUMNS)).sort_values("speed [rpm]", kind="stable") \
-        .reset_index(drop=True)
-
-
 def _amplitude_at(ur, system, m, name, unb, kw):
     """Semi-major axis [m] of ``name`` at one speed, as a function of the speed [rpm]."""
     def amp(speed_rpm):
-        ls = _linear_at(system, m, speed_rpm, kw)
+        ls = linear_at(system, m, speed_rpm, kw)
         omega = rpm_to_rad_s(speed_rpm)
         Q = forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega)
         one = UnbalanceResponse(ur.method, [speed_rpm], Q[None, :], ur.dof_labels, ur.unbalance, ur.meta)
@@ -892,7 +770,7 @@ def response_peaks(ur, cd=None, system=None, names=None, refine=True, **kw):
 
     m = get_method(ur.method)
     opts = {**ur.meta.get("method_options", {}), **kw} if m.parameters else {}
-    system = _system_of(ur, system) if refine else None
+    system = system_of(ur, system) if refine else None
     unb = tuple((u["disc"], u["node"], u["m e [kg m]"], u["phase [rad]"]) for u in ur.unbalance)
     s, rows = ur.speeds_rpm, []
     for name in names or [d["name"] for d in ur.layout["discs"]]:

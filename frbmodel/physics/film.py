@@ -25,6 +25,7 @@ from numba import njit
 
 from ..core.errors import FilmContactError, ParameterError, check_real, check_real_array, renamed_keyword
 from ..system.films import FILM_MODELS, Film, check_film, check_model  # noqa: F401  (FILM_MODELS: re-exported)
+from .finite_length import correction_factors_scalar, correction_polynomials, short_static_force_rt
 
 PI = math.pi
 
@@ -140,8 +141,6 @@ def correction_polys(film: "Film", film_model: str):
     (array([1.]), array([1.]))
     """
     if film_model == "short_corrected":
-        from .finite_length import correction_polynomials
-
         return correction_polynomials(film.length_to_diameter)
     return NO_CORRECTION, NO_CORRECTION
 
@@ -269,12 +268,8 @@ def static_force_rt(eps: float, film_model: str = "short", lam: float | None = N
     >>> [round(x, 6) for x in static_force_rt(0.3)]    # -ε²/(1-ε²)², π ε / (4 (1-ε²)^1.5)
     [-0.108683, 0.271425]
     """
-    s2 = 1.0 - eps * eps
-    f_r = -eps * eps / (s2 * s2)
-    f_t = PI * eps / (4.0 * s2 * math.sqrt(s2))
+    f_r, f_t = short_static_force_rt(eps)
     if film_model == "short_corrected":
-        from .finite_length import correction_factors_scalar
-
         fr, ft, _, _ = correction_factors_scalar(eps, lam)
         f_r, f_t = fr * f_r, ft * f_t
     return f_r, f_t
@@ -553,8 +548,6 @@ def rt_coefficients(eps: float, film_model: str = "short", lam: float | None = N
     K = np.array([[k_rr, k_rt], [k_tr, k_tt]])
     C = np.array([[c_rr, c_rt], [c_rt, c_tt]])
     if film_model == "short_corrected":
-        from .finite_length import correction_factors_scalar
-
         fr, ft, dfr, dft = correction_factors_scalar(eps, lam)
         f_r, f_t = static_force_rt(eps, "short")
         # K_rr = f_r K_rr − F_r f_r'/c  (here in units per c: dimensionless derivative w.r.t. ε)

@@ -16,7 +16,19 @@ from functools import lru_cache
 import numpy as np
 
 from ..core.errors import ParameterError
-from .film import static_force_rt
+
+
+def short_static_force_rt(eps):
+    """Static force of the short π-film in the line-of-centres frame, dimensionless (in units of μ ω_s R L³ / c²):
+    f_r = −ε²/(1−ε²)², f_t = π ε / (4 (1−ε²)^1.5) (docs/theory/films.md#static-and-quasi-static-case); the
+    reference the finite-length ratios are taken against, and the factor :func:`frbmodel.physics.film.static_force_rt`
+    corrects.
+
+    >>> [round(x, 6) for x in short_static_force_rt(0.3)]
+    [-0.108683, 0.271425]
+    """
+    s2 = 1.0 - eps * eps
+    return -eps * eps / (s2 * s2), math.pi * eps / (4.0 * s2 * math.sqrt(s2))
 
 #: ε values at which the ratios are computed for the fit (docs/theory/films.md#finite-length-correction uses 0.02 ...
 # 0.9)
@@ -104,7 +116,7 @@ def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 
     f_t = -np.sum(integ * np.sin(th)) * dth
     # short-bearing static forces per μ ω_s R L³/c² (docs/theory/films.md#static-and-quasi-static-case); convert units:
     # R³ L = R L³ / (4 λ²)
-    fr_is, ft_is = static_force_rt(eps, "short")
+    fr_is, ft_is = short_static_force_rt(eps)
     scale = 1.0 / (4.0 * lam * lam)  # R³L / (R L³)
     return f_r * scale / fr_is, f_t * scale / ft_is
 
