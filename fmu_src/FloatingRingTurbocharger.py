@@ -66,7 +66,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
     def _parameters(self):
         """Parameters with units and valid ranges; defaults: the built-in system and frb.runup's defaults."""
         from frbmodel.core.units import rpm_to_rad_s
-        from frbmodel.nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL
+        from frbmodel.nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, RTOL_RANGE
         from frbmodel.nonlinear.turbocharger_component import CHECK_RATE_HZ, CONTACT_EPS, SPEED_SOURCES
         from frbmodel.physics.film import FILM_MODELS
         from frbmodel.system.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
@@ -107,9 +107,10 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
                     "velocities and spin speeds as in frb.runup; 0 = the larger of speed_start and speed_end",
                     unit="rad/s", low=0.0, high=top)
         self._param("rtol", DEFAULT_RTOL, "relative tolerance of the internal integrator [-] (frb.runup's)",
-                    unit="1", low=1e-12, high=1e-3)
+                    unit="1", low=RTOL_RANGE[0], high=RTOL_RANGE[1])
         self._param("atol", DEFAULT_ATOL_M, "absolute tolerance on displacements [m] (frb.runup's; velocities and "
-                    "speeds scaled from it)", unit="m", low=1e-16, high=1e-7)
+                    "speeds scaled from it; at most 1e-3 of the smallest film clearance)", unit="m", low=1e-16,
+                    high=1e-7)
         self._param("contact_eps", CONTACT_EPS, "eccentricity ratio treated as wall contact: a step that reaches it "
                     "is discarded [-]", unit="1", low=0.01, high=0.9999)
         self._param("initial", "equilibrium", "initial state: equilibrium (method-J static equilibrium at the start "

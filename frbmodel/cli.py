@@ -75,6 +75,9 @@ def load_from_args(args):
     from .system.parameters import load_system
     from .system.presets import turbocharger
 
+    if getattr(args, "system", None) is not None and not str(args.system).strip():
+        raise ParameterError("--system = '' is invalid: give the path of a system file (frb system --out FILE "
+                             "writes one), or leave --system out for the Table 2 system")
     if getattr(args, "system", None):
         tc = load_system(args.system)
         if args.outer_clearance is not None:
@@ -119,16 +122,17 @@ def cmd_campbell(args):
     if args.parameter_set is not None and not args.from_fmu:
         raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
                              "set); without it the system is --system / --outer-clearance")
-    out = writable_dir(args.out)
     if args.from_fmu:
         from .cosim.linearize import campbell_from_fmu
 
         args.parameter_set = args.parameter_set or "co36"
         _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky"))
+        out = writable_dir(args.out)
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
         tc, kw = None, {}
     else:
-        tc = load_from_args(args)
+        tc = load_from_args(args)  # (a system the checks refuse is refused before the folder exists)
+        out = writable_dir(args.out)
         kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
         cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, **kw)
     paths = cd.save(out, fmax_hz=fmax)
@@ -266,12 +270,16 @@ def _parse_unbalance(items):
 
     out = []
     for it in items or []:
+        fields = it.split(":")
         try:
-            disc, amount, *phase = it.split(":")
+            if not 2 <= len(fields) <= 3:  # a 4th field was dropped without a word
+                raise ValueError
+            disc, amount, *phase = fields
             out.append(Unbalance(disc, float(amount), float(phase[0]) if phase else 0.0))
         except ValueError:
-            raise ParameterError(f"--unbalance {it!r} is invalid: use DISC:AMOUNT[:PHASE] with AMOUNT in kg m and "
-                                 "PHASE in rad, e.g. turbine_wheel:1e-6:0") from None
+            raise ParameterError(f"--unbalance {it!r} is invalid: use DISC:AMOUNT[:PHASE] (2 or 3 fields, "
+                                 f"{len(fields)} given) with AMOUNT in kg m and PHASE in rad, e.g. "
+                                 "turbine_wheel:1e-6:0") from None
     return out
 
 
@@ -297,6 +305,9 @@ def _profile(args):
             raise ParameterError(f"--duration = {args.duration!r} s is invalid with --profile {args.profile}: valid "
                                  f"range up to the profile's last time, {prof.t[-1]:g} s")
         return prof
+    if args.profile != "torque" and args.drive_torque:
+        raise ParameterError(f"--drive-torque = {args.drive_torque!r} N m applies only with --profile torque (the "
+                             f"--profile {args.profile} prescribes the speed)")
     duration = 1.0 if args.duration is None else args.duration
     a, b = _speed_pair(args.speeds)
     if args.profile == "ramp":
@@ -311,10 +322,16 @@ def _profile(args):
 
 
 def _speed_pair(text):
+    """``--speeds START:END`` [rpm] of the run-ups, bifurcations and comparisons: exactly two fields (a COUNT, as
+    campbell's START:STOP:COUNT takes, is refused rather than dropped)."""
+    fields = text.split(":")
     try:
-        a, b = (float(x) for x in text.split(":")[:2])
+        if len(fields) != 2:
+            raise ValueError
+        a, b = (float(x) for x in fields)
     except ValueError:
-        raise ParameterError(f"--speeds = {text!r} is invalid: use START:END in rpm") from None
+        extra = (" (this command takes a speed range, not a grid: no COUNT)" if len(fields) == 3 else "")
+        raise ParameterError(f"--speeds = {text!r} is invalid: use START:END in rpm{extra}") from None
     return a, b
 
 
@@ -368,14 +385,16 @@ def cmd_runup(args):
     prof = _profile(args)
     duration = float(prof.t[-1]) if args.duration is None else args.duration
     check_output_rate(args.rate, duration)
+    from .nonlinear.runup import check_tolerances
+
+    rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
+    unbalance = _parse_unbalance(args.unbalance)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
-    rtol = check_positive("--rtol", args.rtol)
-    atol = check_positive("--atol", args.atol, "m")
 
     def run_at(tighten, folder):
-        return runup(tc, profile=prof, duration=duration, unbalance=_parse_unbalance(args.unbalance),
+        return runup(tc, profile=prof, duration=duration, unbalance=unbalance,
                      output_rate_hz=args.rate, rtol=rtol * tighten, atol=atol * tighten, out_dir=folder,
                      progress=True, integrator=args.integrator)
 
@@ -1067,11 +1086,11 @@ def cmd_sweep(args):
                 raise ParameterError(f"--param {item!r} is invalid: use NAME=V1,V2,... with SI values") from None
         opts = {}
         if args.analysis == "campbell":
-            speeds = parse_speeds(args.speeds if args.speeds.count(":") == 2 else "1000:250000:200")
+            speeds = parse_speeds(args.speeds or "1000:250000:200")
             opts = {"methods": [m.strip().upper() for m in args.methods.split(",")],
                     "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
         else:
-            lo, hi = _speed_pair(args.speeds if args.speeds.count(":") == 1 else "1000:250000")
+            lo, hi = _speed_pair(args.speeds or "1000:250000")
             opts = {"speed_rpm": (lo, hi)} if args.analysis in ("hopf", "bifurcation") else \
                 {"speed_rpm": (lo, hi), "duration": args.duration}
             if args.analysis == "bifurcation":
@@ -1326,8 +1345,9 @@ def _add_sweep(sub):
                          "points (each case's diagram in cases/<id>/, its bifurcation points in the map)")
     sw.add_argument("--max-points", type=int, default=25, help="bifurcation: points per branch and direction")
     sw.add_argument("--methods", default="J", help="Campbell methods, comma list")
-    sw.add_argument("--speeds", default="1000:250000:200",
-                    help="campbell: START:STOP:COUNT; run-ups: START:END [rpm]")
+    sw.add_argument("--speeds", default=None,
+                    help="campbell: START:STOP:COUNT (default 1000:250000:200); the other analyses: START:END "
+                         "(default 1000:250000) [rpm]")
     sw.add_argument("--duration", type=float, default=2.0, help="run-up duration [s]")
     sw.add_argument("--ssp", default=None, help="SSP for --analysis cosim")
     sw.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler (tcp://host:port)")

@@ -170,3 +170,57 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     terms then disagree with the speed): refused, naming both lengths."""
     with pytest.raises(ParameterError, match=r"duration = 0\.2 s is longer than the speed profile \(0\.1 s\)"):
         frb.runup(frb.turbocharger(), profile=SpeedProfile.ramp(20e3, 30e3, 0.1), duration=0.2)
+
+
+# ------------------------------------------------------------------------------------ round 3 (issue #24 items 2-3)
+@pytest.mark.parametrize("argv, words", [
+    (["runup", "--rtol", "5", "--duration", "0.01"], ["--rtol = 5.0 is invalid", "valid range"]),
+    (["runup", "--rtol", "1", "--duration", "0.01"], ["--rtol = 1.0 is invalid"]),
+    (["runup", "--atol", "1", "--duration", "0.01"], ["--atol = 1.0 m is invalid", "smallest film clearance"]),
+    (["runup", "--outer-clearance", "1e-12", "--duration", "0.01"], ["outer film clearance = 1e-12 m is invalid",
+                                                                     "roughness"]),
+    (["campbell", "--outer-clearance", "1e-12"], ["outer film clearance = 1e-12 m is invalid"]),
+    (["runup", "--rate", "1", "--duration", "0.001"], ["records no sample after t = 0"]),
+    (["runup", "--duration", "1e-9"], ["records no sample after t = 0"]),
+    (["runup", "--unbalance", "turbine_wheel:1e-6:0:7", "--duration", "0.01"], ["2 or 3 fields, 4 given"]),
+    (["runup", "--speeds", "20000:30000:7", "--duration", "0.01"], ["use START:END", "no COUNT"]),
+    (["bifurcation", "--speeds", "1000:120000:5", "--hopf-only"], ["use START:END", "no COUNT"]),
+    (["runup", "--drive-torque", "0.05", "--duration", "0.01"], ["--drive-torque = 0.05 N m applies only with "
+                                                                  "--profile torque"]),
+    (["runup", "--system", "", "--duration", "0.01"], ["--system = '' is invalid"]),
+    (["campbell", "--system", ""], ["--system = '' is invalid"]),
+])
+def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, words, tmp_path, capsys):
+    """Issue #24 items 2-3: each case ran (exit 0) with a meaningless result or dropped the input; now exit 2 with
+    one line naming the option, its value and the valid range, and nothing written."""
+    from frbmodel.cli import main
+
+    out = tmp_path / "out"
+    assert main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+    assert "Traceback" not in err and not out.exists()
+
+
+def test_api_refuses_meaningless_tolerances_and_runs_that_record_nothing(built):
+    tc = frb.turbocharger()
+    for kw in ({"rtol": 5.0}, {"atol": 1.0}, {"duration": 1e-9}, {"output_rate_hz": 1.0, "duration": 1e-3}):
+        with pytest.raises(frb.ParameterError):
+            frb.runup(tc, **{"duration": 0.01, **kw})
+    with pytest.raises(frb.ParameterError, match="shorter than the macro step"):
+        from frbmodel.cosim.master import Master
+
+        Master(built / "turbocharger.ssp", stop_time=1e-6, step_size=1e-5)
+
+
+def test_a_system_file_with_a_clearance_below_the_roughness_is_refused(tmp_path):
+    """The physical bound on a film's clearance (1e-4 of its radius) holds for system files too, naming the place."""
+    import tomllib
+
+    path = frb.turbocharger().save(tmp_path / "tc.toml")
+    text = path.read_text()
+    d = tomllib.loads(text)
+    assert d["bearings"][1]["outer"]["clearance"] == 3.6e-05
+    path.write_text(text.replace("clearance = 3.6e-05", "clearance = 1e-12", 2))
+    with pytest.raises(frb.ParameterError, match=r"outer: film clearance = 1e-12 m is invalid.*roughness"):
+        frb.load_system(path)

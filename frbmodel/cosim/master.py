@@ -196,6 +196,9 @@ class Master:
         H, T = self.step_size, self.stop_time
         if not (H > 0 and T > 0 and math.isfinite(H) and math.isfinite(T)):
             raise ParameterError(f"step size = {H!r} s and stop time = {T!r} s must be finite and > 0")
+        if T < H * (1 - 1e-9):
+            raise ParameterError(f"stop time = {T!r} s is invalid: it is shorter than the macro step {H!r} s, so the "
+                                 f"run would take no step; valid range >= {H!r} s")
         lo, hi = VALIDATED_STEP_S
         if not lo <= H <= hi and not unvalidated_step:
             raise ParameterError(f"macro step = {H:g} s is outside the validated range {lo:g} ... {hi:g} s (the "

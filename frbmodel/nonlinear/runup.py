@@ -68,6 +68,9 @@ def check_output_rate(output_rate_hz, duration):
     """
     rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
     duration = check_positive("duration", duration, "s")
+    if duration * rate < 1.0 - 1e-9:  # the run would record nothing after its start
+        raise ParameterError(f"duration = {duration:g} s is invalid at output_rate_hz = {rate:g} Hz: it records no "
+                             f"sample after t = 0; valid range duration >= 1 / output_rate_hz = {1.0 / rate:g} s")
     if duration * rate > MAX_SAMPLES:
         raise ParameterError(f"output_rate_hz = {rate:g} Hz is invalid for duration = {duration:g} s: "
                              f"{duration * rate:.3g} samples, valid range <= {MAX_SAMPLES:.0e} samples "
@@ -922,6 +925,42 @@ def _speed_bound(problem):
     return w_max
 
 
+#: valid range of the relative tolerance [-]: above it a run "finishes" after a handful of steps with a meaningless
+#: trajectory (measured: rtol 1 or 5, 9-15 solver steps for a 1 s run-up), below it round-off dominates
+RTOL_RANGE = (1e-13, 1e-4)
+#: the absolute tolerance on displacements may be at most this fraction of the smallest film clearance
+ATOL_MAX_OF_CLEARANCE = 1e-3
+
+
+def check_tolerances(system, rtol, atol, names=("rtol", "atol")):
+    """``(rtol, atol)`` as floats, or a :class:`ParameterError` naming the option, its value and the valid range:
+    rtol within :data:`RTOL_RANGE`, atol [m] > 0 and at most :data:`ATOL_MAX_OF_CLEARANCE` of the smallest film
+    clearance of ``system``.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> check_tolerances(frb.turbocharger(), 1e-7, 1e-11)
+    (1e-07, 1e-11)
+    >>> try:
+    ...     check_tolerances(frb.turbocharger(), 1e-7, 1.0, ("--rtol", "--atol"))
+    ... except ParameterError as exc:
+    ...     print(exc)
+    --atol = 1.0 m is invalid: valid range (0, 3.4e-08] m (1e-3 of the smallest film clearance, 3.4e-05 m)
+    """
+    rtol = check_positive(names[0], rtol)
+    lo, hi = RTOL_RANGE
+    if not lo <= rtol <= hi:
+        raise ParameterError(f"{names[0]} = {rtol!r} is invalid: valid range [{lo:g}, {hi:g}] (larger tolerances "
+                             "end a run after a few meaningless steps)")
+    atol = check_positive(names[1], atol, "m")
+    c_min = min(min(b.inner.clearance, b.outer.clearance) for b in system.bearings)
+    if atol > ATOL_MAX_OF_CLEARANCE * c_min:
+        raise ParameterError(f"{names[1]} = {atol!r} m is invalid: valid range (0, {ATOL_MAX_OF_CLEARANCE * c_min:.3g}]"
+                             f" m (1e-3 of the smallest film clearance, {c_min:.3g} m)")
+    return rtol, atol
+
+
 #: default integrator tolerances of the run-up. The absolute tolerance decides (measured on the main job, c_o = 36
 #: µm): with 1e-10 m the turbine journal of the first 0.1 s is 2.5e-3 c_o off the converged trajectory (rtol 1e-10,
 #: atol 1e-13 m), and the components inside the large whirl at 200 krpm moved by up to 80 Hz with a tighter
@@ -1400,7 +1439,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     model = check_model(film_model or system.film_model)
     duration = check_positive("duration", duration, "s")
     output_rate_hz = check_output_rate(output_rate_hz, duration)
-    rtol = check_positive("rtol", rtol)
+    rtol, atol = check_tolerances(system, rtol, atol)
     if profile is None:
         profile = SpeedProfile.ramp(speed_rpm[0], speed_rpm[1], duration)
     elif not isinstance(profile, SpeedProfile):
@@ -1415,7 +1454,6 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
         raise ParameterError(f"integrator = {integrator!r} is unknown; valid: {', '.join(map(repr, INTEGRATORS))}")
     problem = build_problem(system, profile, model, unbalance, linear_springs)
     y0 = initial_state(problem, initial, perturbation)
-    atol = check_positive("atol", atol, "m")
     atol_v, scale = atol_vector(problem, atol)
     t_out = np.arange(int(math.floor(duration * output_rate_hz + 1e-9)) + 1) / output_rate_hz
     meta = {"system": system.to_dict(), "film_model": model, "profile": profile.description, "duration_s": duration,

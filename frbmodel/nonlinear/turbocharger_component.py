@@ -35,6 +35,7 @@ from .runup import (
     SpeedProfile,
     atol_vector,
     build_problem,
+    check_tolerances,
     contact_message,
     film_samples,
     initial_state,
@@ -173,11 +174,11 @@ class TurbochargerComponent:
         if not 0.0 < self.contact_eps < 1.0:
             raise ParameterError(f"contact_eps = {contact_eps!r} is invalid: valid range 0 < contact_eps < 1")
         self.check_rate_hz = check_positive("check_rate_hz", check_rate_hz, "Hz")
-        self.rtol = check_positive("rtol", rtol)
+        self.rtol, atol = check_tolerances(system, rtol, atol)
         self.problem = build_problem(system, self._profile(w0, w1), check_model(film_model or system.film_model),
                                      unbalance)
         self.y = initial_state(self.problem, initial, perturbation)
-        self.atol = atol_vector(self.problem, check_positive("atol", atol, "m"), scale)[0]
+        self.atol = atol_vector(self.problem, atol, scale)[0]
         from .rosenbrock import FD_TYPICAL_M, film_columns
 
         self.fd_scale = typical_sizes(self.problem, FD_TYPICAL_M, scale)

@@ -6,8 +6,12 @@ from dataclasses import asdict, dataclass
 
 from ..core.errors import ParameterError, check_real
 
-__all__ = ["FILM_MODELS", "FILM_NAMES", "Film", "check_film", "check_model"]
+__all__ = ["FILM_MODELS", "FILM_NAMES", "Film", "check_film", "check_film_thickness", "check_model"]
 
+#: the smallest clearance / radius of a film: turbocharger bearings run at 1e-3 ... 1e-2 (Table 2: 6e-3); below
+#: 1e-4 (0.55 µm on a 5.5 mm journal) the clearance is the size of the ground surfaces' roughness (~0.1-0.8 µm Ra),
+#: so no hydrodynamic film forms (an outer clearance of 1e-12 m gave RSR 0 and "no unstable mode")
+MIN_CLEARANCE_OF_RADIUS = 1e-4
 #: names of the four films of the Table 2 system, in the order bearing 0 inner, outer, bearing 1 inner, outer (the
 #: default labels when a result carries none)
 FILM_NAMES = ("turbine inner", "turbine outer", "compressor inner", "compressor outer")
@@ -49,6 +53,7 @@ class Film:
             raise ParameterError(
                 f"film clearance = {self.clearance:g} m is invalid for radius {self.radius:g} m: the thin-film "
                 f"(Reynolds) theory needs clearance < 0.1 * radius = {0.1 * self.radius:g} m")
+
 
     @property
     def length_to_diameter(self) -> float:
@@ -104,3 +109,22 @@ def check_model(film_model: str) -> str:
     if not isinstance(film_model, str) or film_model not in FILM_MODELS:
         raise ParameterError(f"film model = {film_model!r} is unknown; valid models are {', '.join(FILM_MODELS)}")
     return film_model
+
+
+def check_film_thickness(film, where="film"):
+    """``film`` if its clearance can carry a hydrodynamic film (at least :data:`MIN_CLEARANCE_OF_RADIUS` of its
+    radius), else a :class:`ParameterError` naming ``where``, the value and the valid range. Applied to every system a
+    user gives (presets, system files, ``with_outer_clearance``); a :class:`Film` itself checks only the thin-film
+    theory's upper bound, so that mathematical limits (a rigid film as clearance -> 0) stay reachable in studies.
+
+    Examples
+    --------
+    >>> check_film_thickness(Film(5.5e-3, 6.5e-3, 34e-6, 4.9e-3)).clearance
+    3.4e-05
+    """
+    if film.clearance < MIN_CLEARANCE_OF_RADIUS * film.radius:
+        raise ParameterError(
+            f"{where} clearance = {film.clearance:g} m is invalid for radius {film.radius:g} m: valid range >= "
+            f"{MIN_CLEARANCE_OF_RADIUS:g} * radius = {MIN_CLEARANCE_OF_RADIUS * film.radius:g} m (a thinner film "
+            "is below the surfaces' roughness: no hydrodynamic film forms)")
+    return film

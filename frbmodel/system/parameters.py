@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError, check_positive
-from .films import Film, check_model
+from .films import Film, check_film_thickness, check_model
 from .rotor import GRAVITY, Disc, Rotor, ShaftElement
 
 # ------------------------------------------------------------------ the schema of a system file
@@ -167,6 +167,8 @@ def _build(where, cls, **kw):
 def _bearing(d, where):
     """FloatingRingBearing from a checked ``bearing`` table."""
     films = {f: _build(f"{where}.{f}", Film, **d[f]) for f in ("inner", "outer")}
+    for f, film in films.items():
+        check_film_thickness(film, f"{where}.{f}: film")
     return _build(where, FloatingRingBearing, node=d["node"], name=d.get("name", "bearing"),
                   ring_mass=d["ring_mass"], ring_inertia=d["ring_inertia"], **films)
 
@@ -319,7 +321,8 @@ class Turbocharger:
         -------
         Turbocharger
         """
-        bs = tuple(replace(b, outer=replace(b.outer, clearance=clearance)) for b in self.bearings)
+        bs = tuple(replace(b, outer=check_film_thickness(replace(b.outer, clearance=clearance), f"{b.name} outer film"))
+                   for b in self.bearings)
         return replace(self, bearings=bs)
 
     # ------------------------------------------------------------------ I/O

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..core.errors import check_real
-from .films import Film, check_model
+from .films import Film, check_film_thickness, check_model
 from .parameters import FloatingRingBearing, Turbocharger
 from .rotor import Disc, Rotor, ShaftElement
 
@@ -81,8 +81,10 @@ def turbocharger(outer_clearance: float = PAPER_OUTER_CLEARANCES[0], film_model:
     check_model(film_model)
     bearings = []
     for name, node, mu in (("turbine", 1, viscosity_turbine), ("compressor", 2, viscosity_compressor)):
-        inner = Film(radius=5.5e-3, length=6.5e-3, clearance=inner_clearance, viscosity=mu)
-        outer = Film(radius=8e-3, length=9e-3, clearance=outer_clearance, viscosity=mu)
+        inner = check_film_thickness(Film(radius=5.5e-3, length=6.5e-3, clearance=inner_clearance, viscosity=mu),
+                                     f"{name} inner film")
+        outer = check_film_thickness(Film(radius=8e-3, length=9e-3, clearance=outer_clearance, viscosity=mu),
+                                     f"{name} outer film")
         bearings.append(FloatingRingBearing(node=node, inner=inner, outer=outer, ring_mass=7.2e-3,
                                             ring_inertia=33.641e-8, name=name))
     return Turbocharger(rotor=table2_rotor(), bearings=tuple(bearings), film_model=film_model,
