@@ -936,9 +936,12 @@ def _first_run_notice(command):
 def cmd_build_fmus(args):
     """``frb build-fmus``: build the FMUs and the SSP into a folder."""
     from .cosim.build import build_fmus
+    from .cosim.sources import find_source
 
+    find_source(args.src)  # a missing source tree is named before any --out folder is created
     if Path(args.out).exists() and not Path(args.out).is_dir():
         raise ParameterError(f"--out = {args.out!r} is not a writable folder: it is a file")
+    writable_dir(args.out)  # (e.g. /proc/x: named here, not a FileNotFoundError from the build)
     build_fmus(args.out, args.src, rotor_file=args.rotor_file, linearization=args.linearization)
     print(f"results in {Path(args.out).resolve()}")
 

@@ -224,3 +224,33 @@ def test_a_system_file_with_a_clearance_below_the_roughness_is_refused(tmp_path)
     path.write_text(text.replace("clearance = 3.6e-05", "clearance = 1e-12", 2))
     with pytest.raises(frb.ParameterError, match=r"outer: film clearance = 1e-12 m is invalid.*roughness"):
         frb.load_system(path)
+
+
+def test_the_former_tracebacks_are_one_line_errors(tmp_path, capsys, built):
+    """Issue #24 item 6: each case ended in a traceback; now exit 2 and one line naming the file or option."""
+    import shutil
+    import zipfile
+
+    from frbmodel.cli import main
+
+    corrupt = tmp_path / "corrupt"
+    corrupt.mkdir()
+    (corrupt / "runup.csv").write_text("time [s]\n")
+    (corrupt / "runup.json").write_text('{"status": ')
+    ssp = tmp_path / "ssp"
+    with zipfile.ZipFile(built / "turbocharger.ssp") as z:
+        z.extractall(ssp)
+    fmu = ssp / "resources" / "FloatingRingBearing.fmu"
+    fmu.write_bytes(fmu.read_bytes()[:1000])  # a truncated copy
+    cases = [(["plot", str(corrupt)], "runup.json is not valid JSON: line 1, column 12"),
+             (["cosim", str(ssp), "--stop-time", "1e-4", "--out", str(tmp_path / "o1")], "is not a valid FMU"),
+             (["build-fmus", "--out", "/proc/frb-x"], "is not a writable folder"),
+             (["sweep", "--param", "outer_clearance=36e-6", "--scheduler", "notanaddress", "--out",
+               str(tmp_path / "o2")], "scheduler = 'notanaddress' is unreachable: not an address")]
+    for argv, words in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert words in err and "Traceback" not in err, (argv, err[-500:])
+    with pytest.raises(frb.ParameterError, match="bearing = 'turbine' is a str; expected a FloatingRingBearing"):
+        frb.ring_speed_ratio("turbine")
+    shutil.rmtree(ssp)

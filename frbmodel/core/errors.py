@@ -431,3 +431,40 @@ def renamed_keyword(old, new, since="0.1.0"):
         return wrapper
 
     return decorate
+
+
+def read_json(path, what="file"):
+    """The JSON content of ``path``, or a :class:`ParameterError` naming the file, the line and column and what is
+    wrong (a result folder written by an interrupted or foreign program, a file edited by hand).
+
+    Parameters
+    ----------
+    path : str or Path
+    what : str
+        What the file is, for the message (e.g. ``"run-up metadata"``).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = pathlib.Path(d) / "runup.json"
+    ...     _ = p.write_text('{"status": ')
+    ...     try:
+    ...         read_json(p, "run-up metadata")
+    ...     except ParameterError as exc:
+    ...         print(str(exc).replace(str(p), "runup.json"))
+    run-up metadata runup.json is not valid JSON: line 1, column 12: Expecting value
+    """
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"{what} {path} cannot be read: {getattr(exc, 'strerror', None) or exc}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ParameterError(f"{what} {path} is not valid JSON: line {exc.lineno}, column {exc.colno}: "
+                             f"{exc.msg}") from None

@@ -108,6 +108,9 @@ class FmuInstance:
         self.name = name
         self.trace = trace
         self.calls = {}
+        from .loader import model_identifier
+
+        model_identifier(path)  # a broken archive is named here (fmpy would raise a zipfile.BadZipFile)
         self.md = read_model_description(str(path))
         self.model_identifier = self.md.coSimulation.modelIdentifier
         self.dir = extract(str(path), unzipdir=str(Path(unzip_root) / name))

@@ -168,9 +168,16 @@ def compile_loader(src=None, cc=None) -> bytes:
 
 
 def model_identifier(fmu_path) -> str:
-    """The co-simulation ``modelIdentifier`` in the FMU's modelDescription.xml."""
-    with zipfile.ZipFile(fmu_path) as z:
-        root = ET.fromstring(z.read("modelDescription.xml"))
+    """The co-simulation ``modelIdentifier`` in the FMU's modelDescription.xml (a ParameterError naming the file if it
+    is no FMU: not a zip archive, e.g. a truncated copy, or without a modelDescription.xml)."""
+    from ..core.errors import ParameterError
+
+    try:
+        with zipfile.ZipFile(fmu_path) as z:
+            root = ET.fromstring(z.read("modelDescription.xml"))
+    except (zipfile.BadZipFile, KeyError, ET.ParseError) as exc:
+        raise ParameterError(f"FMU {str(fmu_path)!r} is not a valid FMU ({type(exc).__name__}: {exc}); rebuild it "
+                             "(frb build-fmus) or copy it again") from None
     cs = root.find("CoSimulation")
     if cs is None:
         raise ValueError(f"{fmu_path}: no CoSimulation element in modelDescription.xml")

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_real, check_system
+from ..core.errors import ParameterError, check_real, check_system, read_json
 from ..core.progress import counter_bar
 from ..core.results import Result, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
@@ -615,7 +615,7 @@ class UnbalanceResponse(Result):
                 raise ParameterError(f"folder = {str(out_dir)!r} holds {len(found)} unbalance_*.json files; expected "
                                      "one (give stem=...)")
             stem = found[0]
-        meta = json.loads((out / f"{stem}.json").read_text())
+        meta = read_json(out / f"{stem}.json", "unbalance-response metadata")
         df = pd.read_csv(out / f"{stem}_dofs.csv")
         labels = meta.pop("dof_labels")
         resp = np.column_stack([df[c].to_numpy() + 1j * df[c.replace(" re [", " im [")].to_numpy()

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError
+from ..core.errors import ParameterError, read_json
 from ..core.results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
 from ..core.units import RPM
 
@@ -719,7 +719,7 @@ class RunupResult(Result):
         if not csv.is_file():
             raise ParameterError(f"{csv}: no run-up result there (runup.csv not found)")
         meta_p = csv.with_suffix(".json")
-        meta = json.loads(meta_p.read_text()) if meta_p.exists() else {}
+        meta = read_json(meta_p, "run-up metadata") if meta_p.exists() else {}
         return cls.from_dataframe(pd.read_csv(csv), meta)
 
     @classmethod

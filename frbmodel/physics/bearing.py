@@ -8,6 +8,7 @@ from __future__ import annotations
 from numba import njit
 
 from ..core.errors import ParameterError, check_real, check_real_array, renamed_keyword
+from ..system.parameters import check_bearing
 from .film import (
     check_model,
     film_force_kernel,
@@ -150,6 +151,7 @@ def ring_torque(bearing, r_inner, force_inner, r_outer, force_outer, omega_rotor
         check_real_array(name, v, unit, last_axis=2)
     for name, v in (("omega_rotor", omega_rotor), ("omega_ring", omega_ring)):
         check_real_array(name, v, "rad/s")
+    check_bearing(bearing)
     _, t_ring_from_inner = film_torques(bearing.inner, r_inner, force_inner, omega_rotor, omega_ring)
     t_ring_from_outer, _ = film_torques(bearing.outer, r_outer, force_outer, omega_ring, 0.0)
     return t_ring_from_inner + t_ring_from_outer
@@ -191,6 +193,7 @@ def ring_speed_ratio(bearing, eps_inner: float = 0.0, eps_outer: float = 0.0, to
     >>> round(frb.ring_speed_ratio(b), 5)
     0.19903
     """
+    check_bearing(bearing)
     for name, eps in (("eps_inner", eps_inner), ("eps_outer", eps_outer)):
         if not (0.0 <= check_real(name, eps) < 1.0):
             raise ParameterError(f"{name} = {eps!r} is invalid: valid range 0 <= eps < 1")

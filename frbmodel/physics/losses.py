@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit
 
 from ..core.errors import ParameterError
+from ..system.parameters import check_bearing
 from .film import check_model, correction_polys, film_force_kernel, film_torques_kernel
 
 __all__ = ["bearing_loss", "bearing_loss_kernel", "film_arrays", "journal_torque_kernel"]
@@ -204,6 +205,7 @@ def bearing_loss(bearing, journal, ring, omega_rotor, film_model="short"):
     >>> bool(t < 0 and p_i > 0 and p_o > 0)
     True
     """
+    check_bearing(bearing)
     journal = np.asarray(journal, dtype=float)
     ring = np.asarray(ring, dtype=float)
     if journal.shape[-1:] != (4,) or ring.shape[-1:] != (5,):

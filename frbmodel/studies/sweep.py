@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError
+from ..core.errors import ParameterError, read_json
 
 #: parameters a study can vary (name -> (unit, description)); "<bearing>" and "<disc>" are the names in the system
 #: (the Table 2 system has the bearings "turbine", "compressor" and the discs "turbine_wheel", "compressor_wheel")
@@ -669,9 +669,27 @@ def _client(scheduler, n_workers):
             cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
                                         processes=True, dashboard_address=":0")
         return dist.Client(cluster, set_as_default=False), cluster  # never the user's default client
+    _check_scheduler_reachable(scheduler)  # before any Client exists: a failed one prints a traceback when collected
     try:
         return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S, set_as_default=False), None
     except (OSError, TimeoutError, ValueError) as exc:
+        raise ParameterError(f"scheduler = {scheduler!r} is unreachable: {exc} (expected the address of a running "
+                             f"Dask scheduler, tcp://host:port; waited {SCHEDULER_TIMEOUT_S:g} s)") from None
+
+
+def _check_scheduler_reachable(scheduler):
+    """A :class:`ParameterError` unless ``scheduler`` is ``tcp://host:port`` (or ``host:port``) and a TCP connection
+    to it opens within :data:`SCHEDULER_TIMEOUT_S`."""
+    import re
+    import socket
+
+    m = re.fullmatch(r"(?:tcp://)?\[?([^\]/]+?)\]?:(\d+)/?", str(scheduler))
+    if m is None:
+        raise ParameterError(f"scheduler = {scheduler!r} is unreachable: not an address of the form tcp://host:port "
+                             "(expected a running Dask scheduler, or 'serial', or none for a local cluster)")
+    try:
+        socket.create_connection((m.group(1), int(m.group(2))), timeout=SCHEDULER_TIMEOUT_S).close()
+    except (OSError, ValueError) as exc:
         raise ParameterError(f"scheduler = {scheduler!r} is unreachable: {exc} (expected the address of a running "
                              f"Dask scheduler, tcp://host:port; waited {SCHEDULER_TIMEOUT_S:g} s)") from None
 
@@ -885,7 +903,7 @@ def run_summary(out_dir):
     FileNotFoundError
         If no run of the study has run cases yet.
     """
-    return json.loads((Path(out_dir) / "run_summary.json").read_text())
+    return read_json(Path(out_dir) / "run_summary.json", "study summary")
 
 
 def stability_map(out_dir):

@@ -479,3 +479,19 @@ def _toml_ready(v):
     if isinstance(v, float) and not math.isfinite(v):
         raise ParameterError(f"value {v!r} cannot be written to TOML: it must be finite")
     return v
+
+
+def check_bearing(bearing, name="bearing"):
+    """Return ``bearing`` if it is a :class:`FloatingRingBearing`, else raise :class:`ParameterError` naming what was
+    given (e.g. a bearing's name instead of the bearing).
+
+    Examples
+    --------
+    >>> from frbmodel.system.presets import turbocharger
+    >>> check_bearing(turbocharger().bearings[0]).name
+    'turbine'
+    """
+    if not isinstance(bearing, FloatingRingBearing):
+        raise ParameterError(f"{name} = {bearing!r:.80} is a {type(bearing).__name__}; expected a FloatingRingBearing "
+                             "(e.g. frb.turbocharger().bearings[0], or system.bearings[k])")
+    return bearing
