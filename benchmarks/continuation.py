@@ -29,7 +29,8 @@ def main(argv=None):
 
     import frbmodel as frb
     from frbmodel.cycles.continuation import continuation
-    from frbmodel.cycles.limitcycle import WORKERS, limit_cycle
+    from frbmodel.cycles.flow import WORKERS
+    from frbmodel.cycles.limitcycle import limit_cycle
     from frbmodel.cycles.shooting import monodromy
 
     tc = frb.turbocharger(36e-6)
@@ -38,7 +39,7 @@ def main(argv=None):
     lc61 = limit_cycle(tc, 61e3, guess=lc60)
     t_orbit = time.perf_counter() - t0
 
-    from frbmodel.cycles.limitcycle import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, _Flow
+    from frbmodel.cycles.flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, _Flow
     from frbmodel.nonlinear.runup import SpeedProfile, atol_vector, build_problem
 
     prob = build_problem(tc, SpeedProfile.constant(61e3, 1.0), tc.film_model)

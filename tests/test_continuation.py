@@ -140,7 +140,7 @@ def test_no_fold_from_speed_jitter_on_a_vertical_branch():
 def test_branch_stops_where_it_reaches_the_equilibrium():
     """A branch whose orbit shrinks to the equilibrium has reached a Hopf point: it stops there (continuing would
     pass through it and retrace the same orbits half a period shifted) and the end is marked as a Hopf point."""
-    from frbmodel.cycles.continuation import _collapsed
+    from frbmodel.cycles.branch import _collapsed
 
     radii = [15e-6, 8e-6, 2e-6, 0.5e-6, 0.2e-6, 0.4e-6]
     stops = [k for k in range(1, len(radii) + 1) if _collapsed(
@@ -358,7 +358,7 @@ def test_shooting_jacobian_equals_differences_of_the_residual(segments):
     truncation and round-off are ~1e-8 of the entries at the 1e-5 step used."""
     from scipy.linalg import expm
 
-    from frbmodel.cycles.continuation import _Branch, _jacobian
+    from frbmodel.cycles.branch import _Branch, _jacobian
 
     def a_of(speed):
         w = 2.0 + 1e-4 * speed
@@ -448,7 +448,7 @@ def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(m
     the iteration: a Jacobian computed at the predicted point, and the previous point's with another phase row (as
     the continuation passes it from point to point; the corrector puts the current phase normal in)."""
     import frbmodel.cycles.shooting
-    from frbmodel.cycles import continuation as cont
+    from frbmodel.cycles import branch as cont
 
     exact = frbmodel.cycles.shooting.monodromy
     monkeypatch.setattr(frbmodel.cycles.shooting, "monodromy",
@@ -481,7 +481,7 @@ def test_inaccurate_monodromy_is_replaced_by_central_differences():
     closest to 1 is off by more than MULTIPLIER_TOL is replaced by central differences of the flow; an accurate one
     is kept. On the closed-form degenerate Hopf cycle r = 0.3 (mu = r^4) the multipliers are 1 and exp(-4 mu T)
     (T = 1); central differences at the 1e-4 step are exact to ~1e-8 (truncation h^2 times the flow's curvature)."""
-    from frbmodel.cycles import continuation as cont
+    from frbmodel.cycles import branch as cont
 
     br = object.__new__(cont._Branch)
     br.scale_vec, br.workers = np.array([1.0, 1.0]), 1

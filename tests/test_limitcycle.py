@@ -250,7 +250,7 @@ def test_flow_integrator_hint_skips_the_probe_only_where_radau_keeps_its_budget(
     Radau). Near an equilibrium (the 2.0 krpm Hopf point: Radau needs ~400x the steps there, README) the budget is
     exceeded and the full probe chooses Rodas, as without a hint."""
     from frbmodel.cycles.continuation import hopf_points
-    from frbmodel.cycles.limitcycle import SHOOT_ATOL_M, SHOOT_RTOL, _Flow
+    from frbmodel.cycles.flow import SHOOT_ATOL_M, SHOOT_RTOL, _Flow
     from frbmodel.nonlinear.runup import build_problem
 
     tc = frb.turbocharger(36e-6)
