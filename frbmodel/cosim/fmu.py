@@ -23,6 +23,8 @@ build both arrays at every call (measured in the main job's exchange: 7.3 -> 3.1
 from __future__ import annotations
 
 import ctypes
+import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -76,6 +78,21 @@ class FmiCallFailed(CosimStopped):
     def discarded(self):
         """True if the status is Discard (2): the step may be retried after a rollback."""
         return self.status == 2
+
+
+class ExtractionFolder:
+    """A temporary folder the FMUs of one master are extracted into. :meth:`cleanup` deletes it and takes off
+    ``sys.path`` whatever under it was added since it was made (the instances take their own resources folders off
+    when they are freed; anything else left there would point at deleted files)."""
+
+    def __init__(self, prefix):
+        self._tmp = tempfile.TemporaryDirectory(prefix=prefix)
+        self.name = self._tmp.name
+        self._sys_path = list(sys.path)
+
+    def cleanup(self):
+        sys.path[:] = [p for p in sys.path if p in self._sys_path or not p.startswith(self.name)]
+        self._tmp.cleanup()
 
 
 class FmuInstance:

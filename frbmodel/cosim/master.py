@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -30,7 +29,7 @@ from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
 from ..nonlinear.recorder import Recorder, RunupResult, RunupSchema
-from .fmu import FmiCallFailed, FmuInstance
+from .fmu import ExtractionFolder, FmiCallFailed, FmuInstance
 from .ssp import read_ssp
 
 BEARING_FMU, ROTOR_FMU = "FloatingRingBearing", "TurbochargerRotor"
@@ -258,8 +257,7 @@ class Master:
     # ------------------------------------------------------------------ set-up
     def setup(self):
         """Extract and instantiate every FMU, identify rotor and bearings, plan the exchange."""
-        self._tmp = tempfile.TemporaryDirectory(prefix="frb_cosim_")
-        self._sys_path = list(sys.path)
+        self._tmp = ExtractionFolder("frb_cosim_")
         self.fmus = {}
         for name, path in self.ssp.components.items():  # (one at a time: close() frees those made before a failure)
             self.fmus[name] = FmuInstance(name, path, self._tmp.name, self.trace)
@@ -710,9 +708,6 @@ class Master:
                 stat[1] += wall
         self.fmus = {}
         if self._tmp is not None:
-            # the instances took their resources folders off sys.path (FmuInstance.free); anything else under the
-            # extraction folder goes too: it is deleted here
-            sys.path[:] = [p for p in sys.path if p in self._sys_path or not p.startswith(self._tmp.name)]
             self._tmp.cleanup()
             self._tmp = None
         self.ssp.close()

@@ -299,15 +299,21 @@ def write_ssp(out_dir="ssp", step_size=1e-5, stop_time=1.0, system=None, **kw):
     list of Path
         The written files, SSDs first.
     """
+    return _write_sets(out_dir, parameter_sets(system=system, **kw),
+                       lambda set_name: _ssd_tree(set_name, step_size, stop_time, system))
+
+
+def _write_sets(out_dir, sets, ssd_of):
+    """Write one SSD per parameter set (``ssd_of(set_name)``; the first as the default SSD) and each set's SSV per
+    component under ``resources/``; the written paths, SSDs first."""
     out = Path(out_dir)
     (out / "resources").mkdir(parents=True, exist_ok=True)
     for k, v in NS.items():
         ET.register_namespace(k, v)
-    sets = parameter_sets(system=system, **kw)
     paths = []
     for i, set_name in enumerate(sets):
         paths.append(out / (DEFAULT_SSD if i == 0 else f"{set_name}.ssd"))
-        _ssd_tree(set_name, step_size, stop_time, system).write(paths[-1], xml_declaration=True, encoding="UTF-8")
+        ssd_of(set_name).write(paths[-1], xml_declaration=True, encoding="UTF-8")
     for set_name, comps_p in sets.items():
         for comp, params in comps_p.items():
             paths.append(out / "resources" / f"{set_name}_{comp}.ssv")
@@ -361,22 +367,11 @@ def write_engine_ssp(out_dir="ssp/engine", step_size=1e-3, stop_time=1.0, system
     list of Path
         The written files, SSDs first.
     """
-    out = Path(out_dir)
-    (out / "resources").mkdir(parents=True, exist_ok=True)
-    for k, v in NS.items():
-        ET.register_namespace(k, v)
-    sets = engine_parameter_sets(system=system, **kw)
-    paths = []
-    for i, set_name in enumerate(sets):
-        paths.append(out / (DEFAULT_SSD if i == 0 else f"{set_name}.ssd"))
-        ssd_tree("engine_turbocharger", "Example engine side driving the turbocharger FMU (frbmodel)",
-                 ENGINE_COMPONENTS, ENGINE_CONNECTIONS, set_name, step_size, stop_time).write(
-            paths[-1], xml_declaration=True, encoding="UTF-8")
-    for set_name, comps_p in sets.items():
-        for comp, params in comps_p.items():
-            paths.append(out / "resources" / f"{set_name}_{comp}.ssv")
-            _ssv_tree(set_name, params).write(paths[-1], xml_declaration=True, encoding="UTF-8")
-    return paths
+    return _write_sets(out_dir, engine_parameter_sets(system=system, **kw),
+                       lambda set_name: ssd_tree("engine_turbocharger",
+                                                 "Example engine side driving the turbocharger FMU (frbmodel)",
+                                                 ENGINE_COMPONENTS, ENGINE_CONNECTIONS, set_name, step_size,
+                                                 stop_time))
 
 
 @dataclass

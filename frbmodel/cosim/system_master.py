@@ -18,8 +18,6 @@ communication point.
 from __future__ import annotations
 
 import math
-import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -28,7 +26,7 @@ import numpy as np
 from ..core.errors import CosimStopped, ParameterError
 from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
-from .fmu import FmuInstance
+from .fmu import ExtractionFolder, FmuInstance
 from .ssp import read_ssp
 
 TURBOCHARGER_FMU = "FloatingRingTurbocharger"
@@ -99,8 +97,7 @@ class SystemMaster:
     # ------------------------------------------------------------------ set-up
     def setup(self):
         """Extract and instantiate every FMU, find the turbocharger, plan the exchange."""
-        self._tmp = tempfile.TemporaryDirectory(prefix="frb_system_")
-        self._sys_path = list(sys.path)
+        self._tmp = ExtractionFolder("frb_system_")
         for name, path in self.ssp.components.items():
             self.fmus[name] = FmuInstance(name, path, self._tmp.name, self.trace)
         turbo = [f for f in self.fmus.values() if f.model_identifier == TURBOCHARGER_FMU]
@@ -265,7 +262,6 @@ class SystemMaster:
             fmu.free()
         self.fmus = {}
         if self._tmp is not None:
-            sys.path[:] = [p for p in sys.path if p in self._sys_path or not p.startswith(self._tmp.name)]
             self._tmp.cleanup()
             self._tmp = None
         self.ssp.close()
