@@ -34,21 +34,24 @@ def parse_speeds(text: str) -> np.ndarray:
     >>> parse_speeds("10000:30000:3").tolist(), parse_speeds("5e4,1e5").tolist()
     ([10000.0, 20000.0, 30000.0], [50000.0, 100000.0])
     """
-    from .core.errors import check_speeds_in_range
+    from .core.errors import check_speed_count, check_speeds_in_range
 
+    name = f"--speeds = {text!r}"
     try:
         if ":" in text:
             a, b, n = text.split(":")
-            n = int(n)
+            a, b, n = float(a), float(b), int(n)
             if n < 1:
                 raise ValueError
-            speeds = np.linspace(float(a), float(b), n)
         else:
             speeds = np.array([float(x) for x in text.split(",")])
     except ValueError:
-        raise ParameterError(f"--speeds = {text!r} is invalid: use START:STOP:COUNT (rpm, COUNT >= 1) or a comma "
-                             "list") from None
-    check_speeds_in_range(f"--speeds = {text!r}", speeds)
+        raise ParameterError(f"{name} is invalid: use START:STOP:COUNT (rpm, COUNT >= 1) or a comma list") from None
+    if ":" in text:
+        check_speeds_in_range(name, np.array([a, b]))  # (inf or nan named here, not passed to linspace)
+        check_speed_count(name, n)  # before the grid is made (1e8 speeds: 800 MB)
+        speeds = np.linspace(a, b, n)
+    check_speeds_in_range(name, speeds)
     return speeds
 
 
@@ -115,10 +118,14 @@ def _system_args(p):
 
 def cmd_campbell(args):
     """``frb campbell``: Campbell diagram of one method (from the library or the FMUs), saved and summarised."""
+    from .core.errors import check_speed
     from .linear.campbell import campbell
 
     speeds = parse_speeds(args.speeds)
     fmax = None if args.fmax is None else check_positive("--fmax", args.fmax, "Hz")
+    if args.mode_shapes is not None and args.from_fmu:
+        raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
+    mode_rpm = None if args.mode_shapes is None else check_speed("--mode-shapes", args.mode_shapes)  # before any work
     if args.parameter_set is not None and not args.from_fmu:
         raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
                              "set); without it the system is --system / --outer-clearance")
@@ -154,12 +161,10 @@ def cmd_campbell(args):
     if cd.n_neutral.max():
         print(f"neutral modes (|D| <= round-off bound, undamped): up to {int(cd.n_neutral.max())} at one speed")
     paths.append(_critical_table(cd, None if args.from_fmu else tc, out / f"campbell_{cd.method}_critical.csv", kw))
-    if args.mode_shapes is not None:
+    if mode_rpm is not None:
         from .linear.modeshape import save_mode_shapes
 
-        if args.from_fmu:
-            raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
-        paths += save_mode_shapes(cd, check_positive("--mode-shapes", args.mode_shapes, "rpm"), out, fmax)
+        paths += save_mode_shapes(cd, mode_rpm, out, fmax)
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
 
@@ -190,13 +195,16 @@ def _print_critical(cs):
 
 def _unbalance_methods(text, kw):
     """Method letters of ``--method`` (one or a comma list) and the spring options each takes."""
-    from .system.methods import get_method
+    from .system.methods import METHODS, get_method
 
     methods = [get_method(x) for x in text.split(",") if x.strip()] or [get_method(text)]
     unused = [k for k in kw if not any(k in m.parameters for m in methods)]
     if unused:
+        takers = ", ".join(m.letter for m in METHODS.values() if unused[0] in m.parameters)
+        takes = "; ".join(f"method {m.letter} takes " + (", ".join(f"--{p}" for p in m.parameters) or "no spring")
+                          for m in methods)
         raise ParameterError(f"--{unused[0]} = {kw[unused[0]]!r} is invalid for method {text}: it sets a spring of "
-                             "methods A, B, E")
+                             f"method{'s' if ',' in takers else ''} {takers} ({takes})")
     return [(m.letter, {k: v for k, v in kw.items() if k in m.parameters}) for m in methods]
 
 

@@ -7,6 +7,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -206,6 +207,43 @@ def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, 
     err = capsys.readouterr().err
     assert all(w in err for w in words), err
     assert "Traceback" not in err and not out.exists()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["campbell", "--speeds", "1000:inf:3"], ["--speeds = '1000:inf:3' contains inf rpm"]),
+    (["campbell", "--speeds", "10000:250000:100000000"], ["has 100000000 speeds: valid range 1 ... 10000"]),
+    (["campbell", "--mode-shapes", "999999999"], ["--mode-shapes = 999999999.0 rpm is invalid"]),
+    (["unbalance", "--method", "B", "--k", "5e6"], ["sets a spring of methods A, E (method B takes --kx, --ky)"]),
+    (["unbalance", "--method", "J", "--kx", "5e6"], ["sets a spring of method B (method J takes no spring)"]),
+])
+def test_misleading_or_late_messages_are_clear_and_early(argv, words, tmp_path, capsys):
+    """Issue #24 item 7: an infinite speed gave a numpy RuntimeWarning and then 'contains nan'; a grid of 1e8
+    speeds started (ETA 29 h); --mode-shapes 999999999 was refused only after the whole diagram was written; --k
+    with method B was refused as 'a spring of methods A, B, E'. Now one line at once, and nothing written (the
+    Campbell diagram is replaced by one that fails the test if it is computed)."""
+    import frbmodel.linear.campbell
+    from frbmodel.cli import main
+
+    def computed(*args, **kwargs):
+        raise AssertionError("the analysis ran before the input was checked")
+
+    out = tmp_path / "out"
+    with pytest.MonkeyPatch.context() as mp, warnings.catch_warnings():
+        warnings.simplefilter("error")  # a numpy RuntimeWarning on the way fails the test
+        mp.setattr(frbmodel.linear.campbell, "campbell", computed)
+        assert main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+    assert "Traceback" not in err and "Warning" not in err and not out.exists()
+
+
+def test_a_folder_given_as_system_file_is_named_as_a_folder(tmp_path, capsys):
+    from frbmodel.cli import main
+
+    assert main(["campbell", "--system", str(tmp_path), "--out", str(tmp_path / "out")]) == 2
+    assert f"system file = '{tmp_path}' is a folder; expected a .toml or .json file" in capsys.readouterr().err
+    with pytest.raises(frb.ParameterError, match="cannot be written: it is a folder"):
+        frb.turbocharger().save(tmp_path)
 
 
 def test_api_refuses_meaningless_tolerances_and_runs_that_record_nothing(built):

@@ -129,6 +129,28 @@ def check_positive(name, value, unit="", allow_zero=False):
 MAX_SPEED_RPM = 1e6
 
 
+#: most speeds of one speed grid (Campbell diagrams, critical speeds, the CLI's --speeds): 25 rpm steps over 1 ... 250
+#: krpm, finer than any branch tracking needs, and about a minute of Campbell diagram on the 2-core machine (400
+#: speeds take ~1 s there); a grid of 1e8 speeds was accepted with an ETA of 29 h
+MAX_SPEED_COUNT = 10_000
+
+
+def check_speed_count(name, count):
+    """Raise :class:`ParameterError` unless 1 <= ``count`` <= :data:`MAX_SPEED_COUNT` (speeds of one grid).
+
+    Examples
+    --------
+    >>> try:
+    ...     check_speed_count("--speeds = '1e4:2.5e5:100000000'", 100000000)
+    ... except ParameterError as exc:
+    ...     print(exc)  # doctest: +ELLIPSIS
+    --speeds = '1e4:2.5e5:100000000' has 100000000 speeds: valid range 1 ... 10000 speeds (25 rpm steps ...)
+    """
+    if not 1 <= count <= MAX_SPEED_COUNT:
+        raise ParameterError(f"{name} has {count} speeds: valid range 1 ... {MAX_SPEED_COUNT} speeds "
+                             "(25 rpm steps over 250 krpm: a finer grid resolves nothing more)")
+
+
 def check_speeds_in_range(name, speeds_rpm):
     """Raise :class:`ParameterError` naming ``name`` and the first speed [rpm] of the array ``speeds_rpm`` that is
     not a number with |speed| <= :data:`MAX_SPEED_RPM` (the sign and zero are the caller's to check).
@@ -141,6 +163,8 @@ def check_speeds_in_range(name, speeds_rpm):
     ...     print(exc)
     speeds_rpm contains 2000000.0 rpm: valid range |speed| <= 1e+06 rpm (the model is verified for 1 ... 250 krpm)
     """
+    speeds_rpm = np.asarray(speeds_rpm, dtype=float)
+    check_speed_count(name, speeds_rpm.size)
     bad = speeds_rpm[~(np.abs(speeds_rpm) <= MAX_SPEED_RPM)]  # (also NaN)
     if bad.size:
         raise ParameterError(f"{name} contains {float(bad[0])!r} rpm: valid range |speed| <= {MAX_SPEED_RPM:.0e} rpm "

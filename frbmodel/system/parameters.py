@@ -398,6 +398,8 @@ class Turbocharger:
 
         path = Path(path)
         d = self.to_dict()
+        if path.is_dir():
+            raise ParameterError(f"system file {str(path)!r} cannot be written: it is a folder")
         if path.suffix.lower() in (".json", ".toml"):
             text = json.dumps(d, indent=2) if path.suffix.lower() == ".json" else tomli_w.dumps(_toml_ready(d))
             try:
@@ -431,6 +433,8 @@ def load_system(path) -> Turbocharger:
     """
     path = Path(path)
     suffix = path.suffix.lower()
+    if path.is_dir():
+        raise ParameterError(f"system file = {str(path)!r} is a folder; expected a .toml or .json file")
     if suffix not in (".toml", ".json"):
         raise ParameterError(f"system file suffix = {path.suffix!r} is unknown; use .toml or .json")
     if not path.exists():
