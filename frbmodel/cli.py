@@ -393,9 +393,10 @@ def cmd_runup(args):
     prof = _profile(args)
     duration = float(prof.t[-1]) if args.duration is None else args.duration
     check_output_rate(args.rate, duration)
-    from .nonlinear.runup import check_tolerances
+    from .nonlinear.runup import check_drive_torque, check_tolerances
 
     rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
+    check_drive_torque(tc, prof, "--drive-torque")
     unbalance = _parse_unbalance(args.unbalance)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")

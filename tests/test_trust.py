@@ -195,6 +195,10 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["runup", "--drive-torque", "0.05", "--duration", "0.01"], ["--drive-torque = 0.05 N m applies only with "
                                                                   "--profile torque"]),
     (["runup", "--system", "", "--duration", "0.01"], ["--system = '' is invalid"]),
+    # 1.32e4 N m = J_p (1e6 rpm = 1.047e5 rad/s) / 1 ms with J_p = 1.2619e-4 kg m², the Table 2 rotor's polar inertia
+    # by hand (discs plus shaft, docs/theory/parameters.md); 1e9 N m overshot the speed bound inside one sample
+    (["runup", "--profile", "torque", "--drive-torque", "1e9", "--integrator", "lsoda", "--duration", "0.01"],
+     ["--drive-torque = 1e+09 N m is invalid: valid range |torque| <= 1.32e+04 N m"]),
     (["campbell", "--system", ""], ["--system = '' is invalid"]),
 ])
 def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, words, tmp_path, capsys):

@@ -925,6 +925,27 @@ def _speed_bound(problem):
     return w_max
 
 
+#: shortest time [s] in which a drive torque alone may take the rotor from standstill to MAX_SPEED_RPM: a larger
+#: torque overshoots the speed bound inside one solver call (1e9 N m reached 3.8e9 rpm inside one 50 µs sample with
+#: LSODA, and kept the compiled Radau solver from returning to take Ctrl-C for minutes); 1 ms is 13e3 N m for the
+#: Table 2 rotor, four orders above a turbocharger's turbine torque (~0.01 ... 1 N m)
+MIN_TORQUE_TIME_S = 1e-3
+
+
+def check_drive_torque(system, profile, name="drive torque"):
+    """Refuse a torque-driven ``profile`` whose largest |drive torque| [N m] would take the ``system``'s rotor from
+    standstill to :data:`MAX_SPEED_RPM` in less than :data:`MIN_TORQUE_TIME_S` (a prescribed speed passes)."""
+    if not getattr(profile, "torque_driven", False):
+        return
+    jp = rotor_polar_inertia(system.rotor)
+    limit = jp * MAX_SPEED_RPM * RPM / MIN_TORQUE_TIME_S
+    tq = float(np.max(np.abs(profile.drive_torque)))
+    if tq > limit:
+        raise ParameterError(f"{name} = {tq:g} N m is invalid: valid range |torque| <= {limit:.3g} N m (it would take "
+                             f"the rotor, polar inertia {jp:.3g} kg m², to {MAX_SPEED_RPM:.0e} rpm in under "
+                             f"{MIN_TORQUE_TIME_S * 1e3:g} ms; a turbine gives ~0.01 ... 1 N m)")
+
+
 #: valid range of the relative tolerance [-]: above it a run "finishes" after a handful of steps with a meaningless
 #: trajectory (measured: rtol 1 or 5, 9-15 solver steps for a 1 s run-up), below it round-off dominates
 RTOL_RANGE = (1e-13, 1e-4)
@@ -1452,6 +1473,7 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
         raise ParameterError(f"contact_eps = {contact_eps!r} is invalid: valid range 0 < contact_eps < 1")
     if integrator not in INTEGRATORS:
         raise ParameterError(f"integrator = {integrator!r} is unknown; valid: {', '.join(map(repr, INTEGRATORS))}")
+    check_drive_torque(system, profile)
     problem = build_problem(system, profile, model, unbalance, linear_springs)
     y0 = initial_state(problem, initial, perturbation)
     atol_v, scale = atol_vector(problem, atol)
