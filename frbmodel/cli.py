@@ -424,6 +424,7 @@ def cmd_runup(args):
 
 def cmd_bifurcation(args):
     """``frb bifurcation``: Hopf points and limit-cycle branches vs speed (continuation), tables and diagram."""
+    from .cycles.branch import hopf_dataframe
     from .cycles.continuation import BifurcationDiagram, check_starts, continuation, hopf_points
     from .nonlinear.runup import check_speed
 
@@ -447,7 +448,9 @@ def cmd_bifurcation(args):
     for hp in hps:
         print(f"  {hp.speed_rpm:10.1f} rpm  {hp.frequency_hz:8.2f} Hz  ({hp.frequency_hz * 60 / hp.speed_rpm:.3f} X)  "
               f"{'regains' if hp.restabilizing else 'loses'}")
+    hopf_dataframe(hps).to_csv(out / "hopf_points.csv", index=False)
     if args.hopf_only:
+        print(f"wrote:\n  {out / 'hopf_points.csv'}\nresults in {out.resolve()}")
         return 0
     points = []
     partial = out / "branch_partial.csv"

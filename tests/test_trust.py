@@ -302,3 +302,25 @@ def test_the_former_tracebacks_are_one_line_errors(tmp_path, capsys, built):
     with pytest.raises(frb.ParameterError, match="bearing = 'turbine' is a str; expected a FloatingRingBearing"):
         frb.ring_speed_ratio("turbine")
     shutil.rmtree(ssp)
+
+
+def test_bifurcation_hopf_only_writes_the_hopf_points_it_prints(tmp_path, capsys):
+    """Issue #24 item 8: ``frb bifurcation --hopf-only --out DIR`` printed the Hopf points and wrote nothing into DIR.
+    Now DIR/hopf_points.csv holds the printed rows (speed to the printed 0.1 rpm, frequency to 0.01 Hz), its order
+    column consistent with speed and frequency (f 60 / n, to round-off)."""
+    import pandas as pd
+
+    from frbmodel.cli import main
+
+    out = tmp_path / "hopf"
+    assert main(["bifurcation", "--hopf-only", "--speeds", "1000:5000", "--out", str(out)]) == 0
+    printed = [line.split() for line in capsys.readouterr().out.splitlines() if line.strip().endswith(("loses",
+                                                                                                      "regains"))]
+    tab = pd.read_csv(out / "hopf_points.csv")
+    assert list(tab.columns) == ["speed [rpm]", "frequency [Hz]", "frequency [X]", "with rising speed"]
+    assert len(tab) == len(printed) >= 1  # the compressor bearing's film loses stability near 2 krpm
+    for (_, row), words in zip(tab.iterrows(), printed):
+        assert row["speed [rpm]"] == pytest.approx(float(words[0]), abs=0.05 + 1e-9)
+        assert row["frequency [Hz]"] == pytest.approx(float(words[2]), abs=0.005 + 1e-9)
+        assert row["with rising speed"] == words[-1]
+    np.testing.assert_allclose(tab["frequency [X]"], tab["frequency [Hz]"] * 60 / tab["speed [rpm]"], rtol=1e-12)

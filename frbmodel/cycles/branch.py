@@ -282,6 +282,17 @@ class HopfPoint:
     restabilizing: bool = False
 
 
+def hopf_dataframe(hopf):
+    """The Hopf points ``hopf`` (:func:`hopf_points`) as a table: speed [rpm], frequency [Hz] and in orders of the
+    rotor speed [X], and whether the pair loses or regains stability with rising speed."""
+    import pandas as pd
+
+    return pd.DataFrame({"speed [rpm]": [h.speed_rpm for h in hopf], "frequency [Hz]": [h.frequency_hz for h in hopf],
+                         "frequency [X]": [h.frequency_hz * 60.0 / h.speed_rpm for h in hopf],
+                         "with rising speed": ["regains" if h.restabilizing else "loses" for h in hopf]},
+                        columns=["speed [rpm]", "frequency [Hz]", "frequency [X]", "with rising speed"])
+
+
 def equilibrium_jacobian(system, speed_rpm, film_model=None):
     """Equilibrium state (method-J bearing equilibria: the full model's fixed point) and the full model's Jacobian
     there, without the rotation angle.
@@ -605,4 +616,5 @@ def _phase_normal(br, z, speed):
 TOL, MAX_CORRECTOR, GOOD_ITERATIONS, SLOW_ITERATIONS = 1e-6, 8, 4, 6
 
 
-__all__ = ["BranchPoint", "HopfPoint", "equilibrium_jacobian", "hopf_guess", "hopf_points", "shoot_segments"]
+__all__ = ["BranchPoint", "HopfPoint", "equilibrium_jacobian", "hopf_dataframe", "hopf_guess", "hopf_points",
+           "shoot_segments"]
