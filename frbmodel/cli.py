@@ -615,8 +615,17 @@ def _finish_run(args, run, system, out, **figure_kw):
     print(f"results in {out.resolve()}")
 
 
-def writable_dir(path, option="--out"):
-    """Create folder ``path`` and check that files can be written there — before any computing starts.
+#: results folders claimed by the running command (:mod:`frbmodel.core.manifest`), finished by :func:`main`
+_CLAIMS = []
+#: the running command line (named in the manifests)
+_COMMAND = ["frb"]
+
+
+def writable_dir(path, option="--out", claim=True):
+    """Create folder ``path`` and check that files can be written there — before any computing starts. With
+    ``claim``, the folder is this command's results folder: the files the previous command wrote there and nobody
+    changed since are removed, and the command's own are listed in ``frb_manifest.json`` when it ends
+    (:mod:`frbmodel.core.manifest`).
 
     Parameters
     ----------
@@ -638,7 +647,7 @@ def writable_dir(path, option="--out"):
     --------
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     print(writable_dir(Path(tmp) / "a" / "b").is_dir())
+    ...     print(writable_dir(Path(tmp) / "a" / "b", claim=False).is_dir())
     True
     """
     import tempfile
@@ -650,6 +659,10 @@ def writable_dir(path, option="--out"):
             pass
     except OSError as exc:
         raise ParameterError(f"{option} = {str(path)!r} is not a writable folder: {exc.strerror or exc}") from None
+    if claim and not any(c.folder.resolve() == p.resolve() for c in _CLAIMS):
+        from .core.manifest import claim as claim_folder
+
+        _CLAIMS.append(claim_folder(p, " ".join(_COMMAND)))
     return p
 
 
@@ -696,10 +709,12 @@ def parse_orders(text: str) -> tuple:
 def cmd_plot(args):
     """Re-render the figures of a results folder written by frb runup / frb cosim (finished, stopped or
     interrupted) or by frb unbalance."""
+    from .core.manifest import extend
     from .nonlinear.recorder import RunupResult
     from .system.parameters import Turbocharger
 
     out = Path(args.dir)
+    _CLAIMS.append(extend(out, " ".join(_COMMAND)))  # the figures it draws belong to the run whose folder it is
     orders = parse_orders(args.orders)
     if (out / "branch.nc").exists():
         return replot_bifurcation(args, out)
@@ -1116,7 +1131,7 @@ def cmd_sweep(args):
                 opts["ssp"] = str(Path(args.ssp).resolve())
         cases = grid(params, args.analysis, **opts)
     scheduler = "serial" if args.serial else args.scheduler
-    writable_dir(args.out)
+    writable_dir(args.out, claim=False)  # (a study resumes in its folder: its index owns it)
     interrupted = None
     try:
         idx = run_study(cases, args.out, scheduler=scheduler, n_workers=args.workers,
@@ -1497,6 +1512,35 @@ def main(argv=None):
     os.environ.setdefault("MPLBACKEND", "Agg")  # figures are written to files; the library never sets a backend
     args = build_parser().parse_args(argv)
     signal.signal(signal.SIGTERM, _on_sigterm)
+    _COMMAND[:] = ["frb", *(sys.argv[1:] if argv is None else argv)]
+    code = None
+    try:
+        code = _dispatch(args)
+    finally:
+        _finish_claims(code)
+    return code
+
+
+#: manifest status of a results folder by the command's exit code (None: an exception escaped)
+CLAIM_STATUS = {0: "finished", 2: "refused", 3: "stopped", 4: "finished with failed cases", 130: "interrupted",
+                143: "interrupted"}
+
+
+def _finish_claims(code):
+    """Write the manifests of the folders the command claimed (:func:`writable_dir`), with its outcome."""
+    while _CLAIMS:
+        c = _CLAIMS.pop()
+        try:
+            c.finish(CLAIM_STATUS.get(code, "failed"))
+            if c.removed:
+                print(f"removed {len(c.removed)} files of the previous run in {c.folder} that this one did not write "
+                      "again (its frb_manifest.json listed them; files it did not write are kept)")
+        except OSError as exc:  # (the folder was removed or made read-only meanwhile: the results still stand)
+            print(f"frb: could not write {c.folder / 'frb_manifest.json'}: {exc.strerror or exc}", file=sys.stderr)
+
+
+def _dispatch(args):
+    """Run the parsed command; its exit code (errors become messages and codes)."""
     try:
         _first_run_notice(args.command)
         return args.func(args) or 0
