@@ -1100,7 +1100,7 @@ def cmd_linearize(args):
 
 def cmd_sweep(args):
     """``frb sweep``: parameter study (on Dask or serial) and its stability map; exit code 4 if a case failed."""
-    from .studies.sweep import example_cases, grid, plot_stability_map, run_study, stability_map
+    from .studies.sweep import check_scheduler, example_cases, grid, plot_stability_map, run_study, stability_map
 
     if args.example:
         cases = example_cases(args.example)
@@ -1131,6 +1131,7 @@ def cmd_sweep(args):
                 opts["ssp"] = str(Path(args.ssp).resolve())
         cases = grid(params, args.analysis, **opts)
     scheduler = "serial" if args.serial else args.scheduler
+    check_scheduler(scheduler)  # (before the folder is made: a wrong address leaves nothing behind)
     writable_dir(args.out, claim=False)  # (a study resumes in its folder: its index owns it)
     interrupted = None
     try:

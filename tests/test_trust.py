@@ -299,6 +299,7 @@ def test_the_former_tracebacks_are_one_line_errors(tmp_path, capsys, built):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err
         assert words in err and "Traceback" not in err, (argv, err[-500:])
+    assert not (tmp_path / "o2").exists()  # the study's folder is not made for a scheduler that is not there
     with pytest.raises(frb.ParameterError, match="bearing = 'turbine' is a str; expected a FloatingRingBearing"):
         frb.ring_speed_ratio("turbine")
     shutil.rmtree(ssp)

@@ -669,7 +669,7 @@ def _client(scheduler, n_workers):
             cluster = dist.LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
                                         processes=True, dashboard_address=":0")
         return dist.Client(cluster, set_as_default=False), cluster  # never the user's default client
-    _check_scheduler_reachable(scheduler)  # before any Client exists: a failed one prints a traceback when collected
+    check_scheduler(scheduler)  # before any Client exists: a failed one prints a traceback when collected
     try:
         return dist.Client(scheduler, timeout=SCHEDULER_TIMEOUT_S, set_as_default=False), None
     except (OSError, TimeoutError, ValueError) as exc:
@@ -677,11 +677,14 @@ def _client(scheduler, n_workers):
                              f"Dask scheduler, tcp://host:port; waited {SCHEDULER_TIMEOUT_S:g} s)") from None
 
 
-def _check_scheduler_reachable(scheduler):
-    """A :class:`ParameterError` unless ``scheduler`` is ``tcp://host:port`` (or ``host:port``) and a TCP connection
-    to it opens within :data:`SCHEDULER_TIMEOUT_S`."""
+def check_scheduler(scheduler):
+    """Nothing for ``None`` (a local cluster) and ``"serial"``; else a :class:`ParameterError` unless ``scheduler``
+    is ``tcp://host:port`` (or ``host:port``) and a TCP connection to it opens within :data:`SCHEDULER_TIMEOUT_S`."""
     import re
     import socket
+
+    if scheduler is None or scheduler == "serial":
+        return
 
     m = re.fullmatch(r"(?:tcp://)?\[?([^\]/]+?)\]?:(\d+)/?", str(scheduler))
     if m is None:
