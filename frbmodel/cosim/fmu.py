@@ -95,6 +95,44 @@ class ExtractionFolder:
         self._tmp.cleanup()
 
 
+
+class FmuHost:
+    """Base of the masters: the FMU instances of an SSP's components (``self.ssp``), extracted into one
+    :class:`ExtractionFolder`; a context manager (``setup()`` on entry, :meth:`close` on exit)."""
+
+    fmus: dict
+    _tmp: ExtractionFolder | None = None
+
+    def _instantiate(self, prefix):
+        """Extract and instantiate every component's FMU (one at a time: :meth:`close` frees those made before a
+        failure)."""
+        self._tmp = ExtractionFolder(prefix)
+        self.fmus = {}
+        for name, path in self.ssp.components.items():
+            self.fmus[name] = FmuInstance(name, path, self._tmp.name, self.trace)
+
+    def _freed(self, fmu):
+        """Called for each instance after it is freed (a master collects its call statistics here)."""
+
+    def close(self):
+        """Terminate and free every FMU instance, delete the extracted files and close the SSP."""
+        for fmu in self.fmus.values():
+            fmu.free()
+            self._freed(fmu)
+        self.fmus = {}
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+        self.ssp.close()
+
+    def __enter__(self):
+        return self.setup()
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
 class FmuInstance:
     """An instantiated FMU of the system.
 

@@ -29,7 +29,7 @@ from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
 from ..nonlinear.recorder import Recorder, RunupResult, RunupSchema
-from .fmu import ExtractionFolder, FmiCallFailed, FmuInstance
+from .fmu import FmiCallFailed, FmuHost
 from .ssp import read_ssp
 
 BEARING_FMU, ROTOR_FMU = "FloatingRingBearing", "TurbochargerRotor"
@@ -108,7 +108,7 @@ def system_from_parameters(params, default=None):
     return tc.with_(bearings=tuple(bs), film_model=model)
 
 
-class Master:
+class Master(FmuHost):
     """Fixed-step (optionally rolling-back) or error-controlled co-simulation of an SSP system of one rotor and its
     bearing FMUs.
 
@@ -257,10 +257,7 @@ class Master:
     # ------------------------------------------------------------------ set-up
     def setup(self):
         """Extract and instantiate every FMU, identify rotor and bearings, plan the exchange."""
-        self._tmp = ExtractionFolder("frb_cosim_")
-        self.fmus = {}
-        for name, path in self.ssp.components.items():  # (one at a time: close() frees those made before a failure)
-            self.fmus[name] = FmuInstance(name, path, self._tmp.name, self.trace)
+        self._instantiate("frb_cosim_")
         rotors = [f for f in self.fmus.values() if f.model_identifier == ROTOR_FMU]
         if len(rotors) != 1:
             raise ParameterError(f"{self.ssp_path}: the system needs exactly one {ROTOR_FMU} component, found "
@@ -697,27 +694,12 @@ class Master:
             raise CosimStopped(message, result)
         return result
 
-    def close(self):
-        """Terminate and free every FMU instance and delete the extracted files (the instances' call counts and
-        times are added to :attr:`fmi_calls` first)."""
-        for fmu in self.fmus.values():
-            fmu.free()
-            for function, (n, wall) in fmu.calls.items():
-                stat = self.fmi_calls.setdefault(function, [0, 0.0])
-                stat[0] += n
-                stat[1] += wall
-        self.fmus = {}
-        if self._tmp is not None:
-            self._tmp.cleanup()
-            self._tmp = None
-        self.ssp.close()
-
-    def __enter__(self):
-        return self.setup()
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
+    def _freed(self, fmu):
+        """Add a freed instance's call counts and times to :attr:`fmi_calls`."""
+        for function, (n, wall) in fmu.calls.items():
+            stat = self.fmi_calls.setdefault(function, [0, 0.0])
+            stat[0] += n
+            stat[1] += wall
 
 
 def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_dir=None, progress=False,

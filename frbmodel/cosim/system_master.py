@@ -26,7 +26,7 @@ import numpy as np
 from ..core.errors import CosimStopped, ParameterError
 from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
-from .fmu import ExtractionFolder, FmuInstance
+from .fmu import FmuHost
 from .ssp import read_ssp
 
 TURBOCHARGER_FMU = "FloatingRingTurbocharger"
@@ -50,7 +50,7 @@ def is_system_ssp(ssp) -> bool:
         return any(Path(f).is_file() and model_identifier(f) == TURBOCHARGER_FMU for f in s.components.values())
 
 
-class SystemMaster:
+class SystemMaster(FmuHost):
     """Fixed-step Jacobi co-simulation of an SSP system with one turbocharger FMU (see the module description).
 
     Parameters
@@ -97,9 +97,7 @@ class SystemMaster:
     # ------------------------------------------------------------------ set-up
     def setup(self):
         """Extract and instantiate every FMU, find the turbocharger, plan the exchange."""
-        self._tmp = ExtractionFolder("frb_system_")
-        for name, path in self.ssp.components.items():
-            self.fmus[name] = FmuInstance(name, path, self._tmp.name, self.trace)
+        self._instantiate("frb_system_")
         turbo = [f for f in self.fmus.values() if f.model_identifier == TURBOCHARGER_FMU]
         if len(turbo) != 1:
             raise ParameterError(f"{self.ssp_path}: the system needs exactly one {TURBOCHARGER_FMU} component, "
@@ -256,22 +254,6 @@ class SystemMaster:
         cols = ["time [s]"] + [f"{n} [{units.get(n.split('.')[-1], '?')}]" for n in self.signal_names]
         pd.DataFrame(np.array(rows), columns=cols).to_csv(out / "signals.csv", index=False)
 
-    def close(self):
-        """Terminate and free every FMU instance and delete the extracted files."""
-        for fmu in self.fmus.values():
-            fmu.free()
-        self.fmus = {}
-        if self._tmp is not None:
-            self._tmp.cleanup()
-            self._tmp = None
-        self.ssp.close()
-
-    def __enter__(self):
-        return self.setup()
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
 
 
 def _mark_record(out, status, message):
