@@ -11,13 +11,15 @@ from .core.errors import FRBError, ParameterError, check_finite, check_positive
 from .core.interrupt import Terminated
 
 
-def parse_speeds(text: str) -> np.ndarray:
+def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
     """Rotor speeds [rpm] from ``"start:stop:count"`` (inclusive linspace) or a comma-separated list.
 
     Parameters
     ----------
     text : str
-        The ``--speeds`` option value, in rpm.
+        The option's value, in rpm.
+    option : str
+        The option's name, for the messages.
 
     Returns
     -------
@@ -36,7 +38,7 @@ def parse_speeds(text: str) -> np.ndarray:
     """
     from .core.errors import check_speed_count, check_speeds_in_range
 
-    name = f"--speeds = {text!r}"
+    name = f"{option} = {text!r}"
     try:
         if ":" in text:
             a, b, n = text.split(":")
@@ -141,7 +143,12 @@ def cmd_campbell(args):
         tc = load_from_args(args)  # (a system the checks refuse is refused before the folder exists)
         out = writable_dir(args.out)
         kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
-        cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, **kw)
+        try:
+            cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, **kw)
+        except KeyboardInterrupt as exc:
+            if getattr(exc, "result", None) is None:
+                raise
+            return _save_interrupted_campbell(exc, out, fmax)
     paths = cd.save(out, fmax_hz=fmax)
     print(f"method {cd.method}: {cd.meta.get('method_title', cd.meta.get('source', ''))}; {speeds.size} speeds")
     if not args.no_whirl:
@@ -167,6 +174,17 @@ def cmd_campbell(args):
         paths += save_mode_shapes(cd, mode_rpm, out, fmax)
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
+
+
+def _save_interrupted_campbell(exc, out, fmax):
+    """Write the speeds a Ctrl-C / SIGTERM left of a Campbell diagram (``exc.result``); the exit code 130 / 143."""
+    cd = exc.result
+    paths = cd.save(out, fmax_hz=fmax)
+    code = 143 if isinstance(exc, Terminated) else 130
+    print(f"\nfrb campbell: interrupted ({'SIGTERM' if code == 143 else 'Ctrl-C'}) after {cd.speeds_rpm.size} of "
+          f"{cd.meta['speeds_requested']} speeds (up to {cd.speeds_rpm[-1]:,.0f} rpm); those are written, marked "
+          f"'interrupted':\n  " + "\n  ".join(str(p) for p in paths), file=sys.stderr)
+    return code
 
 
 def _critical_table(cd, system, path, kw):
@@ -736,12 +754,9 @@ def cmd_plot(args):
 
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
+    windows = _orbit_windows(args, run)  # every option checked before the composites are redrawn
     write_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
-    if args.orbits or args.orbit_times:
-        speeds = parse_speeds(args.orbits) if args.orbits else ()
-        times = parse_time_windows(args.orbit_times) if args.orbit_times else ()
-        write_orbits(run, out, speeds, check_positive("--revolutions", args.revolutions), data=True,
-                     time_windows=times)
+    write_orbits(windows, out, data=True)
     if args.waterfall:
         write_waterfalls(run, out, orders=orders)
     print(f"results in {out.resolve()}")
@@ -842,34 +857,68 @@ def parse_time_windows(text: str) -> list:
     return out
 
 
-def write_orbits(run, out, speeds_rpm=(), revolutions=20.0, data=False, time_windows=()):
-    """Orbit figures of a run at given speeds or over time windows (:meth:`Orbits.save`): ``orbits_<rpm>.png`` and
-    ``.html``, or ``orbits_t<t0>-<t1>s.png`` and ``.html``, in ``out``.
+def _orbit_windows(args, run):
+    """The orbit windows of ``frb plot --orbits / --orbit-times / --revolutions`` (:func:`orbit_windows`), each
+    error naming its option; ``--revolutions`` without ``--orbits`` is refused (it would be ignored)."""
+    if args.revolutions is not None and not args.orbits:
+        raise ParameterError(f"--revolutions {args.revolutions:g} applies only with --orbits SPEEDS (the half-width "
+                             "of each speed window); --orbit-times windows are given in seconds")
+    revolutions = check_positive("--revolutions", 20.0 if args.revolutions is None else args.revolutions,
+                                 "revolutions")
+    speeds = parse_speeds(args.orbits, "--orbits") if args.orbits else ()
+    times = parse_time_windows(args.orbit_times) if args.orbit_times else ()
+    windows = []
+    for option, value, kw in (("--orbits", args.orbits, {"speeds_rpm": speeds}),
+                              ("--orbit-times", args.orbit_times, {"time_windows": times})):
+        try:
+            windows += orbit_windows(run, revolutions=revolutions, **kw) if value else []
+        except ParameterError as exc:
+            raise ParameterError(f"{option} {value}: {exc}") from None
+    return windows
+
+
+def orbit_windows(run, speeds_rpm=(), revolutions=20.0, time_windows=()):
+    """Orbits of a run at given speeds and over time windows (:func:`frbmodel.signals.orbits.orbits`).
 
     Parameters
     ----------
     run : RunupResult
         With the system in its metadata (clearances).
-    out : Path
-        Output folder (must exist).
     speeds_rpm : sequence of float
         Window centres [rpm] (each within the run's speeds).
     revolutions : float
         Half-width of each speed window in rotor revolutions.
+    time_windows : sequence of (float, float)
+        Time windows [s] (e.g. the settled end of a constant-speed run), each holding >= 2 samples.
+
+    Returns
+    -------
+    list of Orbits
+    """
+    from .signals.orbits import orbits
+
+    return ([orbits(run, speed_rpm=float(s), revolutions=revolutions) for s in speeds_rpm]
+            + [orbits(run, time_s=w) for w in time_windows])
+
+
+def write_orbits(windows, out, data=False):
+    """Orbit figures (:meth:`Orbits.save`): ``orbits_<rpm>.png`` and ``.html``, or ``orbits_t<t0>-<t1>s.png`` and
+    ``.html``, in ``out``.
+
+    Parameters
+    ----------
+    windows : sequence of Orbits
+        From :func:`orbit_windows`.
+    out : Path
+        Output folder (must exist).
     data : bool
         Also write the samples: ``orbits_<...>.csv`` and ``orbits_<...>.nc`` (:meth:`Orbits.to_xarray`).
-    time_windows : sequence of (float, float)
-        Time windows [s] (e.g. the settled end of a constant-speed run).
 
     Returns
     -------
     list of Path
         The files written.
     """
-    from .signals.orbits import orbits
-
-    windows = [orbits(run, speed_rpm=float(s), revolutions=revolutions) for s in speeds_rpm]
-    windows += [orbits(run, time_s=w) for w in time_windows]
     paths = []
     for o in windows:
         written = o.save(out, csv=data, nc=data)
@@ -1429,8 +1478,8 @@ def _add_plot(sub):
                     help="also write orbits_<rpm>.png/.html/.csv/.nc at these speeds [rpm] (comma list or "
                          "start:stop:count; ± --revolutions about each): journal in ring, ring in housing (µm and ε), "
                          "wheels")
-    pl.add_argument("--revolutions", type=float, default=20.0,
-                    help="half-width of the --orbits windows in rotor revolutions")
+    pl.add_argument("--revolutions", type=float, default=None,
+                    help="half-width of the --orbits windows in rotor revolutions (default 20)")
     pl.add_argument("--orbit-times", metavar="T0:T1", default=None,
                     help="also write orbits_t<t0>-<t1>s.png/.html/.csv/.nc over these time windows [s] (comma list), "
                          "e.g. the settled end of a constant-speed run")

@@ -141,11 +141,11 @@ def test_order_lines_and_waterfall():
 
 
 def test_cli_writers(tmp_path):
-    from frbmodel.cli import build_parser, write_orbits, write_waterfalls
+    from frbmodel.cli import build_parser, orbit_windows, write_orbits, write_waterfalls
 
     t = np.arange(0.0, 0.2, 1e-4)
     run = _run(t, 30e3 + 100e3 * t)
-    paths = write_orbits(run, tmp_path, [35e3]) + write_waterfalls(run, tmp_path)
+    paths = write_orbits(orbit_windows(run, [35e3]), tmp_path) + write_waterfalls(run, tmp_path)
     assert sorted(p.name for p in paths) == ["orbits_35000.html", "orbits_35000.png", "waterfall_wheel.html",
                                              "waterfall_wheel.png"]
     assert all(p.stat().st_size > 0 for p in paths)

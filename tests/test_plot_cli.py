@@ -175,3 +175,28 @@ def test_plot_redraws_a_bifurcation_folder(tmp_path):
     assert set(branch_x) == {2e4, 3e4, 4e4, 5e4}
     marks = [t for t in traces if t.get("name") == "fold"]
     assert marks and "forward conical" in marks[0]["text"][0] and "turbine outer" in marks[0]["text"][0]
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--orbits", "500000"], ["--orbits 500000: speed_rpm = 500000 is invalid: valid range 30000 ... 60000 rpm"]),
+    (["--orbits", "fast"], ["--orbits = 'fast' is invalid: use START:STOP:COUNT"]),
+    (["--orbit-times", "5:6"], ["--orbit-times 5:6: the time window 5 ... 6 s holds 0 samples", "at least 2"]),
+    (["--revolutions=-3"], ["--revolutions -3 applies only with --orbits"]),
+    (["--orbits", "45000", "--revolutions=-3"], ["--revolutions = -3.0 revolutions is invalid", "> 0"]),
+])
+def test_plot_checks_its_orbit_options_before_it_redraws_anything(run_dir, argv, words, capsys, monkeypatch):
+    """Issue #24 item 7: --orbits 500000, --orbit-times 5:6, --revolutions=-3 and --orbits fast were checked only
+    after the composites were redrawn (6 s), --revolutions without --orbits was ignored, and 'fast' was reported as
+    --speeds. Now each is refused first (the composites are replaced by a function that fails the test if called),
+    naming its option, with no file added to the folder."""
+    import frbmodel.cli
+
+    def redrawn(*args, **kwargs):
+        raise AssertionError("the composites were redrawn before the options were checked")
+
+    monkeypatch.setattr(frbmodel.cli, "write_composites", redrawn)
+    before = sorted(p.name for p in run_dir.iterdir())
+    assert main(["plot", str(run_dir), *argv]) == 2
+    err = capsys.readouterr().err
+    assert all(w in err for w in words) and "Traceback" not in err, err
+    assert sorted(p.name for p in run_dir.iterdir()) == before

@@ -147,18 +147,23 @@ def test_rotor_component_refuses_bad_speed_inputs():
         SpeedProfile.torque(math.nan, 2000, 1.0)
 
 
-def test_a_huge_drive_torque_stops_the_compiled_run_at_once(monkeypatch):
-    """A drive torque of 1e9 N m takes the rotor past the 1e6 rpm limit within the first steps. The compiled solver
-    checked the speed only at output samples, so the run went on for millions of ever shorter steps (10 minutes for
-    1 ms, deaf to SIGTERM between samples); it now stops at the first step beyond the limit. With a step budget of
-    2000 per sample the former code ended with "step budget exhausted" instead. (Such a torque is now refused before
-    the run, MIN_TORQUE_TIME_S; the bound is lifted here to check the solver's own per-step stop behind it.)"""
+@pytest.mark.parametrize("integrator, words, work", [
+    ("rodas", "torque-driven rotor speed left 0 < speed <= 1e+06 rpm", "solver_steps"),
+    ("radau", "a torque-driven speed beyond 1e+06 rpm ends it so", "solver_steps"),
+    ("lsoda", "rotor speed left the valid range 0 < speed <= 1e+06 rpm", "rhs_evaluations")])
+def test_a_huge_drive_torque_stops_every_integrator_at_once(monkeypatch, integrator, words, work):
+    """A drive torque of 1e9 N m takes the rotor past the 1e6 rpm limit within the first steps. The solvers checked
+    the speed only at output samples, so the run went on for millions of ever shorter steps (rodas: 10 minutes for
+    1 ms, deaf to SIGTERM; LSODA ended by itself at 3.8e9 rpm); each now stops at the first step beyond the limit
+    (rodas: its status 4; Radau: the right-hand side turns NaN; LSODA: its right-hand side raises). (Such a torque is
+    now refused before the run, MIN_TORQUE_TIME_S; the bound is lifted here to check the solvers' own stop.) The
+    work bound: < 100 steps / 1000 right-hand sides, where the former code took > 2000 per sample."""
     import frbmodel.nonlinear.runup
 
     monkeypatch.setattr(frbmodel.nonlinear.runup, "MIN_TORQUE_TIME_S", 1e-12)
     tc = frb.turbocharger(36e-6)
     prof = SpeedProfile.torque(1e9, 20e3, 1e-3)
     with pytest.raises(frb.RunStopped) as ei:
-        runup(tc, profile=prof, duration=1e-3, nsteps=2000, integrator="rodas")
-    assert "torque-driven rotor speed left 0 < speed <= 1e+06 rpm" in str(ei.value), str(ei.value)
-    assert ei.value.result.meta["solver_steps"] < 100
+        runup(tc, profile=prof, duration=1e-3, nsteps=2000, integrator=integrator)
+    assert words in str(ei.value), str(ei.value)
+    assert ei.value.result.meta[work] < (1000 if integrator == "lsoda" else 100)

@@ -219,12 +219,17 @@ def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, 
     (["campbell", "--mode-shapes", "999999999"], ["--mode-shapes = 999999999.0 rpm is invalid"]),
     (["unbalance", "--method", "B", "--k", "5e6"], ["sets a spring of methods A, E (method B takes --kx, --ky)"]),
     (["unbalance", "--method", "J", "--kx", "5e6"], ["sets a spring of method B (method J takes no spring)"]),
+    (["sweep", "--param", "outer_clearance=40e-6,-1e-6"], ["study parameter outer_clearance = -1e-06 [m]",
+                                                          "film clearance = -1e-06 m is invalid: valid range"]),
+    (["sweep", "--param", "ring_mass=0"], ["study parameter ring_mass = 0 [kg]", "ring_mass = 0.0 kg is invalid"]),
+    (["sweep", "--param", "unbalance_turbine=-1"], ["unbalance_turbine = -1.0 kg m is invalid"]),
 ])
 def test_misleading_or_late_messages_are_clear_and_early(argv, words, tmp_path, capsys):
     """Issue #24 item 7: an infinite speed gave a numpy RuntimeWarning and then 'contains nan'; a grid of 1e8
     speeds started (ETA 29 h); --mode-shapes 999999999 was refused only after the whole diagram was written; --k
-    with method B was refused as 'a spring of methods A, B, E'. Now one line at once, and nothing written (the
-    Campbell diagram is replaced by one that fails the test if it is computed)."""
+    with method B was refused as 'a spring of methods A, B, E'; a study parameter the system refuses ran every case
+    and exited 4 (a negative unbalance was dropped). Now one line at once, and nothing written (the Campbell diagram
+    is replaced by one that fails the test if it is computed)."""
     import frbmodel.linear.campbell
     from frbmodel.cli import main
 
@@ -325,3 +330,83 @@ def test_bifurcation_hopf_only_writes_the_hopf_points_it_prints(tmp_path, capsys
         assert row["frequency [Hz]"] == pytest.approx(float(words[2]), abs=0.005 + 1e-9)
         assert row["with rising speed"] == words[-1]
     np.testing.assert_allclose(tab["frequency [X]"], tab["frequency [Hz]"] * 60 / tab["speed [rpm]"], rtol=1e-12)
+
+
+def _problem_opts(rtol=1e-7, nsteps=500_000):
+    """A main-job problem and the solver options of frb.runup's integrators, for driving them one call at a time."""
+    from frbmodel.nonlinear.runup import DEFAULT_ATOL_M, SpeedProfile, atol_vector, build_problem, initial_state
+
+    problem = build_problem(frb.turbocharger(36e-6), SpeedProfile.ramp(20e3, 250e3, 1.0), "short")
+    opts = {"atol": atol_vector(problem, DEFAULT_ATOL_M), "rtol": rtol, "nsteps": nsteps, "max_step": 0.0}
+    return problem, initial_state(problem), opts
+
+
+def test_lsoda_takes_a_stop_request_inside_a_solver_call():
+    """Ctrl-C / SIGTERM reached LSODA only between output samples, so a run whose sample interval takes millions of
+    steps could not be stopped. Its right-hand side now asks at every evaluation: a request that is pending at the
+    50th evaluation ends the call there, long before the first 5 ms sample (which takes thousands)."""
+    from frbmodel.nonlinear.runup import _lsoda_samples
+
+    problem, y0, opts = _problem_opts()
+    counts = {"rhs_evaluations": 0, "jacobian_evaluations": 0}
+
+    def check():
+        raise KeyboardInterrupt
+
+    opts.update(check=check, pending=lambda: counts["rhs_evaluations"] >= 50)
+    with pytest.raises(KeyboardInterrupt):
+        next(_lsoda_samples(problem, y0, np.array([0.0, 5e-3]), opts, counts))
+    assert counts["rhs_evaluations"] == 50
+
+
+def test_compiled_solvers_return_to_take_stop_requests_within_a_step_budget(monkeypatch):
+    """The compiled solvers ran CHUNK_SAMPLES x nsteps steps per call (5e7 by default) without returning, deaf to
+    Ctrl-C. Now a call returns after CALL_STEPS steps: with a 50-step budget a 5 ms chunk of the main job (hundreds of
+    steps) takes several calls, the stop request is checked after each, and the samples reached are kept; a call
+    without progress doubles the budget, and an interval that needs more than nsteps fails with that reason."""
+    import frbmodel.nonlinear.runup as ru
+
+    monkeypatch.setattr(ru, "CALL_STEPS", 50)
+    t_out = np.arange(101) / 20e3
+    for stepper in (ru._rodas_samples, ru._radau_samples):
+        problem, y0, opts = _problem_opts()
+        counts = {"solver_steps": 0, "rejected_steps": 0}
+        checks = []
+        opts.update(check=lambda c=checks, n=counts: c.append(n["solver_steps"]), pending=lambda: False)
+        got = list(stepper(problem, y0, t_out, opts, counts))
+        assert sum(ys.shape[0] for _, ys, _ in got) == 100 and not any(m for _, _, m in got)
+        assert len(checks) >= counts["solver_steps"] // 50 - 1 and len(checks) > 3, (stepper, checks)
+        assert max(np.diff([0, *checks])) <= 50 + 1, checks  # never more than the budget between two checks
+    problem, y0, opts = _problem_opts(rtol=1e-12, nsteps=60)
+    opts.update(check=lambda: None, pending=lambda: False)
+    counts = {"solver_steps": 0, "rejected_steps": 0}
+    (k, ys, message), = ru._rodas_samples(problem, y0, np.array([0.0, 5e-3]), opts, counts)
+    assert "more than nsteps = 60 solver steps in one output interval" in message and ys.shape[0] == 0
+    assert counts["solver_steps"] == 50 + 60  # the budget doubled from 50, capped at nsteps
+
+
+def test_an_interrupted_campbell_diagram_writes_the_speeds_it_has(monkeypatch, tmp_path, capsys):
+    """Interrupted, `frb campbell` left an empty folder. Now a Ctrl-C / SIGTERM during the sweep returns the speeds
+    done (their modes equal to a diagram computed over just those speeds), written and marked "interrupted", exit
+    code 130 / 143. The interruption is raised at the 6th speed by a wrapped per-speed step."""
+    import frbmodel.linear.campbell as cm
+    from frbmodel.core.interrupt import Terminated
+
+    real, calls = cm._speed_row, []
+
+    def interrupted_at_6th(*a, **k):
+        calls.append(1)
+        if len(calls) == 6:
+            raise Terminated()
+        return real(*a, **k)
+
+    monkeypatch.setattr(cm, "_speed_row", interrupted_at_6th)
+    code, err = run_cli(capsys, "campbell", "--speeds", "20000:120000:11", "--out", str(tmp_path / "c"))
+    assert code == 143 and "interrupted (SIGTERM) after 5 of 11 speeds" in err, err
+    meta = json.loads((tmp_path / "c" / "campbell_J.json").read_text())
+    assert meta["status"] == "interrupted" and meta["speeds_requested"] == 11
+    part = frb.CampbellResult.load(tmp_path / "c" / "campbell_J.nc")
+    monkeypatch.setattr(cm, "_speed_row", real)
+    whole = frb.campbell(frb.turbocharger(36e-6), "J", np.linspace(20e3, 120e3, 11)[:5])
+    np.testing.assert_allclose(part.speeds_rpm, whole.speeds_rpm)
+    np.testing.assert_allclose(part.frequencies_hz, whole.frequencies_hz, rtol=1e-12)  # netCDF stores float64

@@ -691,30 +691,46 @@ def _system_meta(system, m, kw):
 
 
 def _sweep(system, m, speeds, whirl, bar, kw):
-    """Per speed: film equilibria, linear systems (film methods) and whirl rows. Returns the arrays and timing."""
+    """Per speed: film equilibria, linear systems (film methods) and whirl rows. Returns the arrays (cut to the
+    speeds done), the timing and the Ctrl-C / SIGTERM that stopped the sweep (else None)."""
     loads = system.bearing_loads
     nb = len(system.bearings)
     rsr = np.full((speeds.size, nb), np.nan)
     ecc, whirl_hz, margin = (np.full((speeds.size, 2 * nb), np.nan) for _ in range(3))
     t_eq = 0.0
     systems = []
-    for i, s in enumerate(speeds):
-        omega = rpm_to_rad_s(s)
-        eqs = None
-        if m.needs_films:
-            te = time.perf_counter()
-            eqs = tuple(bearing_equilibrium(b, loads[k], omega, m.letter, system.film_model, system.gravity)
-                        for k, b in enumerate(system.bearings))
-            t_eq += time.perf_counter() - te
-            rsr[i] = [e.ring_speed_ratio for e in eqs]
-            systems.append(linear_system(system, m.letter, s, equilibria=eqs, **kw))
-        if whirl and omega > 0:
-            weqs = eqs if m.letter == "J" else tuple(
-                bearing_equilibrium(b, loads[k], omega, "J", system.film_model, system.gravity)
-                for k, b in enumerate(system.bearings))
-            whirl_hz[i], margin[i], ecc[i] = film_whirl_rows(system, weqs)
-        bar.update(1)
-    return systems, rsr, ecc, whirl_hz, margin, t_eq
+    i, stopped = 0, None
+    try:
+        for i, s in enumerate(speeds):
+            t_eq += _speed_row(system, m, s, whirl, kw, loads, systems, (rsr, ecc, whirl_hz, margin), i)
+            bar.update(1)
+        i = speeds.size
+    except KeyboardInterrupt as exc:  # keep the speeds done: the caller returns them with the interruption
+        stopped = exc
+        del systems[i:]
+    return systems, rsr[:i], ecc[:i], whirl_hz[:i], margin[:i], t_eq, stopped
+
+
+def _speed_row(system, m, s, whirl, kw, loads, systems, rows, i):
+    """One speed of :func:`_sweep`: appends the linear system (film methods) to ``systems`` and fills row ``i`` of
+    ``rows`` = (rsr, ecc, whirl_hz, margin). Returns the time spent in equilibria [s]."""
+    rsr, ecc, whirl_hz, margin = rows
+    t_eq = 0.0
+    omega = rpm_to_rad_s(s)
+    eqs = None
+    if m.needs_films:
+        te = time.perf_counter()
+        eqs = tuple(bearing_equilibrium(b, loads[k], omega, m.letter, system.film_model, system.gravity)
+                    for k, b in enumerate(system.bearings))
+        t_eq += time.perf_counter() - te
+        rsr[i] = [e.ring_speed_ratio for e in eqs]
+        systems.append(linear_system(system, m.letter, s, equilibria=eqs, **kw))
+    if whirl and omega > 0:
+        weqs = eqs if m.letter == "J" else tuple(
+            bearing_equilibrium(b, loads[k], omega, "J", system.film_model, system.gravity)
+            for k, b in enumerate(system.bearings))
+        whirl_hz[i], margin[i], ecc[i] = film_whirl_rows(system, weqs)
+    return t_eq
 
 
 def progress_enabled(progress) -> bool:
@@ -767,6 +783,9 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     ------
     ParameterError
         Not a system, an unknown method or option, invalid speeds.
+    KeyboardInterrupt
+        Ctrl-C (or :class:`~frbmodel.core.interrupt.Terminated`, SIGTERM) during the sweep; after the first speed its
+        ``.result`` is the diagram of the speeds done, ``meta["status"] = "interrupted"``.
 
     Examples
     --------
@@ -786,7 +805,10 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     m.options(**kw)  # validate early
     t0 = time.perf_counter()
     with counter_bar(speeds.size, f"campbell {m.letter}", progress_enabled(progress), unit="speed") as bar:
-        systems, rsr, ecc, whirl_hz, margin, t_eq = _sweep(system, m, speeds, whirl, bar, kw)
+        systems, rsr, ecc, whirl_hz, margin, t_eq, stopped = _sweep(system, m, speeds, whirl, bar, kw)
+    if stopped is not None and not rsr.shape[0]:
+        raise stopped
+    requested, speeds = speeds.size, speeds[:rsr.shape[0]]
     if m.needs_films:
         mode_sets = batch_modes(systems)
         mass, ring_dofs = systems[0].M, systems[0].ring_dofs
@@ -796,13 +818,18 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
         G[:system.rotor.n_dof, :system.rotor.n_dof] = system.rotor.G
         mode_sets = speed_modes(ls0.M, ls0.K, ls0.C, G, rpm_to_rad_s(speeds), ls0.planes())
         mass, ring_dofs = ls0.M, ls0.ring_dofs
-    onsets, source = exact_onsets(system, speeds) if whirl else (np.full(2 * len(system.bearings), np.nan),
-                                                                  "not computed (whirl=False)")
+    skipped = "not computed (interrupted)" if stopped is not None else "not computed (whirl=False)"
+    onsets, source = exact_onsets(system, speeds) if whirl and stopped is None else (
+        np.full(2 * len(system.bearings), np.nan), skipped)
     meta = {**_system_meta(system, m, kw), "source": "frbmodel.linear.campbell", "whirl": bool(whirl),
             "speed_grid_order": order, "equilibrium_time_s": t_eq, "whirl_onset_source": source}
     res = campbell_from_modes(m.letter, speeds, mode_sets, system.rotor, mass, ring_dofs, rsr, ecc, whirl_hz, margin,
                               meta, whirl_onset_rpm=onsets)
     res.meta["cpu_time_s"] = time.perf_counter() - t0
+    if stopped is not None:  # the speeds done, marked, on the interruption: the caller saves them
+        res.meta.update(status="interrupted", speeds_requested=requested)
+        stopped.result = res
+        raise stopped
     return res
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from numba import carray, cfunc, njit, types
 
 from ..physics.dynamics import monolithic_rhs
+from .rosenbrock import OMEGA_MAX
 
 #: header of the packed array: n_r, number of unbalances, profile points, torque-driven flag (0/1), spring
 #: stiffness [N/m], ε cap [-], gravity [m/s²], polar inertia [kg m²]
@@ -108,6 +109,9 @@ def rhs_packed(t, y, out, p):
     diag = np.empty(4)
     at_rest, no_mass = np.zeros(2), np.zeros((2, n_r))  # a fixed housing (the Radau path has no housing motion)
     if p[3] > 0:
+        if not 0.0 < y[y.size - 1] <= OMEGA_MAX:  # torque-driven speed out of range: NaN ends the solver's step
+            out[:] = np.nan
+            return out
         return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, p[6], unb_node, unb_me,
                               unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass, p[7],
                               p[k + 3 * nt:k + 4 * nt])

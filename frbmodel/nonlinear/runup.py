@@ -1243,10 +1243,26 @@ INTEGRATORS = ("rodas", "radau", "lsoda")
 CHUNK_SAMPLES = 100
 
 
+#: solver steps per call of a compiled solver: it returns after at most this many, so that the run checks for Ctrl-C /
+#: SIGTERM at least this often (measured on the main job: 39 µs per RODAS step, 155 µs per Radau step, so 0.2 s and
+#: 0.8 s; the main job takes ~750 and ~250 steps per call, never near it); a sample interval
+#: that needs more steps gets the budget doubled from call to call, up to ``nsteps``
+CALL_STEPS = 5_000
+
+
+class _SolverStop(Exception):
+    """Raised inside LSODA's right-hand side to end the solver call (a stop request, or the speed out of range)."""
+
+
+def _speed_out_of_range(problem, y):
+    """True when ``problem`` is torque-driven and the rotor speed in state ``y`` left 0 < speed <= MAX_SPEED_RPM."""
+    return problem.torque_driven and not 0.0 < problem.speed(0.0, y) <= MAX_SPEED_RPM * RPM
+
+
 def _lsoda_samples(problem, y0, t_out, opts, counts):
-    """scipy's LSODA from sample to sample, calling the compiled RHS and Jacobian from Python. Yields (k, ys, "")
-    with the state ys (1, n_states) at each output time t_out[k], k >= 1, or (k, empty ys, message) once when it
-    fails."""
+    """scipy's LSODA from sample to sample, calling the compiled RHS and Jacobian from Python; the stop request
+    (``opts["check"]``) and the speed bound are checked at every right-hand-side evaluation. Yields (k, ys, "") with
+    the state ys (1, n_states) at each output time t_out[k], k >= 1, or (k, empty ys, message) once when it fails."""
     from scipy.integrate import ode
 
     n = problem.n_states
@@ -1255,6 +1271,8 @@ def _lsoda_samples(problem, y0, t_out, opts, counts):
 
     def fun(t, y):
         counts["rhs_evaluations"] += 1
+        if opts["pending"]() or _speed_out_of_range(problem, y):
+            raise _SolverStop
         return _rhs(t, y, f_buf, *problem.args).copy()
 
     def jac(t, y):
@@ -1265,7 +1283,15 @@ def _lsoda_samples(problem, y0, t_out, opts, counts):
                                           max_step=opts["max_step"] or 0.0)
     solver.set_initial_value(y0, 0.0)
     for k in range(1, t_out.size):
-        y = solver.integrate(t_out[k])
+        try:
+            y = solver.integrate(t_out[k])
+        except _SolverStop:
+            opts["check"]()  # a stop request raises here; else the speed left its range
+            yield k, np.empty((0, n)), (f"stopped: the torque-driven rotor speed left the valid range 0 < speed <= "
+                                        f"{MAX_SPEED_RPM:.0e} rpm after t = {t_out[k - 1]:.6g} s (drive torque too "
+                                        "small to overcome the film friction, or too large); results up to there "
+                                        "are kept")
+            return
         if not solver.successful() or not np.all(np.isfinite(y)):
             w_fail = problem.speed(solver.t, solver.y)
             yield k, np.empty((0, n)), (f"integrator failed at t = {solver.t:.6g} s, speed {w_fail / RPM:.0f} rpm "
@@ -1274,64 +1300,91 @@ def _lsoda_samples(problem, y0, t_out, opts, counts):
         yield k, y[None, :], ""
 
 
+def _bounded_calls(problem, call, y0, t_out, opts):
+    """Drive a compiled solver ``call(y, ts, budget) -> (ys, exhausted, message)`` (``ys``: the states at the first
+    rows of ``ts``, from ``ts[0]``) over ``t_out``, CHUNK_SAMPLES output times and at most a step budget per call
+    (:data:`CALL_STEPS`, doubled while an interval makes no progress, up to ``opts["nsteps"]`` per interval), the stop
+    request checked between calls. Yields (k, ys, message) as :func:`_lsoda_samples`, ys the states at t_out[k:]."""
+    y, a, budget = y0, 0, min(CALL_STEPS, opts["nsteps"])
+    while a < t_out.size - 1:
+        ts = t_out[a:a + CHUNK_SAMPLES + 1]
+        ys, exhausted, message = call(y, ts, budget)
+        if exhausted and not message and ys.shape[0] > 1:  # progress: go on from the last sample reached
+            budget = min(CALL_STEPS, opts["nsteps"])
+        elif exhausted and not message and budget < opts["nsteps"]:
+            budget = min(2 * budget, opts["nsteps"])
+        elif exhausted and not message:
+            message = _failure(problem, ts, ys, y, ys.shape[0],
+                               f"step budget exhausted: more than nsteps = {opts['nsteps']} solver steps in one output "
+                               "interval")
+        if message or ys.shape[0] > 1:
+            yield a + 1, ys[1:], message
+        if message:
+            return
+        if ys.shape[0] > 1:
+            y, a = ys[-1], a + ys.shape[0] - 1
+        opts["check"]()
+
+
+def _failure(problem, ts, ys, y, good, message, hint=""):
+    """The message of a compiled solver that failed after ``good`` rows of ``ys`` (``y``: the call's start state)."""
+    t_fail = ts[max(good - 1, 0)]
+    w_fail = problem.speed(t_fail, ys[good - 1] if good else y)
+    return (f"integrator failed after t = {t_fail:.6g} s, speed {w_fail / RPM:.0f} rpm ({message}{hint}); results "
+            "up to there are kept")
+
+
 def _radau_samples(problem, y0, t_out, opts, counts):
-    """The compiled Radau IIA solver (:mod:`frbmodel.nonlinear.compiled`), CHUNK_SAMPLES output times per call. Yields
-    (k, ys, message) per call: the states ys (m, n_states) at the output times t_out[k:k + m] and "" or, when the
-    solver failed after them, the reason (then it stops)."""
+    """The compiled Radau IIA solver (:mod:`frbmodel.nonlinear.compiled`; a speed out of range makes its right-hand
+    side NaN), driven by :func:`_bounded_calls`. Yields as :func:`_lsoda_samples`."""
     from .compiled import pack_problem, solve_chunk
 
     packed = pack_problem(problem)
-    atol = opts["atol"][0]
-    y = y0
-    for a in range(0, t_out.size - 1, CHUNK_SAMPLES):
-        ts = t_out[a:a + CHUNK_SAMPLES + 1]
-        ys, steps, message = solve_chunk(packed, y, ts, opts["rtol"], atol, opts["nsteps"] * (ts.size - 1),
-                                         opts["max_step"])
+
+    def call(y, ts, budget):
+        ys, steps, message = solve_chunk(packed, y, ts, opts["rtol"], opts["atol"][0], budget, opts["max_step"])
         counts["solver_steps"] += steps
         good = ys.shape[0]
         bad = np.flatnonzero(~np.all(np.isfinite(ys), axis=1))
         if bad.size:
-            good, message = int(bad[0]), message or "compiled Radau solver: non-finite state"
-        if message or good < ts.size:
-            t_fail = ts[max(good - 1, 0)]
-            w_fail = problem.speed(t_fail, ys[good - 1] if good else y)
-            yield a + 1, ys[1:max(good, 1)], (f"integrator failed after t = {t_fail:.6g} s, speed "
-                                              f"{w_fail / RPM:.0f} rpm ({message}); results up to there are kept")
-            return
-        yield a + 1, ys[1:], ""
-        y = ys[-1]
+            good, message = int(bad[0]), message or "non-finite state"
+        exhausted = steps >= budget and not bad.size
+        if message and not exhausted:
+            hint = (f"; a torque-driven speed beyond {MAX_SPEED_RPM:.0e} rpm ends it so" if problem.torque_driven
+                    else "")
+            return ys[:max(good, 1)], False, _failure(problem, ts, ys, y, good, message or "compiled Radau solver",
+                                                      hint)
+        return ys[:good], exhausted, ""
+
+    yield from _bounded_calls(problem, call, y0, t_out, opts)
 
 
 def _rodas_samples(problem, y0, t_out, opts, counts):
-    """The compiled Rosenbrock solver (:mod:`frbmodel.nonlinear.rosenbrock`), CHUNK_SAMPLES output times per call, the
-    step
-    size carried from call to call. Yields as :func:`_radau_samples`."""
+    """The compiled Rosenbrock solver (:mod:`frbmodel.nonlinear.rosenbrock`; the speed bound checked at every step),
+    the step size carried from call to call, driven by :func:`_bounded_calls`. Yields as :func:`_lsoda_samples`."""
     from .rosenbrock import FD_TYPICAL_M, STATUS, film_columns, rodas_chunk
 
     atol = opts["atol"][0]
     scale = typical_sizes(problem, FD_TYPICAL_M)
     cols = film_columns(problem.n_rotor, problem.args[3], problem.torque_driven, problem.args[10].size > 0)
-    y, h = y0, 1e-7
+    state = {"h": 1e-7}
     max_step = opts["max_step"] or float(t_out[-1])
-    for a in range(0, t_out.size - 1, CHUNK_SAMPLES):
-        ts = t_out[a:a + CHUNK_SAMPLES + 1]
-        ys, good, h, steps, rejected, status = rodas_chunk(y, ts, h, opts["rtol"], atol, scale, cols,
-                                                           opts["nsteps"] * (ts.size - 1), max_step, problem.args)
+
+    def call(y, ts, budget):
+        ys, good, state["h"], steps, rejected, status = rodas_chunk(y, ts, state["h"], opts["rtol"], atol, scale,
+                                                                    cols, budget, max_step, problem.args)
         counts["solver_steps"] += steps
         counts["rejected_steps"] += rejected
         bad = np.flatnonzero(~np.all(np.isfinite(ys[:good]), axis=1))
-        message = STATUS[status] if status else ""
+        message = STATUS[status] if status not in (0, 1) else ""
         if bad.size:
             good, message = int(bad[0]), message or "non-finite state"
         if message:
-            t_fail = ts[max(good - 1, 0)]
-            w_fail = problem.speed(t_fail, ys[good - 1] if good else y)
-            yield a + 1, ys[1:max(good, 1)], (f"integrator failed after t = {t_fail:.6g} s, speed "
-                                              f"{w_fail / RPM:.0f} rpm (compiled Rosenbrock solver: {message}); "
-                                              "results up to there are kept")
-            return
-        yield a + 1, ys[1:], ""
-        y = ys[-1]
+            return ys[:max(good, 1)], False, _failure(problem, ts, ys, y, good,
+                                                      f"compiled Rosenbrock solver: {message}")
+        return ys[:good], status == 1, ""
+
+    yield from _bounded_calls(problem, call, y0, t_out, opts)
 
 
 def _first_stop(problem, schema, rows, contact_eps):
@@ -1369,11 +1422,12 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     counts = {"lsoda": {"rhs_evaluations": 0, "jacobian_evaluations": 0}, "radau": {"solver_steps": 0},
               "rodas": {"solver_steps": 0, "rejected_steps": 0}}[integrator]
     stepper = {"lsoda": _lsoda_samples, "radau": _radau_samples, "rodas": _rodas_samples}[integrator]
-    samples = stepper(problem, y0, t_out, solver_opts, counts)
     rec.extend(sample_rows(problem, rec.schema, t_out[:1], y0[None, :]))
     status, message, last = "finished", "", y0
     label = {"down": "run-down", "up-down": "run-up/down"}.get(problem.profile.direction, "run-up")
     with deferred_signals() as signals, simulation_bar(t_out[-1], label, progress) as bar:
+        opts = {**solver_opts, "check": signals.check, "pending": lambda: signals.pending is not None}
+        samples = stepper(problem, y0, t_out, opts, counts)
         for k, ys, failure in samples:
             rows = sample_rows(problem, rec.schema, t_out[k:k + ys.shape[0]], ys)
             stop, message = _first_stop(problem, rec.schema, rows, contact_eps)

@@ -77,7 +77,10 @@ def window_indices(run, speed_rpm=None, time_s=None, revolutions=20.0, span_rpm=
             half = revolutions * 60.0 / speed_rpm
             idx = np.flatnonzero(np.abs(t - t[i0]) <= half * (1 + 1e-9))
     if idx.size < 2:
-        raise ParameterError("the window holds fewer than 2 samples: widen it")
+        what = (f"time window {time_s[0]:g} ... {time_s[1]:g} s" if time_s is not None else
+                f"window about {speed_rpm:g} rpm")
+        raise ParameterError(f"the {what} holds {idx.size} samples of the run (0 ... {t[-1]:g} s, every "
+                             f"{np.median(np.diff(t)) if t.size > 1 else 0:.3g} s): valid range at least 2; widen it")
     return idx
 
 

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, read_json
+from ..core.errors import ParameterError, check_real, read_json
 
 #: parameters a study can vary (name -> (unit, description)); "<bearing>" and "<disc>" are the names in the system
 #: (the Table 2 system has the bearings "turbine", "compressor" and the discs "turbine_wheel", "compressor_wheel")
@@ -170,7 +170,8 @@ def grid(params: dict, analysis="campbell", **options):
     Raises
     ------
     ParameterError
-        An unknown parameter, analysis or option value.
+        An unknown parameter, analysis or option value, or a parameter value the system refuses (checked value by
+        value on the Table 2 system, before any case runs).
 
     Examples
     --------
@@ -186,6 +187,12 @@ def grid(params: dict, analysis="campbell", **options):
     if analysis not in ANALYSES:
         raise ParameterError(f"analysis = {analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
     check_options(analysis, options)
+    for n in names:  # each value on its own, before any case runs (a refused value failed every case, exit 4)
+        for v in params[n]:
+            try:
+                build_case_system({n: float(v)})
+            except ParameterError as exc:
+                raise ParameterError(f"study parameter {n} = {v:g} [{PARAMETERS[n][0]}]: {exc}") from None
     return [Case(dict(zip(names, map(float, vals))), analysis, options)
             for vals in product(*(params[n] for n in names))]
 
@@ -264,7 +271,7 @@ def build_case_system(params, base=None):
         bs = [replace(b, ring_mass=m) for b in bs]
     unb = []
     for key in [k for k in p if k.startswith("unbalance_")]:
-        disc, amount = _named_disc(tc, key), p.pop(key)
+        disc, amount = _named_disc(tc, key), check_real(key, p.pop(key), "kg m", minimum=0.0, inclusive=True)
         if amount > 0:
             unb.append(Unbalance(disc, amount, 0.0))
     if p:
