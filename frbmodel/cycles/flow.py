@@ -92,10 +92,11 @@ class _Flow:
         return y, message
 
     def _rodas(self, y0, t):
-        from ..nonlinear.rosenbrock import STATUS, rodas_chunk
+        from ..nonlinear.rosenbrock import NO_MODAL, STATUS, rodas_chunk
 
         y, good, _, steps, _, status = rodas_chunk(y0, np.asarray(t, dtype=float), 1e-7, self.rtol, self.atol,
-                                                   self.fd_scale, self.cols, 10**7, float(t[-1]), self.problem.args)
+                                                   self.fd_scale, self.cols, 10**7, float(t[-1]), self.problem.args,
+                                                   NO_MODAL)
         return y[:good], (STATUS[status] if status else ""), steps
 
     def _choose(self, y0, t):

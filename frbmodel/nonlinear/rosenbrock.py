@@ -39,6 +39,9 @@ STATUS = {1: "step budget exhausted", 2: "step size underflow", 3: "singular ite
 #: huge drive torque drives the speed far beyond it between two samples, in millions of ever shorter steps)
 OMEGA_MAX = MAX_SPEED_RPM * math.pi / 30.0
 
+#: no modal error norm (:func:`rodas_chunk`'s default)
+NO_MODAL = np.zeros((0, 0))
+
 # RODAS (Hairer & Wanner), gamma = 1/4
 GAMMA = 0.25
 A21, A31, A32 = 1.544, 0.9466785280815826, 0.2557011698983284
@@ -197,9 +200,22 @@ def _omegas(t, y, f0, n_r, args):
 
 
 @njit(cache=True)
-def _error_norm(err, y0, y1, rtol, atol):
+def _error_norm(err, y0, y1, rtol, atol, modal):
+    """RMS of err / (atol + rtol max(|y0|, |y1|)); with ``modal`` (m x m, m > 0) the first 2 m entries (the rotor's
+    displacements and velocities) are taken in the coordinates ``modal @ q`` and ``modal @ q̇`` first."""
     s = 0.0
-    for i in range(err.size):
+    m = modal.shape[0]
+    for blk in range(2 if m > 0 else 0):
+        off = blk * m
+        for k in range(m):
+            e, a, b = 0.0, 0.0, 0.0
+            for i in range(m):
+                e += modal[k, i] * err[off + i]
+                a += modal[k, i] * y0[off + i]
+                b += modal[k, i] * y1[off + i]
+            sc = atol[off + k] + rtol * max(abs(a), abs(b))
+            s += (e / sc) ** 2
+    for i in range(2 * m, err.size):
         sc = atol[i] + rtol * max(abs(y0[i]), abs(y1[i]))
         s += (err[i] / sc) ** 2
     return math.sqrt(s / err.size)
@@ -310,7 +326,7 @@ def _dense_output(t, h, y, ynew, ks, t_eval, k_out, out):
 
 
 @njit(cache=True, nogil=True)  # the shooting flows integrate monodromy columns in threads
-def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args):
+def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args, modal):
     """Integrate from t_eval[0] through the times t_eval with RODAS (see the module docstring).
 
     Returns (states at t_eval (k, n), number of rows filled, next step size [s], steps, rejected steps, status:
@@ -352,7 +368,7 @@ def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, arg
             status = 3
             break
         _stages(t, h, y, f0, fx, w, piv, jac, ks, coef, ynew, rhs, args)
-        err = _error_norm(ks[5], y, ynew, rtol, atol)
+        err = _error_norm(ks[5], y, ynew, rtol, atol, modal)
         steps += 1
         if not (err <= 1.0):  # rejected (also NaN)
             rejected += 1

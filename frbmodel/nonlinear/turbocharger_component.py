@@ -39,6 +39,7 @@ from .runup import (
     contact_message,
     film_samples,
     initial_state,
+    modal_error_basis,
     sample_rows,
     typical_sizes,
 )
@@ -178,7 +179,7 @@ class TurbochargerComponent:
         self.problem = build_problem(system, self._profile(w0, w1), check_model(film_model or system.film_model),
                                      unbalance)
         self.y = initial_state(self.problem, initial, perturbation)
-        self.atol = atol_vector(self.problem, atol, scale)[0]
+        self.modal, self.atol = modal_error_basis(self.problem, atol_vector(self.problem, atol, scale)[0], scale)
         from .rosenbrock import FD_TYPICAL_M, film_columns
 
         self.fd_scale = typical_sizes(self.problem, FD_TYPICAL_M, scale)
@@ -198,7 +199,7 @@ class TurbochargerComponent:
 
         ts = np.array([self.t, self.t + 1e-9])
         rodas_chunk(self.y.copy(), ts, 1e-9, self.rtol, self.atol, self.fd_scale, self.cols, 100, 1e-9,
-                    self.problem.args)
+                    self.problem.args, self.modal)
         self.outputs()
 
     # ------------------------------------------------------------------ set-up
@@ -299,7 +300,8 @@ class TurbochargerComponent:
         ts = self._grid(self.t, t_end)
         budget = 500_000 * max(1, min(ts.size - 1, CHUNK_SAMPLES))
         ys, good, h, steps, rejected, status = rodas_chunk(self.y, ts, self.h, self.rtol, self.atol, self.fd_scale,
-                                                           self.cols, budget, t_end - self.t, self.problem.args)
+                                                           self.cols, budget, t_end - self.t, self.problem.args,
+                                                           self.modal)
         if status or good < ts.size or not np.all(np.isfinite(ys)):
             why = STATUS.get(status, "non-finite state")
             raise IntegrationError(f"the integrator failed between t = {self.t:.9g} s and {t_end:.9g} s at "
