@@ -74,7 +74,7 @@ def check_temperature(name, temperature_K, minimum_K=T_MIN_K, maximum_K=T_MAX_K)
     """
     t = check_real(name, temperature_K, "K")
     if not minimum_K <= t <= maximum_K:
-        raise ParameterError(f"{name} = {temperature_K!r} K is invalid: valid range {minimum_K:g} ... {maximum_K:g} K "
+        raise ParameterError(f"{name} = {t!r} K is invalid: valid range {minimum_K:g} ... {maximum_K:g} K "
                              f"({minimum_K - 273.15:.0f} ... {maximum_K - 273.15:.0f} °C); temperatures are in K")
     return t
 
