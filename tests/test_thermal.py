@@ -237,3 +237,42 @@ def test_bad_thermal_input_is_refused_with_value_and_range(kwargs, error, messag
 def test_bad_thermal_model_coefficients_are_refused(kwargs, message):
     with pytest.raises(ParameterError, match=message.replace(".", r"\.")):
         ThermalModel(**kwargs)
+
+
+# ------------------------------------------------------------------ command line
+@pytest.mark.parametrize("argv, message", [
+    (["--oil", "SAE 5W-30", "--supply-temperature", "90"],
+     "--supply-temperature = 90.0 K is invalid: valid range 243.15 ... 473.15 K (-30 ... 200 °C); temperatures are "
+     "in K"),
+    (["--oil", "SAE 5W-30", "--supply-temperature", "333.15,abc"], "--supply-temperature = '333.15,abc' is invalid"),
+    (["--oil", "SAE 5W-30", "--supply-pressure=-2e5"],
+     "--supply-pressure = -200000.0 Pa is invalid: valid range 0 ... 2e+06 Pa"),
+    (["--oil", "SAE 99W"], "oil name = 'SAE 99W' is unknown; known oils: SAE 0W-20, SAE 5W-30"),
+    (["--supply-temperature", "363.15"], "--supply-temperature needs an oil: give --oil NAME"),
+    (["--oil", "ISO VG 46", "--method", "F"], "--method F cannot be combined with an oil"),
+])
+def test_cli_losses_refuses_bad_thermal_options_with_one_line_and_writes_nothing(capsys, tmp_path, argv, message):
+    from frbmodel.cli import main
+
+    out = tmp_path / "losses"
+    code = main(["losses", "--speeds", "1e5", "--out", str(out), *argv])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and "Traceback" not in err, err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_cli_losses_with_an_oil_writes_temperatures_and_the_figure(capsys, tmp_path):
+    """The CLI is the library's table: its CSV equals thermal_losses at the same inputs (exactly)."""
+    from frbmodel.cli import main
+
+    out = tmp_path / "losses"
+    assert main(["losses", "--speeds", "1e5,2e5", "--oil", "SAE 5W-30", "--supply-temperature", "363.15",
+                 "--supply-pressure", "4e5", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "inner film temperature [K]" in printed and "RSR [-]" in printed
+    csv = pd.read_csv(out / "thermal_losses.csv")
+    ref = thermal_losses(TC, [1e5, 2e5], OIL, 363.15, 4e5)
+    np.testing.assert_allclose(csv["inner film temperature [K]"], ref["inner film temperature [K]"], rtol=1e-15)
+    assert (out / "thermal_losses.png").stat().st_size > 10_000
+    assert main(["losses", "--speeds", "1e5", "--out", str(tmp_path / "iso")]) == 0  # no oil: as before, with RSR
+    assert "RSR [-]" in pd.read_csv(tmp_path / "iso" / "bearing_losses_J.csv")

@@ -8,7 +8,7 @@ from ..core.units import RPM
 from ..physics.losses import bearing_loss
 from .equilibrium import equilibrium
 
-__all__ = ["bearing_losses", "equilibrium_loss"]
+__all__ = ["bearing_losses", "equilibrium_loss", "with_ring_speed_ratio"]
 
 
 def equilibrium_loss(bearing, eq, omega_rotor, film_model="short"):
@@ -73,3 +73,19 @@ def bearing_losses(system, speed_rpm, method="J"):
                          "power loss outer [W]": float(p_o), "ring speed [rad/s]": e.ring_speed,
                          "eps inner [-]": e.eps_inner, "eps outer [-]": e.eps_outer})
     return pd.DataFrame(rows)
+
+
+def with_ring_speed_ratio(table):
+    """A copy of a :func:`bearing_losses` table with the column ``RSR [-]`` = ring speed / rotor speed after
+    ``bearing`` (the other columns unchanged).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> df = with_ring_speed_ratio(bearing_losses(frb.turbocharger(36e-6), [100e3], "F"))
+    >>> [round(x, 5) for x in df["RSR [-]"]]                # method F: eq. (6)
+    [0.19903, 0.19903]
+    """
+    table = table.copy()
+    table.insert(2, "RSR [-]", table["ring speed [rad/s]"] / (table["speed [rpm]"] * RPM))
+    return table

@@ -18,7 +18,7 @@ from ..core.units import RPM
 from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, heat_flows
 from ..system.oil import T_MIN_K, Oil, check_temperature
 from .equilibrium import bearing_equilibrium
-from .losses import bearing_losses, equilibrium_loss
+from .losses import bearing_losses, equilibrium_loss, with_ring_speed_ratio
 
 __all__ = ["MAX_SUPPLY_PRESSURE_PA", "thermal_losses", "thermal_system"]
 
@@ -112,9 +112,7 @@ def _row(rpm, t_s, p_s, oil, model, s):
 
 def _isothermal(system, speeds):
     """Constant viscosities (no oil): :func:`bearing_losses` (method J) with the RSR, no temperatures."""
-    table = bearing_losses(system, speeds, "J")
-    table.insert(2, "RSR [-]", table["ring speed [rad/s]"] / (table["speed [rpm]"] * RPM))
-    return table
+    return with_ring_speed_ratio(bearing_losses(system, speeds, "J"))
 
 
 def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
