@@ -276,3 +276,22 @@ def test_cli_losses_with_an_oil_writes_temperatures_and_the_figure(capsys, tmp_p
     assert (out / "thermal_losses.png").stat().st_size > 10_000
     assert main(["losses", "--speeds", "1e5", "--out", str(tmp_path / "iso")]) == 0  # no oil: as before, with RSR
     assert "RSR [-]" in pd.read_csv(tmp_path / "iso" / "bearing_losses_J.csv")
+
+
+def test_thermal_figure_has_a_column_per_bearing_with_units(table):
+    """The figure takes the table only: 3 panels per bearing, units on every axis, °C on the temperature axis."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from frbmodel.plots.thermal import plot_thermal_losses
+
+    fig = plot_thermal_losses(table)
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels.count("ring-speed ratio RSR [-]") == 2 and labels.count("film temperature [K]") == 2
+    assert labels.count("power loss [W]") == 2
+    celsius = [c.get_ylabel() for ax in fig.axes if ax.get_ylabel() == "film temperature [K]" for c in ax.child_axes]
+    assert celsius == ["[°C]", "[°C]"]
+    assert len(fig.legends) == 1 and "supply 333.15 K (60 °C)" in [t.get_text() for t in fig.legends[0].texts]
+    plt.close(fig)
