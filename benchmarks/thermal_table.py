@@ -18,6 +18,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
+from _cli import nonnegative, run_script  # noqa: E402  (benchmarks/ is the script's folder)
 
 import frbmodel as frb  # noqa: E402
 from frbmodel.plots.thermal import plot_thermal_losses  # noqa: E402
@@ -43,7 +44,8 @@ def markdown(table):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--oil", default="SAE 5W-30", choices=list(frb.OILS), help="named oil")
-    ap.add_argument("--supply-pressure", type=float, default=3e5, help="supply pressure above ambient [Pa]")
+    ap.add_argument("--supply-pressure", type=nonnegative, default=3e5,
+                    help="supply pressure above ambient [Pa], 0 ... 2e6")
     ap.add_argument("--figure", default="docs/img/thermal_operating_points.png", help="figure file")
     args = ap.parse_args(argv)
     tc, oil = frb.turbocharger(), frb.OILS[args.oil]
@@ -63,4 +65,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

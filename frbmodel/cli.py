@@ -913,8 +913,8 @@ def write_waterfalls(run, out, orders=(1.0,)):
 
 def _oil_from_args(args, system):
     """The oil of ``frb losses``: ``--oil NAME``, else the system file's ``[oil]`` (None: constant viscosities);
-    ``--supply-temperature`` / ``--supply-pressure`` without an oil, or an oil with a method other than J, are
-    refused."""
+    ``--supply-temperature`` / ``--supply-pressure`` without an oil, or an oil with a method other than J or with
+    ``--run``, are refused."""
     from .system.oil import OIL
 
     oil = OIL(args.oil) if args.oil is not None else system.oil
@@ -927,6 +927,9 @@ def _oil_from_args(args, system):
     elif args.method != "J":
         raise ParameterError(f"--method {args.method} cannot be combined with an oil: the thermal operating point is "
                              "the method-J equilibrium (ring torque balanced); use --method J")
+    elif args.run:
+        raise ParameterError("--run cannot be combined with an oil: a run-up's recorded losses are at the films' "
+                             "constant viscosities; leave --oil (or the system's [oil]) out to overlay them")
     return oil
 
 
@@ -965,8 +968,8 @@ def cmd_losses(args):
     speeds = parse_speeds(args.speeds)
     run = RunupResult.load(args.run) if args.run else None
     out = writable_dir(args.out)
-    table = with_ring_speed_ratio(bearing_losses(tc, speeds, args.method)) if oil is None else None
     if oil is None:
+        table = with_ring_speed_ratio(bearing_losses(tc, speeds, args.method))
         stem, fig = f"bearing_losses_{args.method}", plot_bearing_losses(table, run,
                                                                           title=f"Bearing power loss, {tc.name}")
         cols = ["speed [rpm]", "bearing", "RSR [-]", "journal torque [N m]", "power loss [W]", "power loss inner [W]",

@@ -97,9 +97,10 @@ def test_centrifugal_pressure_of_the_ring_holes_cuts_the_inner_feed():
     b = TC.bearings[0]
     eq = frb.equilibrium(TC, "J", 250e3).bearings[0]
     p_c = 0.5 * 850.0 * eq.ring_speed ** 2 * (b.outer.radius ** 2 - b.inner.radius ** 2)
-    f = bearing_flows(b, eq, 0.5 * p_c, 850.0, 0.01, ThermalModel())
+    args = (eq.eps_inner, eq.eps_outer, eq.rotor_speed, eq.ring_speed, 0.5 * p_c, 850.0, 0.01)
+    f = bearing_flows(b, *args, ThermalModel())
     assert f["feed_pressure"] == pytest.approx(-0.5 * p_c, rel=1e-12) and f["feed_inner"] == 0.0
-    assert bearing_flows(b, eq, 0.5 * p_c, 850.0, 0.01, ThermalModel(centrifugal_feed=False))["feed_inner"] > 0.0
+    assert bearing_flows(b, *args, ThermalModel(centrifugal_feed=False))["feed_inner"] > 0.0
 
 
 # ------------------------------------------------------------------ the balance
@@ -222,11 +223,12 @@ def test_ring_speed_ratio_falls_with_rotor_speed_at_90_C(table):
     (dict(supply_pressure_Pa=3e7), ParameterError, "valid range 0 ... 2e+06 Pa"),
     (dict(oil="SAE 5W-30"), ParameterError, "oil = 'SAE 5W-30' is a str; expected an Oil"),
     (dict(model=ThermalModel(max_evaluations=2)), ConvergenceError, "did not converge: film-temperature residual"),
+    (dict(supply_pressure_Pa=0.0), ParameterError, "the oil flow cannot carry the film's friction power"),
 ])
 def test_bad_thermal_input_is_refused_with_value_and_range(kwargs, error, message):
     args = {**dict(oil=OIL, supply_temperature_K=363.15, supply_pressure_Pa=3e5), **kwargs}
     with pytest.raises(error, match=message.replace(".", r"\.").replace("+", r"\+")):
-        thermal_losses(TC, [150e3], **args)
+        thermal_losses(TC, [250e3] if args["supply_pressure_Pa"] == 0.0 else [150e3], **args)
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -250,6 +252,7 @@ def test_bad_thermal_model_coefficients_are_refused(kwargs, message):
     (["--oil", "SAE 99W"], "oil name = 'SAE 99W' is unknown; known oils: SAE 0W-20, SAE 5W-30"),
     (["--supply-temperature", "363.15"], "--supply-temperature needs an oil: give --oil NAME"),
     (["--oil", "ISO VG 46", "--method", "F"], "--method F cannot be combined with an oil"),
+    (["--oil", "ISO VG 46", "--run", "somewhere"], "--run cannot be combined with an oil"),
 ])
 def test_cli_losses_refuses_bad_thermal_options_with_one_line_and_writes_nothing(capsys, tmp_path, argv, message):
     from frbmodel.cli import main

@@ -48,7 +48,8 @@ def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temp
     b = _with_viscosities(bearing, oil.dynamic_viscosity(t_i), oil.dynamic_viscosity(t_o))
     eq = bearing_equilibrium(b, load, omega, "J", film_model, gravity)
     t_j, p_i, p_o = (float(v) for v in equilibrium_loss(b, eq, omega, film_model))
-    flows = bearing_flows(b, eq, p_s, oil.density(t_s), oil.dynamic_viscosity(t_s), model)
+    flows = bearing_flows(b, eq.eps_inner, eq.eps_outer, omega, eq.ring_speed, p_s, oil.density(t_s),
+                          oil.dynamic_viscosity(t_s), model)
     q_i, q_o = flows["side_inner"] + flows["feed_inner"], flows["side_outer"] + flows["supply_outer"]
     cap_i = oil.density(t_i) * oil.specific_heat_J_kgK * q_i
     cap_o = oil.density(t_o) * oil.specific_heat_J_kgK * q_o
@@ -77,8 +78,13 @@ def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gra
                                f"{t_s:g} K did not converge: film-temperature residual {res:.3g} K > tolerance "
                                f"{model.tolerance_K:g} K after {count['n']} evaluations ({sol.message})")
     for name, t in zip(("inner", "outer"), sol.x):
-        check_temperature(f"{bearing.name} {name} film temperature at {rpm:.0f} rpm (supply {t_s:g} K)", t,
-                          T_MIN_K, oil.max_temperature_K)
+        try:
+            check_temperature(f"{bearing.name} {name} film temperature at {rpm:.0f} rpm (supply {t_s:g} K)", t,
+                              T_MIN_K, oil.max_temperature_K)
+        except ParameterError as exc:
+            raise ParameterError(f"{exc}: beyond the oil's viscosity law, the oil flow cannot carry the film's "
+                                 f"friction power (supply pressure {p_s:g} Pa; raise it, or the feed holes of the "
+                                 "ThermalModel)") from None
     s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, sol.x)
     s.update(iterations=count["n"], residual_K=res)
     return s

@@ -147,7 +147,8 @@ def pressure_flow(film, eps, pressure_Pa):
             / (3.0 * film.viscosity * film.length))
 
 
-def bearing_flows(bearing, eq, supply_pressure_Pa, density_kg_m3, hole_viscosity_Pa_s, model):
+def bearing_flows(bearing, eps_inner, eps_outer, rotor_speed, ring_speed, supply_pressure_Pa, density_kg_m3,
+                  hole_viscosity_Pa_s, model):
     """Oil flows through the two films of one bearing at a static state.
 
     The outer film is fed from the housing's groove at the supply pressure; the inner film through the ring's
@@ -159,8 +160,10 @@ def bearing_flows(bearing, eq, supply_pressure_Pa, density_kg_m3, hole_viscosity
     ----------
     bearing : FloatingRingBearing
         With the films' viscosities at their temperatures.
-    eq : BearingEquilibrium
-        Its static state (ε_I, ε_O, ring and rotor speeds).
+    eps_inner, eps_outer : float
+        Eccentricity ratios of the inner and the outer film at the static state [-].
+    rotor_speed, ring_speed : float
+        ω_R and ω_FR [rad/s].
     supply_pressure_Pa : float
         Oil supply pressure above ambient [Pa].
     density_kg_m3 : float
@@ -179,15 +182,15 @@ def bearing_flows(bearing, eq, supply_pressure_Pa, density_kg_m3, hole_viscosity
     wall = outer.radius - inner.radius - inner.clearance
     p_feed = supply_pressure_Pa
     if model.centrifugal_feed:
-        p_feed -= 0.5 * density_kg_m3 * eq.ring_speed ** 2 * (outer.radius ** 2 - inner.radius ** 2)
+        p_feed -= 0.5 * density_kg_m3 * ring_speed ** 2 * (outer.radius ** 2 - inner.radius ** 2)
     feed = 0.0
     if p_feed > 0.0 and model.feed_holes > 0 and model.feed_hole_diameter_m > 0.0:
         r_holes = 128.0 * hole_viscosity_Pa_s * wall / (math.pi * model.feed_holes * model.feed_hole_diameter_m ** 4)
-        r_film = p_feed / pressure_flow(inner, eq.eps_inner, p_feed)
+        r_film = p_feed / pressure_flow(inner, eps_inner, p_feed)
         feed = p_feed / (r_holes + r_film)
-    return {"side_inner": side_flow(inner, eq.eps_inner, eq.omega_inner), "feed_inner": feed,
-            "side_outer": side_flow(outer, eq.eps_outer, eq.omega_outer),
-            "supply_outer": pressure_flow(outer, eq.eps_outer, supply_pressure_Pa), "feed_pressure": p_feed}
+    return {"side_inner": side_flow(inner, eps_inner, rotor_speed + ring_speed), "feed_inner": feed,
+            "side_outer": side_flow(outer, eps_outer, ring_speed),
+            "supply_outer": pressure_flow(outer, eps_outer, supply_pressure_Pa), "feed_pressure": p_feed}
 
 
 def _conductances(bearing, model, capacity_inner, capacity_outer):
