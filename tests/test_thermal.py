@@ -298,3 +298,12 @@ def test_thermal_figure_has_a_column_per_bearing_with_units(table):
     assert celsius == ["[°C]", "[°C]"]
     assert len(fig.legends) == 1 and "supply 333.15 K (60 °C)" in [t.get_text() for t in fig.legends[0].texts]
     plt.close(fig)
+
+
+def test_inner_to_outer_power_ratio_is_that_of_the_balanced_ring_torque(table):
+    """For centred films the balanced ring torque A_I (ω_R − ω_FR) = A_O ω_FR gives P_I / P_O = (ω_R − ω_FR)/ω_FR
+    = 1/RSR − 1 whatever the viscosities: the almost unloaded compressor bearing (ε ≈ 0.002) at every thermal
+    operating point. Tolerance 1e-5: the pressure-offset terms are O(ε²) (measured ≤ 1e-6)."""
+    comp = table[table["bearing"] == "compressor"]
+    np.testing.assert_allclose(comp["power loss inner [W]"] / comp["power loss outer [W]"], 1.0 / comp["RSR [-]"] - 1.0,
+                               rtol=1e-5)
