@@ -202,9 +202,10 @@ def test_colder_oil_is_more_viscous_loses_more_power_and_changes_the_ring_speed(
 
 
 def test_ring_speed_ratio_falls_with_rotor_speed_at_90_C(table):
-    """The trend reported for turbochargers (San Andrés & Kerth 2004; Kerth's 2003 thesis): the inner film heats more
-    than the outer, its viscosity falls more, and the RSR falls as the rotor speeds up — no published number for the
-    Table 2 rotor exists, so the test asserts the direction and that the inner film is the hotter one. With constant
+    """The trend reported for turbochargers (San Andrés & Kerth 2004; Kerth's 2003 thesis; their numbers were not
+    available here): the inner film heats more than the outer, its viscosity falls more, and the RSR falls as the
+    rotor speeds up — no published number for the Table 2 rotor exists, so the test asserts the direction and that
+    the inner film is the hotter one. With constant
     viscosities the method-J RSR rises with speed instead (towards eq. (6))."""
     hot = table[table["supply temperature [K]"] == 363.15]
     for name, grp in hot.groupby("bearing"):
