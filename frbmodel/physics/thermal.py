@@ -2,7 +2,7 @@
 temperatures (docs/theory/thermal.md).
 
 A lumped model of the kind of San Andrés & Kerth (2004, "Thermal effects on the performance of floating ring
-bearings for turbochargers", Proc. IMechE Part J 218(5)): each film has one effective temperature, heated by
+bearings for turbochargers", Proc. IMechE Part J 218): each film has one effective temperature, heated by
 its friction power (:func:`frbmodel.physics.losses.bearing_loss`) and cooled by the oil flowing through it and by the
 heat it exchanges with the ring (and, optionally, with the shaft or the housing). The equations here are written for
 this project from the energy balance; they are not a transcription of the paper's, whose coefficients are not
