@@ -28,6 +28,7 @@ from .linear.campbell import CampbellResult, campbell
 from .linear.equilibrium import BearingEquilibrium, EquilibriumResult, equilibrium
 from .linear.losses import bearing_losses
 from .linear.modal import Modes, modes
+from .linear.thermal import thermal_losses, thermal_system
 from .linear.unbalance import UnbalanceResponse, unbalance_response
 from .linear.whirl import film_onset_speeds
 from .nonlinear.recorder import Recorder, RunupResult, RunupSchema
@@ -43,9 +44,11 @@ from .physics.film import (
     static_position,
 )
 from .physics.losses import bearing_loss
+from .physics.thermal import ThermalModel
 from .signals.spectral import SpectrogramResult, spectrogram
 from .signals.tracking import Component
 from .system.methods import METHODS, Method, get_method
+from .system.oil import OILS, Oil
 from .system.parameters import FloatingRingBearing, Turbocharger, load_system
 from .system.presets import PAPER_OUTER_CLEARANCES, turbocharger
 from .system.rotor import Disc, Rotor, ShaftElement
@@ -54,7 +57,7 @@ __all__ = [
     "__version__", "BearingEquilibrium", "CampbellResult", "Component", "ConvergenceError", "CosimStopped", "Disc",
     "EquilibriumResult", "FILM_MODELS", "FRBError", "Film", "FilmContactError", "FloatingRingBearing",
     "IntegrationError", "LimitCycle", "LinearSystem", "METHODS", "Method", "Modes", "PAPER_OUTER_CLEARANCES",
-    "ParameterError",
+    "OILS", "Oil", "ParameterError", "ThermalModel", "thermal_losses", "thermal_system",
     "Recorder", "Rotor", "RunStopped", "RunupResult", "RunupSchema", "RunupStopped", "ShaftElement",
     "SpectrogramResult", "SpeedProfile", "Turbocharger", "Unbalance", "bearing_loss", "bearing_losses", "campbell",
     "equilibrium", "film_coefficients", "film_force", "film_onset_speeds", "film_torques", "get_method", "limit_cycle",

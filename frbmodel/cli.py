@@ -960,27 +960,78 @@ def write_waterfalls(run, out, orders=(1.0,)):
     return paths
 
 
+def _oil_from_args(args, system):
+    """The oil of ``frb losses``: ``--oil NAME``, else the system file's ``[oil]`` (None: constant viscosities);
+    ``--supply-temperature`` / ``--supply-pressure`` without an oil, or an oil with a method other than J or with
+    ``--run``, are refused."""
+    from .system.oil import OIL
+
+    oil = OIL(args.oil) if args.oil is not None else system.oil
+    if oil is None:
+        given = [o for o, v in (("--supply-temperature", args.supply_temperature),
+                                ("--supply-pressure", args.supply_pressure)) if v is not None]
+        if given:
+            raise ParameterError(f"{given[0]} needs an oil: give --oil NAME or an [oil] table in --system (without an "
+                                 "oil the films keep their constant viscosities)")
+    elif args.method != "J":
+        raise ParameterError(f"--method {args.method} cannot be combined with an oil: the thermal operating point is "
+                             "the method-J equilibrium (ring torque balanced); use --method J")
+    elif args.run:
+        raise ParameterError("--run cannot be combined with an oil: a run-up's recorded losses are at the films' "
+                             "constant viscosities; leave --oil (or the system's [oil]) out to overlay them")
+    return oil
+
+
+def _supply_from_args(args, oil):
+    """Supply temperatures [K] (each checked against the oil's range) and pressure [Pa] of ``frb losses``."""
+    from .linear.thermal import SUPPLY_PRESSURE_PA, check_supply_pressure
+    from .system.oil import T_MIN_K, check_temperature
+
+    text = args.supply_temperature or "333.15,363.15,393.15"
+    try:
+        values = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise ParameterError(f"--supply-temperature = {text!r} is invalid: give a temperature [K] or a comma list "
+                             "(e.g. 333.15,363.15)") from None
+    temps = [check_temperature("--supply-temperature", v, T_MIN_K, oil.max_temperature_K) for v in values]
+    p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
+    return temps, check_supply_pressure("--supply-pressure", p_s)
+
+
 def cmd_losses(args):
-    """Bearing journal torque and power loss at the static equilibrium over speed (CSV + figure), optionally with
-    the recorded losses of a run-up / co-simulation folder."""
+    """Bearing journal torque, power loss and ring-speed ratio at the static equilibrium over speed (CSV + figure),
+    optionally with the recorded losses of a run-up / co-simulation folder; with an oil (``--oil`` or the system
+    file's) at the thermal operating point, with the film temperatures
+    (:func:`frbmodel.linear.thermal.thermal_losses`)."""
     import matplotlib.pyplot as plt
 
-    from .linear.losses import bearing_losses
+    from .linear.losses import bearing_losses, with_ring_speed_ratio
+    from .linear.thermal import thermal_losses
     from .nonlinear.recorder import RunupResult
     from .plots.losses import plot_bearing_losses
+    from .plots.thermal import plot_thermal_losses
 
     tc = load_from_args(args)
-    out = writable_dir(args.out)
+    oil = _oil_from_args(args, tc)
+    temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
+    speeds = parse_speeds(args.speeds)
     run = RunupResult.load(args.run) if args.run else None
-    table = bearing_losses(tc, parse_speeds(args.speeds), args.method)
-    p_csv = out / f"bearing_losses_{args.method}.csv"
+    out = writable_dir(args.out)
+    if oil is None:
+        table = with_ring_speed_ratio(bearing_losses(tc, speeds, args.method))
+        stem, fig = f"bearing_losses_{args.method}", plot_bearing_losses(table, run,
+                                                                          title=f"Bearing power loss, {tc.name}")
+        cols = ["speed [rpm]", "bearing", "RSR [-]", "journal torque [N m]", "power loss [W]", "power loss inner [W]",
+                "power loss outer [W]"]
+    else:
+        table = thermal_losses(tc, speeds, oil, temps, p_s)
+        stem, fig = "thermal_losses", plot_thermal_losses(table)
+        cols = ["supply temperature [K]", "speed [rpm]", "bearing", "RSR [-]", "inner film temperature [K]",
+                "outer film temperature [K]", "ring temperature [K]", "power loss [W]"]
+    p_csv, p_png = out / f"{stem}.csv", out / f"{stem}.png"
     table.to_csv(p_csv, index=False)
-    fig = plot_bearing_losses(table, run, title=f"Bearing power loss, {tc.name}")
-    p_png = out / f"bearing_losses_{args.method}.png"
     fig.savefig(p_png, dpi=130)
     plt.close(fig)
-    cols = ["speed [rpm]", "bearing", "journal torque [N m]", "power loss [W]", "power loss inner [W]",
-            "power loss outer [W]"]
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
     print(f"wrote:\n  {p_csv}\n  {p_png}")
     print(f"results in {out.resolve()}")
@@ -1451,11 +1502,20 @@ def _add_losses(sub):
     from .system.methods import METHODS
 
     lo = sub.add_parser("losses", formatter_class=_Formatter,
-                        help="bearing journal torque and friction power loss vs speed (CSV + PNG)")
+                        help="bearing journal torque, power loss and RSR vs speed; with --oil the film temperatures "
+                             "(CSV + PNG)")
     lo.add_argument("--speeds", default="10000:250000:49", help="START:STOP:COUNT [rpm] or comma list")
     lo.add_argument("--method", default="J", type=str.upper, choices=[m for m in METHODS if m in "CDFGIJ"],
                     help="equilibrium method")
     lo.add_argument("--run", default=None, metavar="DIR", help="overlay the recorded losses of this run-up folder")
+    lo.add_argument("--oil", default=None, metavar="NAME",
+                    help="thermal operating point with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, "
+                         "ISO VG 46; or an [oil] table in --system): film temperatures, viscosities, RSR, losses")
+    lo.add_argument("--supply-temperature", default=None, metavar="K",
+                    help="oil supply temperature(s) [K], one value or a comma list (default 333.15,363.15,393.15; "
+                         "needs an oil)")
+    lo.add_argument("--supply-pressure", type=float, default=None, metavar="PA",
+                    help="oil supply pressure above ambient [Pa] (default 3e5; needs an oil)")
     lo.add_argument("--out", default="results/losses", help="output folder")
     _system_args(lo)
     lo.set_defaults(func=cmd_losses)

@@ -197,6 +197,8 @@ def test_build_fmus_without_sources_names_what_is_missing_and_the_fix(tmp_path, 
     ("benchmarks/masters.py", ["--halvings", "-1"], ["argument --halvings", "an integer >= 0"]),
     ("benchmarks/sweep.py", ["--duration", "nan"], ["argument --duration: 'nan' is invalid"]),
     ("benchmarks/continuation.py", ["--points", "x"], ["argument --points: 'x' is not a number"]),
+    ("benchmarks/thermal_table.py", ["--supply-pressure=-1"], ["argument --supply-pressure", "finite and >= 0"]),
+    ("benchmarks/thermal_table.py", ["--supply-pressure", "3e7"], ["supply_pressure_Pa = 30000000.0 Pa is invalid"]),
 ])
 def test_scripts_refuse_bad_arguments_with_exit_2_before_any_work(tmp_path, script, args, words):
     """The scripts a user runs from the checkout: a bad argument is one line naming it, its value and the valid

@@ -138,7 +138,7 @@ def _nth(text, old, new, n):
 
 
 FILM_KEYS = "valid keys: clearance, length, radius, viscosity"
-TOP_KEYS = "valid keys: bearings, film_model, gravity, name, rotor, units"
+TOP_KEYS = "valid keys: bearings, film_model, gravity, name, oil, rotor, units"
 # (what goes wrong, edit of the saved Table 2 system (old, new, which occurrence), what the message must say);
 # the saved file has 3 [[rotor.shaft]], 2 [[rotor.discs]] and 2 [[bearings]] tables with [bearings.inner] and
 # [bearings.outer] each, in this order

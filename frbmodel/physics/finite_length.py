@@ -38,9 +38,8 @@ CALIBRATION_EPS = np.array([0.02, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9])
 def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 60):
     """Finite-length / short-bearing static force ratios ``(f_r, f_t)`` at ``eps`` and L/D = ``lam``.
 
-    Solves ∂θ(H³ ∂θ P) + (R/L)² ∂ζ(H³ ∂ζ P) = 6 ∂H/∂θ on θ ∈ [0, 2π) (periodic), ζ = z/L ∈ [−½, ½] with
-    P = 0 at the film ends, H = 1 − ε cos θ, p = μ ω_s R²/c² · P; then clips P < 0 (Gümbel) and integrates.
-    Second-order finite volumes, ``n_theta`` × ``n_z`` cells; converged to about 1e-3 at 360 × 60.
+    Integrates the clipped finite-volume pressure field of :func:`reynolds_pressure` over the film; converged to
+    about 1e-3 at 360 × 60 cells.
 
     Parameters
     ----------
@@ -61,6 +60,49 @@ def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 
     >>> f_r, f_t = reynolds_force_ratio(0.3, 0.05)     # a very short film: the short-bearing theory holds
     >>> bool(abs(f_r - 1.0) < 0.01 and abs(f_t - 1.0) < 0.01)
     True
+    """
+    th, P = reynolds_pressure(eps, lam, n_theta, n_z)
+    dth = 2.0 * math.pi / n_theta
+    dz = 1.0 / n_z
+    # forces on the inner member per μ ω_s R³ L / c²: F = −∫∫ P (cos θ, sin θ) dθ dζ
+    integ = P.sum(axis=1) * dz
+    f_r = -np.sum(integ * np.cos(th)) * dth
+    f_t = -np.sum(integ * np.sin(th)) * dth
+    # short-bearing static forces per μ ω_s R L³/c² (docs/theory/films.md#static-and-quasi-static-case); convert units:
+    # R³ L = R L³ / (4 λ²)
+    fr_is, ft_is = short_static_force_rt(eps)
+    scale = 1.0 / (4.0 * lam * lam)  # R³L / (R L³)
+    return f_r * scale / fr_is, f_t * scale / ft_is
+
+
+def reynolds_pressure(eps: float, lam: float, n_theta: int = 360, n_z: int = 60):
+    """Dimensionless static pressure field of the finite-length π-film by finite volumes.
+
+    Solves ∂θ(H³ ∂θ P) + (R/L)² ∂ζ(H³ ∂ζ P) = 6 ∂H/∂θ on θ ∈ [0, 2π) (periodic), ζ = z/L ∈ [−½, ½] with
+    P = 0 at the film ends, H = 1 − ε cos θ, p = μ ω_s R²/c² · P; then clips P < 0 (Gümbel). Second-order finite
+    volumes, ``n_theta`` × ``n_z`` cells.
+
+    Parameters
+    ----------
+    eps : float
+        Eccentricity ratio, 0 < ε < 1.
+    lam : float
+        L/D > 0.
+    n_theta, n_z : int
+        Cells around and along the film.
+
+    Returns
+    -------
+    theta : ndarray (n_theta,)
+        Cell centres θ [rad] (θ = ϑ: measured from the line of centres, minimum film at θ = 0).
+    P : ndarray (n_theta, n_z)
+        Pressure p c² / (μ ω_s R²) [-] at the cell centres ζ_j = −½ + (j + ½)/n_z, negative values clipped to 0.
+
+    Examples
+    --------
+    >>> th, P = reynolds_pressure(0.3, 0.5, 36, 8)
+    >>> P.shape, bool(P.min() == 0.0 and P.max() > 0.0)
+    ((36, 8), True)
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.linalg import spsolve
@@ -110,15 +152,7 @@ def reynolds_force_ratio(eps: float, lam: float, n_theta: int = 360, n_z: int = 
     rhs = np.repeat((6.0 * (h_e - h_w) / dth)[:, None], n_zz, axis=1).ravel()
     P = spsolve(A, rhs).reshape(n_t, n_zz)
     P = np.clip(P, 0.0, None)
-    # forces on the inner member per μ ω_s R³ L / c²: F = −∫∫ P (cos θ, sin θ) dθ dζ
-    integ = P.sum(axis=1) * dz
-    f_r = -np.sum(integ * np.cos(th)) * dth
-    f_t = -np.sum(integ * np.sin(th)) * dth
-    # short-bearing static forces per μ ω_s R L³/c² (docs/theory/films.md#static-and-quasi-static-case); convert units:
-    # R³ L = R L³ / (4 λ²)
-    fr_is, ft_is = short_static_force_rt(eps)
-    scale = 1.0 / (4.0 * lam * lam)  # R³L / (R L³)
-    return f_r * scale / fr_is, f_t * scale / ft_is
+    return th, P
 
 
 @lru_cache(maxsize=64)

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..core.errors import ParameterError, check_positive
 from .films import Film, check_film_thickness, check_model
+from .oil import Oil, oil_from_dict
 from .rotor import GRAVITY, Disc, Rotor, ShaftElement
 
 # ------------------------------------------------------------------ the schema of a system file
@@ -62,9 +63,15 @@ ROTOR = Section("rotor", {"shaft": [SHAFT_ELEMENT], "discs": [DISC]}, ("shaft",)
 BEARING = Section("bearing", {"node": (INTEGER, ""), "name": (STRING, ""), "ring_mass": (REAL, "kg"),
                               "ring_inertia": (REAL, "kg m^2"), "inner": FILM, "outer": FILM},
                   ("node", "ring_mass", "ring_inertia", "inner", "outer"))
+#: the lubricant (optional): ``name`` of a named oil (:data:`frbmodel.system.oil.OILS`) or its datasheet numbers;
+#: :func:`frbmodel.system.oil.oil_from_dict` checks which combination is given
+OIL = Section("oil", {"nu40_m2_s": (REAL, "m^2/s"), "nu100_m2_s": (REAL, "m^2/s"), "density15_kg_m3": (REAL, "kg/m^3"),
+                      "density_coefficient_1_K": (REAL, "1/K"), "specific_heat_J_kgK": (REAL, "J/(kg K)"),
+                      "name": (STRING, "")})
 #: the whole system file (``units`` is a free-text note for readers of the file)
 SYSTEM = Section("system", {"name": (STRING, ""), "gravity": (REAL, "m/s^2"), "film_model": (STRING, ""),
-                            "units": (STRING, ""), "rotor": ROTOR, "bearings": [BEARING]}, ("rotor", "bearings"))
+                            "units": (STRING, ""), "rotor": ROTOR, "bearings": [BEARING], "oil": OIL},
+                 ("rotor", "bearings"))
 
 
 def _kind_name(value) -> str:
@@ -260,6 +267,9 @@ class Turbocharger:
     film_model : {"short", "short_corrected"}
         Film model used by equilibria, linearization and run-ups.
     name : str
+    oil : Oil, optional
+        The lubricant, used only by the thermal analyses (:func:`frbmodel.linear.thermal.thermal_losses`); every other
+        analysis uses the films' constant viscosities. None (the default) for none.
 
     Examples
     --------
@@ -275,9 +285,13 @@ class Turbocharger:
     gravity: float = GRAVITY
     film_model: str = "short"
     name: str = "turbocharger"
+    oil: Oil = None
 
     def __post_init__(self):
         object.__setattr__(self, "bearings", tuple(self.bearings))
+        if self.oil is not None and not isinstance(self.oil, Oil):
+            raise ParameterError(f"oil = {self.oil!r:.60} is a {type(self.oil).__name__}; expected an Oil "
+                                 "(frbmodel.Oil(...) or frbmodel.OILS[name]) or None")
         if len(self.bearings) != 2:
             raise ParameterError(f"number of bearings = {len(self.bearings)} is invalid: exactly 2 are supported")
         object.__setattr__(self, "gravity", check_positive("gravity", self.gravity, "m/s^2", allow_zero=True))
@@ -333,11 +347,15 @@ class Turbocharger:
         -------
         dict
             ``name``, ``gravity`` [m/s²], ``film_model``, ``rotor`` (:meth:`Rotor.to_dict`), ``bearings``
-            (two :meth:`FloatingRingBearing.to_dict`) and ``units`` (a note for readers of the file).
+            (two :meth:`FloatingRingBearing.to_dict`), ``units`` (a note for readers of the file) and, only if the
+            system has one, ``oil`` (:meth:`Oil.to_dict`).
         """
-        return {"name": self.name, "gravity": self.gravity, "film_model": self.film_model,
-                "rotor": self.rotor.to_dict(), "bearings": [b.to_dict() for b in self.bearings],
-                "units": "SI: m, kg, s, Pa, Pa s, kg m^2"}
+        d = {"name": self.name, "gravity": self.gravity, "film_model": self.film_model,
+             "rotor": self.rotor.to_dict(), "bearings": [b.to_dict() for b in self.bearings],
+             "units": "SI: m, kg, s, Pa, Pa s, kg m^2"}
+        if self.oil is not None:
+            d["oil"] = self.oil.to_dict()
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "Turbocharger":
@@ -366,7 +384,8 @@ class Turbocharger:
         return _build("", cls, rotor=_build("rotor", Rotor, shaft=shaft, discs=discs),
                       bearings=tuple(_bearing(b, f"bearings[{i}]") for i, b in enumerate(d["bearings"])),
                       gravity=d.get("gravity", GRAVITY), film_model=d.get("film_model", "short"),
-                      name=d.get("name", "turbocharger"))
+                      name=d.get("name", "turbocharger"),
+                      oil=oil_from_dict(d["oil"], "oil") if "oil" in d else None)
 
     def save(self, path) -> Path:
         """Write the system to a TOML (written by tomli-w) or JSON file.

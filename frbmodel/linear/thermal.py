@@ -1,0 +1,224 @@
+"""Thermo-hydrodynamic operating point of the floating-ring bearings over speed (docs/theory/thermal.md).
+
+Per bearing and speed, the fixed point film temperatures → viscosities μ(T) of the oil → method-J equilibrium
+(ring speed, eccentricities) → friction powers (:func:`frbmodel.linear.losses.equilibrium_loss`) and oil flows
+(:func:`frbmodel.physics.thermal.bearing_flows`) → temperatures (:func:`frbmodel.physics.thermal.film_temperatures`)
+is solved for the two film temperatures with a Newton-type root (MINPACK hybr). :func:`thermal_system` returns the
+Turbocharger with its film viscosities at those temperatures: the entry point of the Campbell diagram, run-ups and
+FMUs at an oil temperature (stage 2 of issue #25).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..core.errors import ConvergenceError, ParameterError, check_real, check_speed, check_system
+from ..core.units import RPM
+from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, heat_flows
+from ..system.oil import T_MIN_K, Oil, check_temperature
+from .equilibrium import bearing_equilibrium
+from .losses import bearing_losses, equilibrium_loss, with_ring_speed_ratio
+
+__all__ = ["MAX_SUPPLY_PRESSURE_PA", "thermal_losses", "thermal_system"]
+
+#: the highest oil supply pressure accepted [Pa] (gauge): 20 bar; turbocharger oil circuits run at 1 ... 6 bar
+MAX_SUPPLY_PRESSURE_PA = 2e6
+#: default supply pressure [Pa] (gauge): 3 bar, a typical engine oil-gallery pressure at speed
+SUPPLY_PRESSURE_PA = 3e5
+
+
+def check_supply_pressure(name, pressure_Pa):
+    """``float(pressure_Pa)`` if 0 <= p <= :data:`MAX_SUPPLY_PRESSURE_PA`, else a :class:`ParameterError`."""
+    p = check_real(name, pressure_Pa, "Pa")
+    if not 0.0 <= p <= MAX_SUPPLY_PRESSURE_PA:
+        raise ParameterError(f"{name} = {pressure_Pa!r} Pa is invalid: valid range 0 ... {MAX_SUPPLY_PRESSURE_PA:g} "
+                             "Pa (gauge; 1 bar = 1e5 Pa)")
+    return p
+
+
+def _with_viscosities(bearing, mu_inner, mu_outer):
+    return replace(bearing, inner=replace(bearing.inner, viscosity=mu_inner),
+                   outer=replace(bearing.outer, viscosity=mu_outer))
+
+
+def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temps):
+    """Everything at film temperatures ``temps`` (clipped into the oil's range while the solver searches)."""
+    t_i, t_o = (min(max(float(t), T_MIN_K), oil.max_temperature_K) for t in temps)
+    b = _with_viscosities(bearing, oil.dynamic_viscosity(t_i), oil.dynamic_viscosity(t_o))
+    eq = bearing_equilibrium(b, load, omega, "J", film_model, gravity)
+    t_j, p_i, p_o = (float(v) for v in equilibrium_loss(b, eq, omega, film_model))
+    flows = bearing_flows(b, eq.eps_inner, eq.eps_outer, omega, eq.ring_speed, p_s, oil.density(t_s),
+                          oil.dynamic_viscosity(t_s), model)
+    q_i, q_o = flows["side_inner"] + flows["feed_inner"], flows["side_outer"] + flows["supply_outer"]
+    cap_i = oil.density(t_i) * oil.specific_heat_J_kgK * q_i
+    cap_o = oil.density(t_o) * oil.specific_heat_J_kgK * q_o
+    new = film_temperatures(b, model, p_i, p_o, cap_i, cap_o, t_s)
+    return {"bearing": b, "eq": eq, "torque": t_j, "powers": (p_i, p_o), "flows": flows, "q": (q_i, q_o),
+            "capacities": (cap_i, cap_o), "temperatures": new}
+
+
+def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity):
+    """Converged state of one bearing (see :func:`thermal_losses`), with iterations and residual."""
+    from scipy.optimize import root
+
+    count = {"n": 0}
+
+    def residual(x):
+        count["n"] += 1
+        s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, x)
+        return np.array(s["temperatures"][:2]) - x
+
+    sol = root(residual, np.array([t_s, t_s]), method="hybr",
+               options={"xtol": 1e-13, "maxfev": model.max_evaluations})
+    res = float(np.max(np.abs(sol.fun)))
+    rpm = omega / RPM
+    if not res <= model.tolerance_K:
+        raise ConvergenceError(f"thermal operating point of the {bearing.name} bearing at {rpm:.0f} rpm, supply "
+                               f"{t_s:g} K did not converge: film-temperature residual {res:.3g} K > tolerance "
+                               f"{model.tolerance_K:g} K after {count['n']} evaluations ({sol.message})")
+    for name, t in zip(("inner", "outer"), sol.x):
+        try:
+            check_temperature(f"{bearing.name} {name} film temperature at {rpm:.0f} rpm (supply {t_s:g} K)", t,
+                              T_MIN_K, oil.max_temperature_K)
+        except ParameterError as exc:
+            raise ParameterError(f"{exc}: beyond the oil's viscosity law, the oil flow cannot carry the film's "
+                                 f"friction power (supply pressure {p_s:g} Pa; raise it, or the feed holes of the "
+                                 "ThermalModel)") from None
+    s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, sol.x)
+    s.update(iterations=count["n"], residual_K=res)
+    return s
+
+
+def _row(rpm, t_s, p_s, oil, model, s):
+    """One table row (units in every column) of a converged state ``s``."""
+    b, eq, (p_i, p_o), f, (q_i, q_o) = s["bearing"], s["eq"], s["powers"], s["flows"], s["q"]
+    t_i, t_o, t_r = s["temperatures"]
+    h = heat_flows(b, model, s["temperatures"], *s["capacities"], t_s)
+    closure = p_i + p_o - (h["oil_inner"] + h["oil_outer"] + h["shaft"] + h["housing"])
+    return {"speed [rpm]": rpm, "bearing": b.name, "supply temperature [K]": t_s, "supply pressure [Pa]": p_s,
+            "oil": oil.name, "inner film temperature [K]": t_i, "outer film temperature [K]": t_o,
+            "ring temperature [K]": t_r,
+            "inner outlet temperature [K]": t_s + (t_i - t_s) / model.mixing,
+            "outer outlet temperature [K]": t_s + (t_o - t_s) / model.mixing,
+            "inner viscosity [Pa s]": b.inner.viscosity, "outer viscosity [Pa s]": b.outer.viscosity,
+            "ring speed [rad/s]": eq.ring_speed, "RSR [-]": eq.ring_speed_ratio,
+            "eps inner [-]": eq.eps_inner, "eps outer [-]": eq.eps_outer, "journal torque [N m]": s["torque"],
+            "power loss [W]": p_i + p_o, "power loss inner [W]": p_i, "power loss outer [W]": p_o,
+            "inner side flow [m^3/s]": f["side_inner"], "inner feed flow [m^3/s]": f["feed_inner"],
+            "outer side flow [m^3/s]": f["side_outer"], "outer supply flow [m^3/s]": f["supply_outer"],
+            "inner flow [m^3/s]": q_i, "outer flow [m^3/s]": q_o, "feed pressure [Pa]": f["feed_pressure"],
+            "heat to oil inner [W]": h["oil_inner"], "heat to oil outer [W]": h["oil_outer"],
+            "heat inner film to ring [W]": h["inner_to_ring"], "heat ring to outer film [W]": h["ring_to_outer"],
+            "heat to shaft [W]": h["shaft"], "heat to housing [W]": h["housing"],
+            "energy-balance residual [W]": closure,
+            "ring balance residual [W]": h["inner_to_ring"] - h["ring_to_outer"],
+            "temperature residual [K]": s["residual_K"], "iterations [-]": s["iterations"]}
+
+
+def _isothermal(system, speeds):
+    """Constant viscosities (no oil): :func:`bearing_losses` (method J) with the RSR, no temperatures."""
+    return with_ring_speed_ratio(bearing_losses(system, speeds, "J"))
+
+
+def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
+                   model=None):
+    """Film and ring temperatures, viscosities, ring speed, power losses and oil flows of every bearing at the
+    thermo-hydrodynamic operating point (method-J equilibrium at the films' temperatures).
+
+    Parameters
+    ----------
+    system : Turbocharger
+    speed_rpm : float or sequence of float
+        Rotor speed(s) [rpm], 0 < speed <= 1e6.
+    oil : Oil, optional
+        The lubricant; None: the system's ``oil``; if that is None too, the films keep their constant viscosities
+        and the result is :func:`frbmodel.linear.losses.bearing_losses` (method J) with an ``RSR [-]`` column.
+    supply_temperature_K : float or sequence of float
+        Oil supply (inlet) temperature(s) [K], 243.15 ... the oil's upper limit (<= 473.15).
+    supply_pressure_Pa : float
+        Supply pressure above ambient [Pa], 0 ... 2e6.
+    model : ThermalModel, optional
+        Coefficients; default :class:`ThermalModel()`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per supply temperature, speed and bearing; the columns (units in every name) are those of
+        ``_row``: speed, bearing, supply temperature and pressure, film, ring and outlet temperatures [K], film
+        viscosities [Pa s], ring speed [rad/s], RSR [-], ε, journal torque [N m], power losses [W], flows [m³/s],
+        heat flows [W], the energy-balance residual [W], the temperature residual [K] and the iterations.
+
+    Raises
+    ------
+    ParameterError
+        A bad speed, temperature, pressure or oil (named, with its valid range), or a film temperature beyond the
+        oil's viscosity law.
+    ConvergenceError
+        The fixed point did not converge (the message names bearing, speed, residual and evaluations).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> df = thermal_losses(frb.turbocharger(), [100e3], frb.OILS["SAE 5W-30"], 363.15)
+    >>> bool((df["inner film temperature [K]"] > 363.15).all())
+    True
+    >>> bool(abs(df["energy-balance residual [W]"]).max() < 1e-9)   # friction power = heat to oil + walls
+    True
+    """
+    import pandas as pd
+
+    check_system(system)
+    speeds = [check_speed("speed_rpm", s) for s in np.atleast_1d(np.asarray(speed_rpm, dtype=float))]
+    oil = system.oil if oil is None else oil
+    if oil is None:
+        return _isothermal(system, speeds)
+    if not isinstance(oil, Oil):
+        raise ParameterError(f"oil = {oil!r:.60} is a {type(oil).__name__}; expected an Oil (frbmodel.OILS[name])")
+    model = ThermalModel() if model is None else model
+    if not isinstance(model, ThermalModel):
+        raise ParameterError(f"model = {model!r:.60} is a {type(model).__name__}; expected a ThermalModel")
+    p_s = check_supply_pressure("supply_pressure_Pa", supply_pressure_Pa)
+    temps = [check_temperature("supply_temperature_K", t, T_MIN_K, oil.max_temperature_K)
+             for t in np.atleast_1d(np.asarray(supply_temperature_K, dtype=float))]
+    rows = []
+    for t_s in temps:
+        for rpm in speeds:
+            for b, load in zip(system.bearings, system.bearing_loads):
+                s = _operating_point(b, float(load), rpm * RPM, oil, t_s, p_s, model, system.film_model,
+                                     system.gravity)
+                rows.append(_row(rpm, t_s, p_s, oil, model, s))
+    return pd.DataFrame(rows)
+
+
+def thermal_system(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
+                   model=None):
+    """The Turbocharger with every film's viscosity at its temperature of the thermal operating point at one speed
+    (:func:`thermal_losses`): what a Campbell diagram, a run-up or an FMU at that oil state uses.
+
+    Parameters
+    ----------
+    system, oil, supply_temperature_K, supply_pressure_Pa, model
+        As :func:`thermal_losses` (one supply temperature [K]).
+    speed_rpm : float
+        Rotor speed [rpm].
+
+    Returns
+    -------
+    Turbocharger
+        ``system`` with the inner and outer viscosities [Pa s] of each bearing replaced (unchanged without an oil).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> tc = thermal_system(frb.turbocharger(), 150e3, frb.OILS["SAE 5W-30"], 363.15)
+    >>> bool(tc.bearings[0].inner.viscosity < tc.bearings[0].outer.viscosity)   # the inner film runs hotter
+    True
+    """
+    table = thermal_losses(system, check_speed("speed_rpm", speed_rpm), oil, check_real(
+        "supply_temperature_K", supply_temperature_K, "K"), supply_pressure_Pa, model)
+    if "inner viscosity [Pa s]" not in table:
+        return system
+    bearings = tuple(_with_viscosities(b, float(r["inner viscosity [Pa s]"]), float(r["outer viscosity [Pa s]"]))
+                     for b, (_, r) in zip(system.bearings, table.iterrows()))
+    return replace(system, bearings=bearings)

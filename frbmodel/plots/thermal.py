@@ -1,0 +1,66 @@
+"""Figure of the thermal operating points over speed (the table of :func:`frbmodel.linear.thermal.thermal_losses`):
+ring-speed ratio, film temperatures and power loss per bearing for each supply temperature."""
+from __future__ import annotations
+
+__all__ = ["plot_thermal_losses"]
+
+#: the offset between K and °C [K]
+_ZERO_C_K = 273.15
+
+
+def plot_thermal_losses(table, title=None):
+    """RSR [-], film temperatures [K] (°C on the right axis) and the bearing's power loss [W] versus rotor speed, one
+    column per bearing, one colour per supply temperature; inner film solid, outer film dashed, supply dotted.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A :func:`thermal_losses` table (columns ``bearing``, ``speed [rpm]``, ``supply temperature [K]``,
+        ``RSR [-]``, ``inner film temperature [K]``, ``outer film temperature [K]``, ``power loss [W]``, ``oil``,
+        ``supply pressure [Pa]``).
+    title : str, optional
+        Figure title (default: the oil and the supply pressure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (the backend is left to the caller; matplotlib is imported only here).
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    bearings = list(dict.fromkeys(table["bearing"]))
+    supplies = sorted(set(table["supply temperature [K]"]))
+    fig, axes = plt.subplots(3, len(bearings), figsize=(5.2 * len(bearings), 9.0), sharex=True, squeeze=False)
+    for j, name in enumerate(bearings):
+        ax_rsr, ax_t, ax_p = axes[:, j]
+        for k, t_s in enumerate(supplies):
+            grp = table[(table["bearing"] == name) & (table["supply temperature [K]"] == t_s)].sort_values(
+                "speed [rpm]")
+            krpm, color = grp["speed [rpm]"] / 1e3, f"C{k}"
+            ax_rsr.plot(krpm, grp["RSR [-]"], "-", color=color, lw=1.6)
+            ax_t.plot(krpm, grp["inner film temperature [K]"], "-", color=color, lw=1.6)
+            ax_t.plot(krpm, grp["outer film temperature [K]"], "--", color=color, lw=1.6)
+            ax_t.axhline(t_s, color=color, ls=":", lw=1.0)
+            ax_p.plot(krpm, grp["power loss [W]"], "-", color=color, lw=1.6)
+        ax_rsr.set_title(f"{name} bearing")
+        ax_rsr.set_ylabel("ring-speed ratio RSR [-]")
+        ax_t.set_ylabel("film temperature [K]")
+        celsius = ax_t.secondary_yaxis("right", functions=(lambda k: k - _ZERO_C_K, lambda c: c + _ZERO_C_K))
+        celsius.set_ylabel("[°C]")
+        ax_p.set_ylabel("power loss [W]")
+        ax_p.set_xlabel("rotor speed [krpm]")
+        for ax in (ax_rsr, ax_t, ax_p):
+            ax.grid(True, alpha=0.3)
+    supply = [Line2D([], [], color=f"C{k}", lw=1.6, label=f"supply {t:.2f} K ({t - _ZERO_C_K:.0f} °C)")
+              for k, t in enumerate(supplies)]
+    styles = [Line2D([], [], color="0.3", ls="-", label="inner film temperature; RSR; bearing power loss"),
+              Line2D([], [], color="0.3", ls="--", label="outer film temperature"),
+              Line2D([], [], color="0.3", ls=":", label="supply temperature")]
+    fig.legend(handles=supply + styles, loc="lower center", ncol=3, fontsize=8, frameon=False)
+    if title is None:
+        oil = table["oil"].iloc[0] if "oil" in table else "oil"
+        title = f"Thermal operating point: {oil}, supply {table['supply pressure [Pa]'].iloc[0] / 1e5:g} bar (gauge)"
+    fig.suptitle(title)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    return fig
