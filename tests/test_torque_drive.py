@@ -141,6 +141,10 @@ def test_rotor_component_refuses_bad_speed_inputs():
         rot.step(1e-5, F, K, C, drive_torque=1e-3)
     with pytest.raises(frb.ParameterError, match="drive_torque"):
         rot.step(1e-5, F, K, C, drive_torque=math.nan, journal_torques=[0.0, 0.0])
+    # the run-up's bound on the FMUs' input too: 1.32e4 N m = J_p (1e6 rpm) / 1 ms for the Table 2 rotor
+    with pytest.raises(frb.ParameterError, match=r"drive_torque = 1e\+09 N m is invalid: valid range \|torque\| <= "
+                                                 r"1\.32e\+04 N m"):
+        rot.step(1e-5, F, K, C, drive_torque=1e9, journal_torques=[0.0, 0.0])
     with pytest.raises(frb.ParameterError, match="speed_in"):
         RotorComponent(tc, speed_source="input").step(1e-5, F, K, C, speed_in=math.inf)
     with pytest.raises(frb.ParameterError, match="drive torque"):

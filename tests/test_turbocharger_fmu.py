@@ -202,6 +202,10 @@ def test_bad_input_gives_fmi_errors_and_discards_never_nan(built, tmp_path):
     g.s.setReal([vr["drive_torque"]], [math.nan])
     with pytest.raises(FMICallException, match="discard"):
         g.s.doStep(0.0, 1e-3)
+    # 1e9 N m: beyond the run-up's bound (1.32e4 N m for the Table 2 rotor, 1e6 rpm from rest in 1 ms): Discard
+    g.s.setReal([vr["drive_torque"]], [1e9])
+    with pytest.raises(FMICallException, match="discard"):
+        g.s.doStep(0.0, 1e-3)
     g.s.setReal([vr["drive_torque"]], [0.01])
     g.s.doStep(0.0, 1e-3)  # recovered: the same step again, with a finite input
     assert np.all(np.isfinite(g.get(JOURNAL)))

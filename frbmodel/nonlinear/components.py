@@ -41,6 +41,7 @@ from ..physics.dynamics import (
 from ..physics.film import check_model, film_force_kernel
 from ..physics.losses import bearing_loss_kernel, film_arrays
 from ..system.rotor import GRAVITY
+from .runup import check_drive_torque_value
 
 #: default ring integration substep [s] of :class:`BearingComponent` (and of the bearing FMU)
 BEARING_SUBSTEP = 5e-6
@@ -1047,7 +1048,7 @@ class RotorComponent:
         if tj.size != nb or not np.isfinite(tj).all():
             raise ParameterError(f"speed_source = 'torque' needs {nb} finite journal torques [N m]; got "
                                  f"{journal_torques!r}")
-        drive = check_finite("drive_torque", drive_torque, "N m")
+        drive = check_drive_torque_value("drive_torque", drive_torque, self.polar_inertia)
         return self.omega, spin_acceleration(drive, tj, self.polar_inertia)
 
     def step(self, H, forces, Ks, Cs, refs=None, path=None, speed_in=None, drive_torque=0.0, journal_torques=None):

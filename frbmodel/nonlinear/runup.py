@@ -935,15 +935,25 @@ MIN_TORQUE_TIME_S = 1e-3
 def check_drive_torque(system, profile, name="drive torque"):
     """Refuse a torque-driven ``profile`` whose largest |drive torque| [N m] would take the ``system``'s rotor from
     standstill to :data:`MAX_SPEED_RPM` in less than :data:`MIN_TORQUE_TIME_S` (a prescribed speed passes)."""
-    if not getattr(profile, "torque_driven", False):
-        return
-    jp = rotor_polar_inertia(system.rotor)
-    limit = jp * MAX_SPEED_RPM * RPM / MIN_TORQUE_TIME_S
-    tq = float(np.max(np.abs(profile.drive_torque)))
-    if tq > limit:
+    if getattr(profile, "torque_driven", False):
+        check_drive_torque_value(name, float(np.max(np.abs(profile.drive_torque))), rotor_polar_inertia(system.rotor))
+
+
+def check_drive_torque_value(name, torque, polar_inertia):
+    """``float(torque)`` [N m], or a :class:`ParameterError` when it is not finite or |torque| would take a rotor of
+    ``polar_inertia`` [kg m²] from standstill to :data:`MAX_SPEED_RPM` in less than :data:`MIN_TORQUE_TIME_S` (the
+    run-up's profile and the FMUs' ``drive_torque`` input alike).
+
+    >>> check_drive_torque_value("drive_torque", 0.5, 1.26e-4)
+    0.5
+    """
+    tq = check_finite(name, torque, "N m")
+    limit = polar_inertia * MAX_SPEED_RPM * RPM / MIN_TORQUE_TIME_S
+    if abs(tq) > limit:
         raise ParameterError(f"{name} = {tq:g} N m is invalid: valid range |torque| <= {limit:.3g} N m (it would take "
-                             f"the rotor, polar inertia {jp:.3g} kg m², to {MAX_SPEED_RPM:.0e} rpm in under "
+                             f"the rotor, polar inertia {polar_inertia:.3g} kg m², to {MAX_SPEED_RPM:.0e} rpm in under "
                              f"{MIN_TORQUE_TIME_S * 1e3:g} ms; a turbine gives ~0.01 ... 1 N m)")
+    return tq
 
 
 #: valid range of the relative tolerance [-]: above it a run "finishes" after a handful of steps with a meaningless

@@ -35,6 +35,7 @@ from .runup import (
     SpeedProfile,
     atol_vector,
     build_problem,
+    check_drive_torque_value,
     check_tolerances,
     contact_message,
     film_samples,
@@ -286,7 +287,8 @@ class TurbochargerComponent:
                                      "(a step was skipped, or a state was not restored)")
             t_end = t + h
         w = check_positive("speed_in", speed_in, "rad/s") if self.speed_source == "input" else None
-        tq = check_finite("drive_torque", drive_torque, "N m") if self.speed_source == "torque" else 0.0
+        tq = (check_drive_torque_value("drive_torque", drive_torque, self.problem.polar_inertia)
+              if self.speed_source == "torque" else 0.0)
         acc = [check_finite(f"housing acceleration {q}", a, "m/s2") for q, a in zip("xy", housing_acc)]
         near = 1e-6 * h  # a ramp end this close to the step's start or end is taken as there (no sliver of a step)
         if self.speed_source == "ramp" and self.t + near < self.ramp_time < t_end - near:  # a knot: stop there
