@@ -39,11 +39,11 @@ def main(argv=None):
     lc61 = limit_cycle(tc, 61e3, guess=lc60)
     t_orbit = time.perf_counter() - t0
 
-    from frbmodel.cycles.flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, _Flow
+    from frbmodel.cycles.flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, ConstantSpeedFlow
     from frbmodel.nonlinear.runup import SpeedProfile, atol_vector, build_problem
 
     prob = build_problem(tc, SpeedProfile.constant(61e3, 1.0), tc.film_model)
-    flow = _Flow(prob, SHOOT_RTOL, SHOOT_ATOL_M)
+    flow = ConstantSpeedFlow(prob, SHOOT_RTOL, SHOOT_ATOL_M)
     flow(lc61.state, lc61.period)  # chooses the integrator
     t0 = time.perf_counter()
     end = flow(lc61.state, lc61.period)

@@ -729,7 +729,7 @@ def cmd_plot(args):
     interrupted) or by frb unbalance."""
     from .core.manifest import extend
     from .nonlinear.recorder import RunupResult
-    from .system.parameters import Turbocharger
+    from .system.parameters import system_from_meta
 
     out = Path(args.dir)
     _CLAIMS.append(extend(out, " ".join(_COMMAND)))  # the figures it draws belong to the run whose folder it is
@@ -747,9 +747,7 @@ def cmd_plot(args):
     run = RunupResult.load(out)
     if run.time.size < 64:
         raise ParameterError(f"{out}: {run.time.size} samples recorded; the figures need at least 64")
-    system = Turbocharger.from_dict(run.meta["system"]) if "system" in run.meta else None
-    if system is None:
-        raise ParameterError(f"{out / 'runup.json'}: no system recorded, cannot draw the Campbell overlay")
+    system = system_from_meta(run.meta, out / "runup.json", "the Campbell overlay")
     from .nonlinear.runup import SpeedProfile
 
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
@@ -766,14 +764,12 @@ def replot_bifurcation(args, out):
     """``frb plot DIR`` of a folder written by ``frb bifurcation``: the diagram drawn again from ``branch.nc`` (with
     the Campbell lines of the system it holds and the runs of ``--runs``)."""
     from .cycles.continuation import BifurcationDiagram
-    from .system.parameters import Turbocharger
+    from .system.parameters import system_from_meta
 
     bd = BifurcationDiagram.load(out)
-    if "system" not in bd.meta:
-        raise ParameterError(f"{out / 'branch.nc'}: no system recorded, cannot draw the Campbell lines")
     lo, hi = bd.meta.get("speed_range_rpm", [min(p.speed_rpm for p in bd.points), max(p.speed_rpm for p in bd.points)])
     runs = _load_runs(getattr(args, "runs", None))
-    _save_diagram(runs, Turbocharger.from_dict(bd.meta["system"]), bd, out, lo, hi)
+    _save_diagram(runs, system_from_meta(bd.meta, out / "branch.nc", "the Campbell lines"), bd, out, lo, hi)
     print(f"results in {out.resolve()} (bifurcation.png/.html)")
     return 0
 
@@ -1039,10 +1035,10 @@ def cmd_losses(args):
 
 def cmd_warmup(args):
     """Compile (or load) the numba kernels once, with a progress bar (CI and images call it on purpose)."""
-    from .studies.warmup import _marker, warmup
+    from .studies.warmup import warmup, warmup_marker
 
     wall = warmup(progress=True)
-    print(f"numba kernels ready in {wall:.1f} s (cached next to the package: {_marker().parent})")
+    print(f"numba kernels ready in {wall:.1f} s (cached next to the package: {warmup_marker().parent})")
 
 
 #: commands that run compiled kernels (a first run compiles them: the CLI says so first)
@@ -1079,7 +1075,7 @@ def cmd_cosim(args):
     from .cosim.master import COUPLING_TOL, cosimulate
     from .cosim.system_master import is_system_ssp
     from .nonlinear.runup import SpeedProfile
-    from .system.parameters import Turbocharger
+    from .system.parameters import system_from_meta
 
     if Path(args.ssp).exists() and is_system_ssp(args.ssp):
         return _cosim_system(args)
@@ -1117,7 +1113,7 @@ def cmd_cosim(args):
         print(f"wall time {m['wall_time_s']:.1f} s ({m['fmi_time_s'] / max(m['wall_time_s'], 1e-9):.0%} in FMI "
               f"calls), {steps}, {run.time.size} samples")
     kind = "run-up" if profile is None else RUN_TITLES.get(profile.direction, "run-up")
-    _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
+    _finish_run(args, run, lambda: system_from_meta(run.meta), out,
                 title=f"co-simulated {kind} ({args.parameter_set})")
     if args.check_convergence and code == 0 and args.adaptive:
         m = run.meta  # the path defect is O(h³): tolerance / 8 asks for about half the step
@@ -1144,7 +1140,7 @@ def _cosim_system(args):
     """``frb cosim`` of an SSP with the turbocharger FMU (e.g. build/engine_turbocharger.ssp): the fixed-step
     Jacobi master, the FMU's own record at 20 kHz, the composite figures."""
     from .cosim.system_master import SystemMaster
-    from .system.parameters import Turbocharger
+    from .system.parameters import system_from_meta
 
     given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None)]
     if given:
@@ -1164,7 +1160,7 @@ def _cosim_system(args):
           f"({m.get('fmi_time_s', 0) / max(m.get('wall_time_s', 1e-9), 1e-9):.0%} in FMI calls), "
           f"{m.get('master', {}).get('steps_taken', 0)} macro steps, {run.time.size} samples of the turbocharger's "
           "record")
-    _finish_run(args, run, lambda: Turbocharger.from_dict(run.meta["system"]), out,
+    _finish_run(args, run, lambda: system_from_meta(run.meta), out,
                 title=f"turbocharger FMU in {Path(args.ssp).name} ({args.parameter_set})")
     if not args.no_figure and run.time.size >= 2:
         import pandas as pd

@@ -358,7 +358,7 @@ def test_shooting_jacobian_equals_differences_of_the_residual(segments):
     truncation and round-off are ~1e-8 of the entries at the 1e-5 step used."""
     from scipy.linalg import expm
 
-    from frbmodel.cycles.branch import _Branch, _jacobian
+    from frbmodel.cycles.branch import ContinuationProblem, _jacobian
 
     def a_of(speed):
         w = 2.0 + 1e-4 * speed
@@ -376,7 +376,7 @@ def test_shooting_jacobian_equals_differences_of_the_residual(segments):
         def rhs(self, z):
             return self.a @ z
 
-    br = object.__new__(_Branch)
+    br = object.__new__(ContinuationProblem)
     br.scale_vec, br.workers = np.array([1e-6, 2e-6, 5.0]), 1
     br.flow = lambda speed, like=None: Flow(speed)
     br.set_segments(segments)
@@ -453,7 +453,7 @@ def test_corrector_converges_on_a_vertical_branch_despite_an_inexact_monodromy(m
     exact = frbmodel.cycles.shooting.monodromy
     monkeypatch.setattr(frbmodel.cycles.shooting, "monodromy",
                         lambda *a, **k: exact(*a, **k) + 3e-4 * np.array([[1.0, -0.5], [0.7, 1.0]]))
-    br = object.__new__(cont._Branch)
+    br = object.__new__(cont.ContinuationProblem)
     br.scale_vec, br.workers = np.array([1.0, 1.0]), 1
     br.flow = lambda speed, like=None: _DegenerateHopfFlow(speed)
     br.set_segments(1)
@@ -483,7 +483,7 @@ def test_inaccurate_monodromy_is_replaced_by_central_differences():
     (T = 1); central differences at the 1e-4 step are exact to ~1e-8 (truncation h^2 times the flow's curvature)."""
     from frbmodel.cycles import branch as cont
 
-    br = object.__new__(cont._Branch)
+    br = object.__new__(cont.ContinuationProblem)
     br.scale_vec, br.workers = np.array([1.0, 1.0]), 1
     br.flow = lambda speed, like=None: _DegenerateHopfFlow(speed)
     br.set_segments(1)
@@ -491,7 +491,7 @@ def test_inaccurate_monodromy_is_replaced_by_central_differences():
     x = np.array([r, 0.0, 1.0 / t_ref, (S_H + r ** 4 / K_DH) / w_ref])
     expected = np.sort([1.0, math.exp(-4 * r ** 4)])
     wrong = np.array([[1.0, 0.1], [0.1, math.exp(-4 * r ** 4)]])  # the exact diagonal, coupled: multipliers moved
-    assert cont._trivial_error(np.linalg.eigvals(wrong)) > 5e-3
+    assert cont.trivial_error(np.linalg.eigvals(wrong)) > 5e-3
     fixed = cont._checked_monodromy(br, x, 2, t_ref, w_ref, wrong, br.flow(x[3] * w_ref))
     np.testing.assert_allclose(np.sort(np.linalg.eigvals(fixed).real), expected, atol=1e-6)
     good = fixed + 1e-4  # within the tolerance: kept as it is

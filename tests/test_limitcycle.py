@@ -250,28 +250,28 @@ def test_flow_integrator_hint_skips_the_probe_only_where_radau_keeps_its_budget(
     Radau). Near an equilibrium (the 2.0 krpm Hopf point: Radau needs ~400x the steps there, README) the budget is
     exceeded and the full probe chooses Rodas, as without a hint."""
     from frbmodel.cycles.continuation import hopf_points
-    from frbmodel.cycles.flow import SHOOT_ATOL_M, SHOOT_RTOL, _Flow
+    from frbmodel.cycles.flow import SHOOT_ATOL_M, SHOOT_RTOL, ConstantSpeedFlow
     from frbmodel.nonlinear.runup import build_problem
 
     tc = frb.turbocharger(36e-6)
     prob = build_problem(tc, SpeedProfile.constant(60e3, 1.0), tc.film_model)
-    probed = _Flow(prob, SHOOT_RTOL, SHOOT_ATOL_M)
+    probed = ConstantSpeedFlow(prob, SHOOT_RTOL, SHOOT_ATOL_M)
     end = probed(lc60.state, lc60.period)
     assert probed.method == "radau" and probed.rodas_steps > 0
-    original, calls = _Flow._rodas, []
+    original, calls = ConstantSpeedFlow._rodas, []
 
     def counting(self, y0, t):
         calls.append(1)
         return original(self, y0, t)
 
-    monkeypatch.setattr(_Flow, "_rodas", counting)
-    hinted = _Flow(prob, SHOOT_RTOL, SHOOT_ATOL_M, hint=probed)
+    monkeypatch.setattr(ConstantSpeedFlow, "_rodas", counting)
+    hinted = ConstantSpeedFlow(prob, SHOOT_RTOL, SHOOT_ATOL_M, hint=probed)
     np.testing.assert_allclose(hinted(lc60.state, lc60.period), end, rtol=1e-12, atol=1e-18)
     assert hinted.method == "radau" and not calls
     hp = hopf_points(tc, (1.5e3, 2.5e3), n_grid=4)[0]
     near = build_problem(tc, SpeedProfile.constant(hp.speed_rpm, 1.0), tc.film_model)
     small = hp.equilibrium + 1e-7 * hp.eigenvector.real / np.abs(hp.eigenvector).max()  # a 0.1 um orbit
-    f = _Flow(near, SHOOT_RTOL, SHOOT_ATOL_M, hint=probed)
+    f = ConstantSpeedFlow(near, SHOOT_RTOL, SHOOT_ATOL_M, hint=probed)
     f(small, 0.005)
     assert f.method == "rodas" and calls
 

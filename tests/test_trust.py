@@ -164,7 +164,7 @@ def test_warmup_marks_the_kernels_ready_for_these_sources(tmp_path, monkeypatch)
     changed kernel source means a new stamp (the next command compiles first and says so)."""
     import frbmodel.studies.warmup as w
 
-    monkeypatch.setattr(w, "_marker", lambda: tmp_path / f"kernels-{w._stamp()}.ok")
+    monkeypatch.setattr(w, "warmup_marker", lambda: tmp_path / f"kernels-{w._stamp()}.ok")
     assert not w.kernels_ready()
     assert w.warmup(progress=False) > 0
     assert w.kernels_ready()

@@ -44,18 +44,18 @@ class BranchPoint:
     state: np.ndarray = field(repr=False, default=None)
 
 
-class _Branch:
+class ContinuationProblem:
     """Flows and residuals of the continuation problem at any speed (problems built per speed and cached)."""
 
     def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm, segments=1):
         from ..nonlinear.runup import atol_vector
-        from .flow import _Flow
+        from .flow import ConstantSpeedFlow
 
         self.system, self.model = system, model
         self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
         self._flows = {}
         self._last = None  # the last flow made for a new speed (it has chosen its integrator by the next one)
-        self._flow_cls = _Flow
+        self._flow_cls = ConstantSpeedFlow
         #: one scaling of the states for the whole branch (that of the start speed): u = z / scale
         self.scale_vec = atol_vector(self.flow(start_rpm).problem, scale_m)[0][:-1]
         self.set_segments(segments)
@@ -217,7 +217,7 @@ def _checked_monodromy(br, x, n, t_ref, w_ref, m, fl):
     from .flow import FD_STEP, MULTIPLIER_TOL
     from .shooting import monodromy
 
-    if _trivial_error(np.linalg.eigvals(m)) <= MULTIPLIER_TOL:
+    if trivial_error(np.linalg.eigvals(m)) <= MULTIPLIER_TOL:
         return m
     mseg = br.segments
     z, T = x[:n] * br.scale(), x[n] * t_ref
@@ -227,11 +227,11 @@ def _checked_monodromy(br, x, n, t_ref, w_ref, m, fl):
             central = monodromy(fl, zk, T / mseg, br.scale_vec, None, FD_STEP, br.workers, central=True) @ central
     except ConvergenceError:
         return m
-    better = _trivial_error(np.linalg.eigvals(central)) < _trivial_error(np.linalg.eigvals(m))
+    better = trivial_error(np.linalg.eigvals(central)) < trivial_error(np.linalg.eigvals(m))
     return central if better else m
 
 
-def _trivial_error(mult):
+def trivial_error(mult):
     """Distance of the multiplier closest to 1 from 1 (0 for exact multipliers of a periodic orbit)."""
     return float(np.min(np.abs(np.asarray(mult) - 1.0)))
 
@@ -239,13 +239,13 @@ def _trivial_error(mult):
 def _point(br, x, n, t_ref, w_ref, m, fl):
     """A BranchPoint (orbit measures sampled from the flow ``fl``) for the solution x with monodromy m."""
     from ..nonlinear.recorder import RunupSchema
-    from .flow import MULTIPLIER_TOL, _orbit_result
+    from .flow import MULTIPLIER_TOL, orbit_result
     from .shooting import stable_multipliers
 
     m = _checked_monodromy(br, x, n, t_ref, w_ref, m, fl)
     z, T, speed = x[:br.n] * br.start_scale, x[n] * t_ref, x[n + 1] * w_ref  # the orbit from segment 0's start
     t = np.linspace(0.0, T, POINT_SAMPLES + 1)
-    orbit = _orbit_result(fl.problem, RunupSchema.from_system(br.system), t, fl.states(z, t))
+    orbit = orbit_result(fl.problem, RunupSchema.from_system(br.system), t, fl.states(z, t))
     xy = orbit.displacement[orbit.schema.discs[0]][:-1]
     radius = float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T)))
     mult = np.linalg.eigvals(m)
@@ -410,15 +410,15 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, res
     return out
 
 
-def _hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point, segments):
+def hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point, segments):
     """The branch born at the Hopf point ``hp``, started along its eigenvector."""
     from .flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
 
-    br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments)
+    br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments)
     n = br.segments * br.n
     t_ref, w_ref = 0.01 / hp.frequency_hz, 0.01 * hp.speed_rpm
     x0, tangent, f0 = _hopf_start(br, hp, n, t_ref, w_ref)
-    return _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, 0.2, ds_max, max_points, progress, f0, on_point)
+    return follow_branch(br, x0, n, t_ref, w_ref, tangent, lo, hi, 0.2, ds_max, max_points, progress, f0, on_point)
 
 
 def hopf_guess(system, speed_rpm, film_model=None, search=0.25, max_points=40):
@@ -460,7 +460,7 @@ def hopf_guess(system, speed_rpm, film_model=None, search=0.25, max_points=40):
     hp = min(hps, key=lambda h: abs(h.speed_rpm - speed_rpm))
     margin = 0.05 * abs(speed_rpm - hp.speed_rpm) + 10 * FOLD_MIN_REL * hp.speed_rpm  # vertical start's jitter
     lo, hi = min(hp.speed_rpm, speed_rpm) - margin, max(hp.speed_rpm, speed_rpm) + margin
-    pts = _hopf_branch(system, model, hp, lo, hi, 8.0, max_points, False, None, 1)
+    pts = hopf_branch(system, model, hp, lo, hi, 8.0, max_points, False, None, 1)
     side = np.sign(speed_rpm - hp.speed_rpm)
     passed = [p for p in pts if side * (p.speed_rpm - speed_rpm) >= 0]
     if side != 0 and not passed:
@@ -474,7 +474,7 @@ def hopf_guess(system, speed_rpm, film_model=None, search=0.25, max_points=40):
                                             "branch_points": len(pts), "from_point_rpm": best.speed_rpm}
 
 
-def _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first=None,
+def follow_branch(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first=None,
             on_point=None, jac0=None):
     """Branch points from x0 along ``tangent`` (x0 itself not included; ``f_first``: the phase normal at x0 if the
     flow vanishes there, at a Hopf point; ``jac0``: the Jacobian at x0, if known and regular). Ctrl-C / SIGTERM are
@@ -532,7 +532,7 @@ def _collapsed(points):
     return len(r) >= 2 and r[-1] < COLLAPSE * max(r) and r[-1] < r[-2]
 
 
-def _start_tangent(br, x0, n, t_ref, w_ref, direction):
+def start_tangent(br, x0, n, t_ref, w_ref, direction):
     """Unit tangent at a computed orbit x0, its speed component of sign ``direction``, the orbit as a point, and
     the Jacobian there."""
     _, jac, m, fl = _at_point(br, x0, n, t_ref, w_ref)
@@ -574,7 +574,7 @@ def shoot_segments(system, model, speed_rpm, z0, period, segments, tol=1e-6, max
     from .flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
     from .shooting import ShootingSolution
 
-    br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, speed_rpm, segments)
+    br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, speed_rpm, segments)
     n_all, t_ref = br.segments * br.n, 0.01 * period
     starts = br.flow(speed_rpm).states(np.asarray(z0, float), period * np.arange(br.segments + 1) / br.segments)
     x = np.append(starts[:-1, :-1].ravel() / br.scale(), period / t_ref)
@@ -616,5 +616,5 @@ def _phase_normal(br, z, speed):
 TOL, MAX_CORRECTOR, GOOD_ITERATIONS, SLOW_ITERATIONS = 1e-6, 8, 4, 6
 
 
-__all__ = ["BranchPoint", "HopfPoint", "equilibrium_jacobian", "hopf_dataframe", "hopf_guess", "hopf_points",
-           "shoot_segments"]
+__all__ = ["BranchPoint", "ContinuationProblem", "HopfPoint", "equilibrium_jacobian", "follow_branch", "hopf_branch",
+           "hopf_dataframe", "hopf_guess", "hopf_points", "shoot_segments", "start_tangent", "trivial_error"]

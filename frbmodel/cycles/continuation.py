@@ -24,16 +24,16 @@ from .branch import (
     COLLAPSE,
     FOLD_MIN_REL,
     BranchPoint,
+    ContinuationProblem,
     HopfPoint,
-    _Branch,
-    _follow,
-    _hopf_branch,
-    _start_tangent,
-    _trivial_error,
     equilibrium_jacobian,
+    follow_branch,
+    hopf_branch,
     hopf_guess,
     hopf_points,
     shoot_segments,
+    start_tangent,
+    trivial_error,
 )
 
 
@@ -104,7 +104,7 @@ class BifurcationDiagram:
                  "turbine wheel orbit radius [um]": p.turbine_radius_m * 1e6, "stable": p.stable,
                  "max |multiplier| (nontrivial) [-]": float(np.max(np.abs(np.delete(
                      p.multipliers, int(np.argmin(np.abs(p.multipliers - 1.0))))))),
-                 "trivial multiplier error [-]": _trivial_error(p.multipliers),
+                 "trivial multiplier error [-]": trivial_error(p.multipliers),
                  **{f"max eps {k} [-]": v for k, v in zip(("turbine inner", "turbine outer", "compressor inner",
                                                           "compressor outer"), p.max_eps)}} for p in self.points]
         return pd.DataFrame(rows)
@@ -254,7 +254,7 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     for s0 in starts:
         if isinstance(s0, str):
             for hp in hopf_points(system, (lo, hi), model, restabilizing=True):
-                branches.append(_hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point,
+                branches.append(hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point,
                                              segments))
                 origins.append(hp)
         else:
@@ -304,16 +304,16 @@ def _branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress,
     """The branch through the orbit ``lc``, followed in both directions (lower speeds first in the result)."""
     from .flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
 
-    br = _Branch(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments)
+    br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments)
     n = br.segments * br.n
     t_ref, w_ref = 0.01 * lc.period, 0.01 * lc.speed_rpm
     starts = br.flow(lc.speed_rpm).states(lc.state, lc.period * np.arange(br.segments + 1) / br.segments)
     x0 = np.concatenate([starts[:-1, :-1].ravel() / br.scale(), [lc.period / t_ref, lc.speed_rpm / w_ref]])
     halves = []
     for direction in (+1, -1):
-        tangent, first, jac0 = _start_tangent(br, x0, n, t_ref, w_ref, direction)
-        halves.append([first] + _follow(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress,
-                                        on_point=on_point, jac0=jac0))
+        tangent, first, jac0 = start_tangent(br, x0, n, t_ref, w_ref, direction)
+        halves.append([first] + follow_branch(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points,
+                                              progress, on_point=on_point, jac0=jac0))
     return halves[1][::-1] + halves[0][1:]
 
 

@@ -1,7 +1,7 @@
 """The flow of the constant-speed model, z(0) -> z(T), for shooting and continuation, and its tolerances.
 
-One object (:class:`_Flow`) integrates the full nonlinear model of :func:`frbmodel.nonlinear.runup` at a constant
-rotor speed in compiled code, without the GIL, so that the monodromy's columns run in threads. The shooting
+One object (:class:`ConstantSpeedFlow`) integrates the full nonlinear model of :func:`frbmodel.nonlinear.runup` at a
+constant rotor speed in compiled code, without the GIL, so that the monodromy's columns run in threads. The shooting
 tolerances, the difference step and the multiplier accuracy used by :mod:`frbmodel.cycles.limitcycle`,
 :mod:`frbmodel.cycles.branch` and :mod:`frbmodel.cycles.continuation` are defined here, once.
 """
@@ -22,7 +22,7 @@ SHOOT_RTOL, SHOOT_ATOL_M = 3e-9, 3e-13
 FD_STEP = 1e-4
 
 
-#: integrator of the shooting flows ("auto", "radau" or "rodas", see :class:`_Flow`)
+#: integrator of the shooting flows ("auto", "radau" or "rodas", see :class:`ConstantSpeedFlow`)
 FLOW_METHOD = "auto"
 
 
@@ -46,7 +46,7 @@ SCALE_M = 1e-6
 WORKERS = 2
 
 
-class _Flow:
+class ConstantSpeedFlow:
     """The flow z(0) -> z(T) of the constant-speed model, z = the state without φ; compiled, without the GIL.
 
     Two integrators: CyRK's Radau IIA (:mod:`frbmodel.nonlinear.compiled`; 2-3.5x faster on whirl orbits) and the
@@ -141,7 +141,7 @@ class _Flow:
         return self.problem.rhs(0.0, np.append(z, 0.0), np.empty(z.size + 1))[:-1].copy()
 
 
-def _orbit_result(problem, schema, t, y):
+def orbit_result(problem, schema, t, y):
     """The sampled orbit as a RunupResult (recorded quantities of each state)."""
     from ..nonlinear.recorder import RunupResult
     from ..nonlinear.runup import sample_rows

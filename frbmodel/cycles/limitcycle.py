@@ -23,7 +23,7 @@ import numpy as np
 from ..core.errors import ConvergenceError, ParameterError
 from ..core.results import Result, netcdf_attrs, variable
 from ..core.units import RPM
-from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, _Flow, _orbit_result
+from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
 
 #: a state returns to itself (period found) when it comes back within this fraction of the orbit's size
 RETURN_TOL = 0.02
@@ -311,7 +311,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     forced = any(u.amount > 0 for u in unbalance)
     _check_segments(segments, forced)
     z0, period, info, m0 = _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced)
-    flow = _Flow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
+    flow = ConstantSpeedFlow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
     scale = atol_vector(problem, SCALE_M)[0][:-1]
     if segments != 1:
         sol = _multiple(system, model, speed_rpm, z0, period, segments, forced, tol, max_iter)
@@ -321,7 +321,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
         sol = _minimal_period(flow, sol, scale, forced, tol, max_iter)
     t = np.linspace(0.0, sol.period, samples + 1)
     y = flow.states(sol.z0, t)
-    orbit = _orbit_result(problem, RunupSchema.from_system(system), t, y)
+    orbit = orbit_result(problem, RunupSchema.from_system(system), t, y)
     meta = {"film_model": model, "rtol": SHOOT_RTOL, "atol_displacement_m": SHOOT_ATOL_M, "newton_iterations":
             sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
     stable = stable_multipliers(sol.nontrivial_multipliers, MULTIPLIER_TOL)

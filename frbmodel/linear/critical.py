@@ -33,9 +33,9 @@ def system_of(cd, system):
     if system is not None:
         return system
     if isinstance(cd.meta.get("system"), dict):
-        from ..system.parameters import Turbocharger
+        from ..system.parameters import system_from_meta
 
-        return Turbocharger.from_dict(cd.meta["system"])
+        return system_from_meta(cd.meta)
     return None
 
 

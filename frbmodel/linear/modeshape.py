@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ParameterError
-from ..system.parameters import Turbocharger
+from ..system.parameters import system_from_meta
 from .assembly import linear_system
 from .modal import modes
 
@@ -333,10 +333,7 @@ def mode_shape(cd, speed_rpm, mode) -> ModeShape:
     >>> bool(np.isclose(ms.eigenvalue, cd.eigenvalues[0, 0]))
     True
     """
-    if "system" not in cd.meta:
-        raise ParameterError("this CampbellResult has no system in its meta (e.g. computed from an FMU): mode shapes "
-                             "need frbmodel.campbell(system, ...)")
-    system = Turbocharger.from_dict(cd.meta["system"])
+    system = system_from_meta(cd.meta, "this CampbellResult", "mode shapes (they need frbmodel.campbell(system, ...))")
     speed_rpm = float(speed_rpm)
     ls = linear_system(system, cd.method, speed_rpm, **cd.meta.get("method_options", {}))
     md = modes(ls.M, ls.C, ls.K)
@@ -610,11 +607,10 @@ def shape_hover_text(cd, shown=None):
     """
     if "system" not in (cd.meta or {}):
         return None
-    from ..system.parameters import Turbocharger
     from .assembly import linear_system
     from .modal import modes
 
-    system = Turbocharger.from_dict(cd.meta["system"])
+    system = system_from_meta(cd.meta)
     opts = cd.meta.get("method_options", {})
     shown = np.isfinite(cd.eigenvalues) if shown is None else shown & np.isfinite(cd.eigenvalues)
     out = np.full(cd.eigenvalues.shape, "", dtype=object)

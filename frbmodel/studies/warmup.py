@@ -31,7 +31,7 @@ def _stamp():
     return h.hexdigest()[:16]
 
 
-def _marker():
+def warmup_marker():
     import numba
 
     from ..core.version import __version__
@@ -51,7 +51,7 @@ def _marker():
 def kernels_ready():
     """True if :func:`warmup` ran for these kernel sources (so numba finds them in its cache)."""
     try:
-        return _marker().exists()
+        return warmup_marker().exists()
     except OSError:
         return False
 
@@ -116,7 +116,7 @@ def warmup(progress=True):
             bar.set_postfix_str(label, refresh=False)
             fn()
             bar.update(1)
-    marker = _marker()
+    marker = warmup_marker()
     try:
         marker.parent.mkdir(parents=True, exist_ok=True)
         marker.write_text(f"compiled in {time.perf_counter() - t0:.1f} s\n")

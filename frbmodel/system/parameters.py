@@ -430,6 +430,32 @@ class Turbocharger:
         return path
 
 
+def system_from_meta(meta, what="this result", need="it"):
+    """The :class:`Turbocharger` a result recorded in its metadata (``meta["system"]``, :meth:`Turbocharger.to_dict`).
+
+    Parameters
+    ----------
+    meta : dict
+        The result's metadata.
+    what, need : str
+        The result and what needs the system, for the message.
+
+    Raises
+    ------
+    ParameterError
+        No system recorded (e.g. a result computed from an FMU).
+
+    Examples
+    --------
+    >>> from frbmodel.system.presets import turbocharger
+    >>> system_from_meta({"system": turbocharger(40e-6).to_dict()}).bearings[0].outer.clearance
+    4e-05
+    """
+    if not isinstance(meta.get("system"), dict):
+        raise ParameterError(f"{what} has no system in its metadata (e.g. computed from an FMU): {need} cannot be done")
+    return Turbocharger.from_dict(meta["system"])
+
+
 def load_system(path) -> Turbocharger:
     """Read a system written by :meth:`Turbocharger.save` (or by hand) from TOML or JSON.
 
