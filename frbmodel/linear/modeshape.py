@@ -268,17 +268,17 @@ class ModeShape:
         """
         return plot_mode_shape(self, ax=ax, n_phases=n_phases, title=title)
 
-    def plot_html(self, path=None, include_plotlyjs="directory"):
+    def plot_html(self, path=None, include_plotlyjs=None):
         """Interactive 3-D (plotly) figure of the whirling shaft; written to ``path`` if given.
 
         Parameters
         ----------
         path : str or Path, optional
             The HTML file.
-        include_plotlyjs : {"directory", True}
-            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
-            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
-            :func:`frbmodel.plots.figures.write_html`.
+        include_plotlyjs : {"directory", True}, optional
+            ``"directory"``: plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small file, shown
+            offline); ``True``: embedded (self-contained, 4.8 MB larger). Default: ``"directory"``, or what
+            :func:`frbmodel.plots.figures.html_plotlyjs` set. See :func:`frbmodel.plots.figures.write_html`.
 
         Returns
         -------
@@ -414,7 +414,7 @@ def plot_mode_shape(ms, ax=None, n_phases=8, title=None):
     return fig
 
 
-def plot_mode_shape_html(ms, path=None, n_frames=24, include_plotlyjs="directory"):
+def plot_mode_shape_html(ms, path=None, n_frames=24, include_plotlyjs=None):
     """Interactive 3-D (plotly) whirling shaft with a phase slider (see :meth:`ModeShape.plot_html`); written to
     ``path`` by :func:`frbmodel.plots.figures.write_html` if given."""
     import plotly.graph_objects as go

@@ -510,7 +510,7 @@ class UnbalanceResponse(Result):
         """
         return response_figure(self, names, films, title)
 
-    def plot_html(self, path=None, names=None, films=None, include_plotlyjs="directory"):
+    def plot_html(self, path=None, names=None, films=None, include_plotlyjs=None):
         """Interactive plotly Bode, clearance and polar plot (hover: speed, amplitude, phase).
 
         Parameters
@@ -519,10 +519,10 @@ class UnbalanceResponse(Result):
             Write the figure there as HTML.
         names, films : sequence of str, optional
             As for :meth:`plot`.
-        include_plotlyjs : {"directory", True}
-            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
-            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
-            :func:`frbmodel.plots.figures.write_html`.
+        include_plotlyjs : {"directory", True}, optional
+            ``"directory"``: plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small file, shown
+            offline); ``True``: embedded (self-contained, 4.8 MB larger). Default: ``"directory"``, or what
+            :func:`frbmodel.plots.figures.html_plotlyjs` set. See :func:`frbmodel.plots.figures.write_html`.
 
         Returns
         -------

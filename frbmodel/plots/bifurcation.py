@@ -183,7 +183,7 @@ def _draw_campbell(axf, cd, fmax, speed_range):
             axf.plot(s[sel], f[sel], ls=ls, lw=1.0, color=color, alpha=0.8, label=label)
 
 
-def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plotlyjs="directory"):
+def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
     """The bifurcation diagram as an interactive HTML page (plotly; the content of :func:`diagram_figure` without
     the spectrogram; hover shows speed, radius, frequency and each bifurcation point's type, mode and film).
 
@@ -195,7 +195,7 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
     title : str, optional
     envelopes, campbell
         As for :func:`diagram_figure`.
-    include_plotlyjs : {"directory", True}
+    include_plotlyjs : {"directory", True}, optional
         See :func:`frbmodel.plots.figures.write_html`.
 
     Returns

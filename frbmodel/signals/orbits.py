@@ -377,7 +377,7 @@ class Orbits(Result):
         fig.tight_layout()
         return fig
 
-    def plot_html(self, path=None, title=None, include_plotlyjs="directory"):
+    def plot_html(self, path=None, title=None, include_plotlyjs=None):
         """Interactive orbits (plotly), the panels of :meth:`plot`; written to ``path`` (HTML) if given.
 
         Parameters
@@ -386,10 +386,10 @@ class Orbits(Result):
             The HTML file.
         title : str, optional
             Figure title.
-        include_plotlyjs : {"directory", True}
-            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
-            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
-            :func:`frbmodel.plots.figures.write_html`.
+        include_plotlyjs : {"directory", True}, optional
+            ``"directory"``: plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small file, shown
+            offline); ``True``: embedded (self-contained, 4.8 MB larger). Default: ``"directory"``, or what
+            :func:`frbmodel.plots.figures.html_plotlyjs` set. See :func:`frbmodel.plots.figures.write_html`.
 
         Returns
         -------
