@@ -219,3 +219,39 @@ def test_a_second_run_into_its_folder_keeps_the_shared_bundle(tmp_path):
         assert main(["unbalance", "--method", "A", "--speeds", "20000:40000:3", "--out", str(tmp_path)]) == 0
     assert (tmp_path / "plotly.min.js").read_text(encoding="utf-8") == get_plotlyjs()
     assert script_srcs(tmp_path / "unbalance_A.html") == ["plotly.min.js"]
+
+
+@pytest.fixture(scope="module")
+def responses():
+    tc = frb.turbocharger(36e-6)
+    speeds = np.linspace(3e3, 250e3, 8)
+    return {m: frb.unbalance_response(tc, m, speeds, critical=False, progress=False) for m in "AJ"}
+
+
+def _is_1_2_5_decade(v):
+    k = np.floor(np.log10(v) + 1e-9)
+    return any(np.isclose(v, m * 10.0 ** k) for m in (1, 2, 5))
+
+
+def test_unbalance_pages_polar_units_log_ticks_height_names(responses):
+    import matplotlib.pyplot as plt
+
+    from frbmodel.plots.unbalance import response_figure, response_plotly
+
+    undamped, damped = responses["A"], responses["J"]
+    fig = response_plotly(undamped)
+    assert not [t for t in fig.data if t.type == "scatterpolar"]  # not two lines along 0° and 180°
+    assert "undamped" in fig.layout.title.text
+    fig = response_plotly(damped)
+    assert [t for t in fig.data if t.type == "scatterpolar"]
+    assert any("[µm]" in a.text for a in fig.layout.annotations)  # the polar plot's radius has its unit
+    for axis in (fig.layout.yaxis, fig.layout.yaxis3):
+        assert axis.type == "log" and axis.tickmode == "array" and len(axis.tickvals) >= 2
+        assert all(_is_1_2_5_decade(v) for v in axis.tickvals)
+        assert all(not t.isdigit() or t in ("1", "2", "5", "10", "20", "50", "100") for t in axis.ticktext)
+    assert fig.layout.height <= HTML_HEIGHT_PX
+    assert not any("_" in (t.name or "") for t in fig.data) and "turbine wheel" in fig.layout.title.text
+    png = response_figure(undamped)
+    assert not [ax for ax in png.axes if ax.name == "polar"]
+    assert any("undamped" in t.get_text() for ax in png.axes for t in ax.texts)
+    plt.close(png)

@@ -206,6 +206,7 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
     from plotly.subplots import make_subplots
 
     from .figures import write_html
+    from .style import html_layout, log_axis
 
     fig = make_subplots(rows=2, cols=1, shared_xaxes=True, vertical_spacing=0.06)
     for label, s, r in envelopes:
@@ -235,8 +236,14 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
                                      name=kind, legendgroup=kind, showlegend=row == 1, text=text,
                                      marker=dict(symbol=symbol, size=10, color="crimson"),
                                      hovertemplate="%{x:.0f} rpm, %{y:.4g}<br>%{text}<extra></extra>"), row, 1)
-    fig.update_yaxes(title_text="turbine wheel orbit radius [µm]", type="log" if envelopes else "linear", row=1)
+    radius = "turbine wheel orbit radius [µm]"
+    if envelopes:  # (decade ticks with plain numbers, over the radii drawn)
+        radii = [t.y for t in fig.data if t.yaxis == "y" and t.y is not None]
+        fig.update_yaxes(**log_axis(radius, np.concatenate([np.ravel(r) for r in radii])), row=1)
+    else:
+        fig.update_yaxes(title_text=radius, row=1)
     fig.update_yaxes(title_text="orbit frequency [Hz]", row=2, range=[0, fmax] if fmax else None)
     fig.update_xaxes(title_text="rotor speed [rpm]", row=2)
-    fig.update_layout(title=title or "limit-cycle branches (solid: stable, dashed: unstable)", height=800)
+    fig.update_layout(title=title or "limit-cycle branches (solid: stable, dashed: unstable)",
+                      **html_layout(legend_below=False))
     return write_html(fig, path, include_plotlyjs)

@@ -15,7 +15,7 @@ import contextvars
 import numpy as np
 
 from ..system.films import FILM_NAMES
-from .style import D_MAX, D_MIN, HTML_HEIGHT_PX, damping_cmap, damping_colorscale, readable
+from .style import D_MAX, D_MIN, HTML_HEIGHT_PX, damping_cmap, damping_colorscale, html_layout, readable
 
 MARKERS = {"forward": ("^", "triangle-up"), "backward": ("v", "triangle-down"), "mixed": ("o", "circle")}
 #: colour of neutral modes (|D| within its round-off bound), which the damping colour map would draw white
@@ -364,29 +364,6 @@ def _critical_plotly(go, fig, cs):
                              name="critical speeds (1X crossings)",
                              marker=dict(symbol="star", size=14, color="gold", line=dict(width=1, color="black")),
                              hovertemplate="critical speed %{x:.0f} rpm<br>%{y:.1f} Hz<extra></extra>"))
-
-
-def html_layout(legend_below=True, height=HTML_HEIGHT_PX):
-    """Layout of an interactive page's figure: at most :data:`frbmodel.plots.style.HTML_HEIGHT_PX` tall (a
-    laptop screen), as wide as the window, the legend below the plot (or right of the colour bar), clear of the
-    colour bar's title and ticks.
-
-    Parameters
-    ----------
-    legend_below : bool
-        Legend horizontal below the plot (else a column right of the plot and its colour bar).
-    height : int
-        Figure height [px].
-
-    Returns
-    -------
-    dict
-        Keyword arguments of ``fig.update_layout``.
-    """
-    legend = (dict(orientation="h", x=0.0, xanchor="left", y=-0.14, yanchor="top") if legend_below
-              else dict(x=1.1, xanchor="left", y=1.0, yanchor="top"))
-    return dict(height=min(int(height), HTML_HEIGHT_PX), autosize=True, legend=legend,
-                margin=dict(l=70, r=30, t=80, b=150 if legend_below else 60))
 
 
 def rsr_figure(results, title="Ring-speed ratio", bearing_names=None):
@@ -860,7 +837,7 @@ def composite_plotly(sp, campbell=None, fmax_hz=None, amplitude="db_max", orders
     marks, hidden = component_marks(sp) if components else ([], [])
     _components_plotly(go, fig, marks, (float(s_all.min()), float(s_all.max())), (0.0, fmax), kind == "run-down")
     if with_rsr:
-        _rsr_plotly(go, fig, sp.run, linear_rsr)
+        _rsr_plotly(go, fig, sp.run, linear_rsr, num)
     note = hidden_note(sp, hidden)
     title = f"{kind.capitalize()} spectrogram, {readable(sp.node)}" + (f"<br><sup>{note}</sup>" if note else "")
     fig.update_xaxes(title_text=_speed_label(kind, "rpm"), range=[float(s_all.min()), float(s_all.max())],
@@ -952,13 +929,15 @@ def _components_plotly(go, fig, marks, x_range, y_range, down):
                                      "<extra></extra>"), 1, 1)
 
 
-def _rsr_plotly(go, fig, run, linear):
-    """The ring-speed ratio panel of :func:`composite_plotly` (the content of :func:`_rsr_panel`)."""
+def _rsr_plotly(go, fig, run, linear, num):
+    """The ring-speed ratio panel of :func:`composite_plotly` (the content of :func:`_rsr_panel`; the run's
+    samples thinned to about a screen's width, :data:`HTML_MAX_COLUMNS`)."""
     rr = run.ring_speed_ratio
     kind = "run-down" if run.speed_rpm[-1] < run.speed_rpm[0] else "run-up"
-    step = max(1, run.speed_rpm.size // 2000)  # (a screen's width of points)
+    step = max(1, run.speed_rpm.size // HTML_MAX_COLUMNS)
     for j, name in enumerate(_bearing_names(run)):
-        fig.add_trace(go.Scatter(x=run.speed_rpm[::step], y=rr[::step, j], mode="lines", name=f"{kind}, {name}",
+        fig.add_trace(go.Scatter(x=num(run.speed_rpm[::step]), y=num(rr[::step, j]), mode="lines",
+                                 name=f"{kind}, {name}",
                                  line=dict(width=1), legend="legend2"), 1, 2)
     if linear is not None:
         speeds, by_method, bearing_names = linear
@@ -1043,7 +1022,7 @@ def waterfall_figure(sp, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40
     ax.set_zlabel("orbit amplitude [µm]" if amplitude == "um" else "orbit amplitude [dB re 1 µm]")
     ax.view_init(elev=28, azim=-60)
     ax.legend(fontsize=8, loc="upper left")
-    ax.set_title(title or f"Waterfall, {_kind(sp)}, {sp.node} (orbit x + iy, max of forward/backward)",
+    ax.set_title(title or f"Waterfall, {_kind(sp)}, {readable(sp.node)} (orbit x + iy, max of forward/backward)",
                  fontsize=10)
     return fig
 
@@ -1071,7 +1050,7 @@ def waterfall_plotly(sp, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40
         ok = fk <= f[-1]
         fig.add_trace(go.Scatter3d(x=fk[ok], y=s[ok], z=np.full(ok.sum(), float(z.min())), mode="lines",
                                    name=order_label(k), line=dict(dash="dash", color="red", width=3)))
-    fig.update_layout(title=title or f"Waterfall, {_kind(sp)}, {sp.node}",
+    fig.update_layout(title=title or f"Waterfall, {_kind(sp)}, {readable(sp.node)}", height=HTML_HEIGHT_PX,
                       scene=dict(xaxis_title="frequency [Hz]", yaxis_title="rotor speed [rpm]",
                                  zaxis_title=f"orbit amplitude [{unit}]"))
     return fig
@@ -1259,8 +1238,8 @@ def system_run_figure(run, signals=None, title=None, orbit_windows_s=0.01):
         ax.plot(xy[sel, 0], xy[sel, 1], color=style, lw=0.8, label=f"{end - orbit_windows_s:.3g}-{end:.3g} s, "
                 f"{rpm / 1e3:.0f} krpm")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(f"{disc} x [µm]")
-    ax.set_ylabel(f"{disc} y [µm]")
+    ax.set_xlabel(f"{readable(disc)} x [µm]")
+    ax.set_ylabel(f"{readable(disc)} y [µm]")
     ax.legend(frameon=False, fontsize=8)
     ax.set_title("orbit (relative to the housing)")
     if title:

@@ -85,17 +85,96 @@ def damping_colorscale():
     return [[(d - D_MIN) / (D_MAX - D_MIN), "rgb({}, {}, {})".format(*c)] for d, c in DAMPING_STOPS]
 
 
-def log_axis(title):
-    """A plotly log axis with one labelled tick per decade (1e-3, 0.01, ...), not plotly's digit ticks.
+def log_ticks(values):
+    """Ticks of a log axis over the positive finite ``values``: the decades (1e-3, 0.01, 0.1, ...), with 2 and 5
+    times them when fewer than two decades fall inside; labels as plain numbers (``"0.01"``, ``"20"``; powers of
+    ten beyond 1e-4 … 1e5).
+
+    Parameters
+    ----------
+    values : array_like
+        The data of the axis.
+
+    Returns
+    -------
+    ticks : list of float
+    labels : list of str
+
+    Examples
+    --------
+    >>> log_ticks([0.0012, 0.35])
+    ([0.01, 0.1], ['0.01', '0.1'])
+    >>> log_ticks([0.4, 3.7])
+    ([0.5, 1.0, 2.0], ['0.5', '1', '2'])
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    v = v[np.isfinite(v) & (v > 0)]
+    if not v.size:
+        return [], []
+    lo, hi = float(v.min()), float(v.max())
+    decades = range(int(np.floor(np.log10(lo))), int(np.ceil(np.log10(hi))) + 1)
+    ticks = [10.0 ** k for k in decades if lo <= 10.0 ** k <= hi]
+    if len(ticks) < 2:
+        ticks = [m * 10.0 ** k for k in decades for m in (1, 2, 5) if lo <= m * 10.0 ** k <= hi]
+    ticks = [float(f"{t:.12g}") for t in ticks]
+    return ticks, [f"{t:g}" if 1e-4 <= t < 1e5 else f"1e{int(round(np.log10(t)))}" for t in ticks]
+
+
+def log_axis(title, values):
+    """A plotly log axis labelled by :func:`log_ticks` (decades with plain numbers, not plotly's digit ticks
+    "4 3 2 1 9 8 ...").
 
     Parameters
     ----------
     title : str
+    values : array_like
+        The data of the axis.
 
     Returns
     -------
     dict
         Keyword arguments of ``fig.update_yaxes`` / ``update_xaxes``.
     """
-    return dict(type="log", dtick=1, exponentformat="power", showexponent="all", minor=dict(ticks="inside",
-                showgrid=True), title_text=title)
+    ticks, labels = log_ticks(values)
+    return dict(type="log", tickmode="array", tickvals=ticks, ticktext=labels, title_text=title)
+
+
+def log_ticks_mpl(ax, values, axis="y"):
+    """Label a matplotlib log axis as :func:`log_ticks` does (no minor labels).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    values : array_like
+        The data of the axis.
+    axis : {"x", "y"}
+    """
+    from matplotlib.ticker import FixedFormatter, FixedLocator, NullFormatter
+
+    ticks, labels = log_ticks(values)
+    target = ax.yaxis if axis == "y" else ax.xaxis
+    target.set_major_locator(FixedLocator(ticks))
+    target.set_major_formatter(FixedFormatter(labels))
+    target.set_minor_formatter(NullFormatter())
+
+
+def html_layout(legend_below=True, height=HTML_HEIGHT_PX):
+    """Layout of an interactive page's figure: at most :data:`HTML_HEIGHT_PX` tall (a laptop screen), as wide as
+    the window, the legend below the plot (clear of a colour bar's title and ticks) or right of it.
+
+    Parameters
+    ----------
+    legend_below : bool
+        Legend horizontal below the plot (else a column right of the plot, for figures without a colour bar).
+    height : int
+        Figure height [px] (at most :data:`HTML_HEIGHT_PX`).
+
+    Returns
+    -------
+    dict
+        Keyword arguments of ``fig.update_layout``.
+    """
+    legend = (dict(orientation="h", x=0.0, xanchor="left", y=-0.14, yanchor="top") if legend_below
+              else dict(x=1.02, xanchor="left", y=1.0, yanchor="top"))
+    return dict(height=min(int(height), HTML_HEIGHT_PX), autosize=True, legend=legend,
+                margin=dict(l=70, r=30, t=80, b=150 if legend_below else 60))

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
+from ..plots.style import readable
 
 #: :meth:`Orbits.plot` zooms its µm panel onto a film orbit narrower than this share of the clearance diameter
 ZOOM_FRACTION = 0.1
@@ -317,13 +318,14 @@ class Orbits(Result):
         """
         um, eps = [], []
         for b, (ci, co) in self.clearances.items():
-            j, r = self.journal_in_ring[b], self.ring[b]
+            j, r, e_in, e_out = self.journal_in_ring[b], self.ring[b], self.eps_inner(b), self.eps_outer(b)
+            b = readable(b)
             um += [(f"{b}: journal in ring", j[:, 0] * 1e6, j[:, 1] * 1e6, ci * 1e6, "µm"),
                    (f"{b}: ring in housing", r[:, 0] * 1e6, r[:, 1] * 1e6, co * 1e6, "µm")]
-            eps += [(f"{b}: journal in ring", self.eps_inner(b)[:, 0], self.eps_inner(b)[:, 1], 1.0, "ε"),
-                    (f"{b}: ring in housing", self.eps_outer(b)[:, 0], self.eps_outer(b)[:, 1], 1.0, "ε")]
+            eps += [(f"{b}: journal in ring", e_in[:, 0], e_in[:, 1], 1.0, "ε"),
+                    (f"{b}: ring in housing", e_out[:, 0], e_out[:, 1], 1.0, "ε")]
         for d, xy in self.wheels.items():
-            um.append((f"{d}", xy[:, 0] * 1e6, xy[:, 1] * 1e6, None, "µm"))
+            um.append((readable(d), xy[:, 0] * 1e6, xy[:, 1] * 1e6, None, "µm"))
         return [um, eps]
 
     def plot(self, title=None, zoom=True):
@@ -441,7 +443,7 @@ def orbits_figure(windows, title=None):
     fig, axs = plt.subplots(len(windows), ncol, figsize=(2.6 * ncol, 2.7 * len(windows)), squeeze=False)
     th = np.linspace(0, 2 * np.pi, 200)
     for i, o in enumerate(windows):
-        cells = [(f"{b}: {w}", e) for b in bearings
+        cells = [(f"{readable(b)}: {w}", e) for b in bearings
                  for w, e in (("journal in ring", o.eps_inner(b)), ("ring in housing", o.eps_outer(b)))]
         for j, (name, e) in enumerate(cells):
             ax = axs[i, j]
@@ -453,7 +455,7 @@ def orbits_figure(windows, title=None):
             ax.set_title(f"{name}, ε", fontsize=8)
         ax = axs[i, -1]
         for d, xy in o.wheels.items():
-            ax.plot(xy[:, 0] * 1e6, xy[:, 1] * 1e6, lw=0.7, label=d)
+            ax.plot(xy[:, 0] * 1e6, xy[:, 1] * 1e6, lw=0.7, label=readable(d))
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_title("wheels [µm]", fontsize=8)
         ax.legend(fontsize=6, loc="upper right")
