@@ -255,3 +255,15 @@ def test_unbalance_pages_polar_units_log_ticks_height_names(responses):
     assert not [ax for ax in png.axes if ax.name == "polar"]
     assert any("undamped" in t.get_text() for ax in png.axes for t in ax.texts)
     plt.close(png)
+
+
+def test_mode_shape_figure_title_clear_of_the_panels(campbell_j):
+    import matplotlib.pyplot as plt
+
+    from frbmodel.linear.modeshape import plot_mode_shapes
+
+    fig = plot_mode_shapes([campbell_j.mode_shape(130e3, j) for j in range(4)], title="method J, 130,000 rpm")
+    renderer = fig.canvas.get_renderer()
+    top = fig._suptitle.get_window_extent(renderer)
+    assert not any(top.overlaps(ax.title.get_window_extent(renderer)) for ax in fig.axes)
+    plt.close(fig)

@@ -490,7 +490,7 @@ def plot_mode_shapes(shapes, ncols=2, n_phases=8, title=None):
         ax.set_visible(False)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - (0.4 if title else 0.0) / fig.get_figheight()))  # (title clear)
     return fig
 
 

@@ -22,6 +22,8 @@ MARKERS = {"forward": ("^", "triangle-up"), "backward": ("v", "triangle-down"), 
 NEUTRAL_COLOR, NEUTRAL_COLOR_PLOTLY = "0.45", "rgb(115, 115, 115)"
 NEUTRAL_LABEL = "neutral (|D| <= round-off bound)"
 WHIRL_STYLES = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a")
+#: colours of the run's RSR per bearing (matplotlib's C0, C1, ...: the PNG's and the page's alike)
+RUN_COLORS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728")
 #: two film whirl curves closer than this (relative to the larger curve's highest frequency, wherever both are
 #: defined) coincide on a figure: they are drawn with interleaved dashes, so that both stay visible
 WHIRL_COINCIDE_RTOL = 0.01
@@ -458,7 +460,8 @@ def _rsr_panel(ax, run, xscale, linear=None):
     rr = run.ring_speed_ratio
     kind = "run-down" if run.speed_rpm[-1] < run.speed_rpm[0] else "run-up"
     for j, name in enumerate(names):
-        ax.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, label=f"{kind}, {name}")
+        ax.plot(run.speed_rpm / 1e3, rr[:, j], lw=0.8, alpha=0.8, color=RUN_COLORS[j % len(RUN_COLORS)],
+                label=f"{kind}, {name}")
     if linear is not None:
         speeds, by_method, bearing_names = linear
         styles = {"F": "-", "I": "-.", "J": "--"}
@@ -937,8 +940,8 @@ def _rsr_plotly(go, fig, run, linear, num):
     step = max(1, run.speed_rpm.size // HTML_MAX_COLUMNS)
     for j, name in enumerate(_bearing_names(run)):
         fig.add_trace(go.Scatter(x=num(run.speed_rpm[::step]), y=num(rr[::step, j]), mode="lines",
-                                 name=f"{kind}, {name}",
-                                 line=dict(width=1), legend="legend2"), 1, 2)
+                                 name=f"{kind}, {name}", line=dict(width=1, color=RUN_COLORS[j % len(RUN_COLORS)]),
+                                 legend="legend2"), 1, 2)
     if linear is not None:
         speeds, by_method, bearing_names = linear
         dashes = {"F": "solid", "I": "dashdot", "J": "dash"}
