@@ -262,7 +262,9 @@ def test_mode_shape_figure_title_clear_of_the_panels(campbell_j):
 
     from frbmodel.linear.modeshape import plot_mode_shapes
 
-    fig = plot_mode_shapes([campbell_j.mode_shape(130e3, j) for j in range(4)], title="method J, 130,000 rpm")
+    fig = plot_mode_shapes([campbell_j.mode_shape(130e3, j) for j in range(16)],
+                           title="method J, 130,000 rpm: mode shapes (x deflection at 8 phases; node orbits red "
+                                 "forward, blue backward)")  # tall, as frb campbell --mode-shapes draws it
     renderer = fig.canvas.get_renderer()
     top = fig._suptitle.get_window_extent(renderer)
     assert not any(top.overlaps(ax.title.get_window_extent(renderer)) for ax in fig.axes)

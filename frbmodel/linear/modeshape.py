@@ -488,10 +488,22 @@ def plot_mode_shapes(shapes, ncols=2, n_phases=8, title=None):
         plot_mode_shape(ms, ax=ax, n_phases=n_phases)
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
+    fig.tight_layout()
     if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - (0.4 if title else 0.0) / fig.get_figheight()))  # (title clear)
+        _suptitle_clear(fig, fig.suptitle(title, fontsize=10))
     return fig
+
+
+def _suptitle_clear(fig, text):
+    """Lower the panels until the figure title ``text`` covers none of their titles (a tall figure's tight layout
+    leaves too little room above the first row)."""
+    renderer = getattr(fig.canvas, "get_renderer", lambda: None)()
+    if renderer is None:
+        return
+    bottom = text.get_window_extent(renderer).y0
+    top = max(ax.title.get_window_extent(renderer).y1 for ax in fig.axes if ax.get_visible())
+    if top > bottom - 8:
+        fig.subplots_adjust(top=fig.subplotpars.top - (top - bottom + 10) / fig.bbox.height)
 
 
 def save_mode_shapes(cd, speed_rpm, out_dir, fmax_hz=None):
