@@ -269,3 +269,14 @@ def test_mode_shape_figure_title_clear_of_the_panels(campbell_j):
     top = fig._suptitle.get_window_extent(renderer)
     assert not any(top.overlaps(ax.title.get_window_extent(renderer)) for ax in fig.axes)
     plt.close(fig)
+
+
+def test_orbit_and_waterfall_pages_fit_a_screen_with_readable_names():
+    from frbmodel.signals.orbits import orbits
+
+    run = synthetic_run()
+    page = orbits(run, time_s=(0.1, 0.12)).plot_html()
+    assert page.layout.height <= HTML_HEIGHT_PX
+    assert "turbine wheel" in [a.text for a in page.layout.annotations]  # panel titles, not "turbine_wheel"
+    wf = frb.spectrogram(run, "turbine_wheel").waterfall_html()
+    assert wf.layout.height <= HTML_HEIGHT_PX and "turbine wheel" in wf.layout.title.text

@@ -187,8 +187,9 @@ def _mark_critical_speeds(ax, cs, fmax):
 
 
 def campbell_figure(cd, fmax_hz=None, whirl=True, one_x=True, ax=None, title=None, critical=None):
-    """Holistic Campbell diagram: frequency vs speed, colour = modal damping (diverging, centred at 0),
-    marker = precession (▲ forward, ▼ backward, ● mixed), unstable modes enlarged with a black edge, neutral modes
+    """Holistic Campbell diagram: frequency vs speed, colour = modal damping (unstable red, stable blue,
+    :data:`frbmodel.plots.style.DAMPING_STOPS`), marker = precession (▲ forward, ▼ backward, ● mixed), unstable
+    modes enlarged with a black edge, neutral modes
     (|D| within its round-off bound, e.g. every mode of the undamped methods A, B, E) grey; dashed film whirl curves
     above their onset; optional 1X line with the critical speeds (its crossings with the damped branches) starred.
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
-from ..plots.style import readable
+from ..plots.style import HTML_HEIGHT_PX, readable
 
 #: :meth:`Orbits.plot` zooms its µm panel onto a film orbit narrower than this share of the clearance diameter
 ZOOM_FRACTION = 0.1
@@ -405,7 +405,8 @@ class Orbits(Result):
         rows = self.panels()
         ncol = max(len(r) for r in rows)
         titles = [row[j][0] if j < len(row) else "" for row in rows for j in range(ncol)]
-        fig = make_subplots(rows=2, cols=ncol, subplot_titles=titles)
+        fig = make_subplots(rows=2, cols=ncol, subplot_titles=titles, horizontal_spacing=min(0.2, 0.4 / ncol),
+                            vertical_spacing=0.16)  # (room for each panel's y title beside its neighbour's ticks)
         th = np.linspace(0, 2 * np.pi, 100)
         for i, row in enumerate(rows):
             for j, (name, x, y, c, unit) in enumerate(row):
@@ -417,7 +418,7 @@ class Orbits(Result):
                 fig.update_xaxes(title_text=f"x [{unit}]", row=i + 1, col=j + 1)
                 fig.update_yaxes(title_text=f"y [{unit}]", scaleanchor=f"x{i * ncol + j + 1}", row=i + 1,
                                  col=j + 1)
-        fig.update_layout(title=title or f"Orbits, {self.label}", showlegend=False)
+        fig.update_layout(title=title or f"Orbits, {self.label}", showlegend=False, height=HTML_HEIGHT_PX)
         if path is not None:
             write_html(fig, path, include_plotlyjs)
         return fig
