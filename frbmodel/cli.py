@@ -1494,10 +1494,19 @@ HTML_MODES = {"folder": "directory", "self-contained": True}
 
 
 def _html_arg(p):
-    p.add_argument("--html", choices=list(HTML_MODES), default="folder",
-                   help="interactive pages: 'folder' loads plotly.js from the one plotly.min.js written beside them "
-                        "(small pages; copy the folder as a whole), 'self-contained' embeds it in every page "
-                        "(+4.8 MB each; a page opens alone, e.g. mailed)")
+    p.add_argument("--html", choices=list(HTML_MODES), default=None,
+                   help="interactive pages: 'folder' (default) loads plotly.js from the one plotly.min.js written "
+                        "beside them (small pages; copy the folder as a whole), 'self-contained' embeds it in every "
+                        "page (+4.8 MB each; a page opens alone, e.g. mailed)")
+
+
+def _html_mode(args):
+    """How the command's pages get plotly.js (``--html``, :data:`HTML_MODES`); ``--html`` with ``--no-figure`` is
+    refused (no page is written)."""
+    mode = getattr(args, "html", None)
+    if mode is not None and getattr(args, "no_figure", False):
+        raise ParameterError(f"--html {mode} applies to the figures: with --no-figure no page is written")
+    return HTML_MODES[mode or "folder"]
 
 
 #: optional packages and the extra that installs them
@@ -1561,8 +1570,9 @@ def _dispatch(args):
     try:
         from .plots.figures import html_plotlyjs
 
+        mode = _html_mode(args)
         _first_run_notice(args.command)
-        with html_plotlyjs(HTML_MODES[getattr(args, "html", "folder")]):
+        with html_plotlyjs(mode):
             return args.func(args) or 0
     except FRBError as exc:
         print(f"frb {args.command}: error: {exc}", file=sys.stderr)

@@ -280,3 +280,11 @@ def test_orbit_and_waterfall_pages_fit_a_screen_with_readable_names():
     assert "turbine wheel" in [a.text for a in page.layout.annotations]  # panel titles, not "turbine_wheel"
     wf = frb.spectrogram(run, "turbine_wheel").waterfall_html()
     assert wf.layout.height <= HTML_HEIGHT_PX and "turbine wheel" in wf.layout.title.text
+
+
+def test_html_option_refused_where_no_page_is_written(tmp_path, capsys):
+    out = tmp_path / "never"
+    assert main(["runup", "--no-figure", "--html", "self-contained", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--html self-contained" in err[0] and "--no-figure" in err[0]
+    assert not out.exists()  # refused before any work
