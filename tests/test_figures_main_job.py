@@ -205,6 +205,13 @@ def test_cli_writes_self_contained_pages_on_request(tmp_path):
     assert main(["plot", str(tmp_path), "--html", "self-contained"]) == 0
     pages = sorted(tmp_path.glob("composite_*.html"))
     assert len(pages) == 2 and not (tmp_path / "plotly.min.js").exists()
+    import matplotlib.pyplot as plt
+
+    fig = frb.spectrogram(synthetic_run(), "turbine_wheel").plot()  # the PNG's RSR panel: legend off the data too
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes[:2]:  # heatmap, RSR panel (then the colour bar)
+        assert not ax.get_legend().get_window_extent(renderer).overlaps(ax.bbox)
+    plt.close(fig)
     for page in pages:
         assert script_srcs(page) == []
         traces = figure_data(page)
@@ -288,3 +295,15 @@ def test_html_option_refused_where_no_page_is_written(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--html self-contained" in err[0] and "--no-figure" in err[0]
     assert not out.exists()  # refused before any work
+
+
+def test_composite_page_rsr_legend_above_the_data():
+    from frbmodel.plots.figures import HTML_LEGEND_ENTRY_PX, HTML_PANEL_PX
+
+    fig = frb.spectrogram(synthetic_run(), "turbine_wheel").plot_html()
+    rsr = [t for t in fig.data if t.legend == "legend2"]
+    assert len(rsr) >= 4  # the run's and the linear methods' RSR, in the panel's own legend
+    top = max(float(np.nanmax(t.y)) for t in rsr)
+    lo, hi = fig.layout.yaxis2.range
+    legend_fraction = len(rsr) * HTML_LEGEND_ENTRY_PX / HTML_PANEL_PX  # the legend hangs from the panel's top
+    assert fig.layout.legend2.y == 1.0 and (hi - top) / (hi - lo) > legend_fraction

@@ -475,7 +475,7 @@ def _rsr_panel(ax, run, xscale, linear=None):
     ax.set_xlabel(_speed_label(kind))
     ax.set_ylabel("RSR = ω_FR / ω_R [-]")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=2)  # below the panel, never on it
     ax.set_title("ring-speed ratio", fontsize=10)
 
 
@@ -933,6 +933,23 @@ def _components_plotly(go, fig, marks, x_range, y_range, down):
                                      "<extra></extra>"), 1, 1)
 
 
+#: the RSR panel's traces have the panel's own legend, at its top, above the data (:func:`_rsr_headroom`)
+RSR_LEGEND = dict(legend="legend2")
+#: the height of the RSR panel of a page [px] and of one legend entry [px], for :func:`_rsr_headroom`
+HTML_PANEL_PX, HTML_LEGEND_ENTRY_PX = 530.0, 19.0
+
+
+def _rsr_headroom(values, n_entries):
+    """RSR axis range [-] of a page whose top leaves room for the panel's legend of ``n_entries`` entries
+    (:data:`HTML_PANEL_PX`, :data:`HTML_LEGEND_ENTRY_PX`), so that the legend covers no data."""
+    v = np.concatenate([np.ravel(np.asarray(a, dtype=float)) for a in values])
+    v = v[np.isfinite(v)]
+    lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+    span = max(hi - lo, 1e-3)
+    frac = min(0.6, (n_entries * HTML_LEGEND_ENTRY_PX + 20.0) / HTML_PANEL_PX)
+    return [lo - 0.03 * span, hi + span * frac / (1.0 - frac) + 0.03 * span]
+
+
 def _rsr_plotly(go, fig, run, linear, num):
     """The ring-speed ratio panel of :func:`composite_plotly` (the content of :func:`_rsr_panel`; the run's
     samples thinned to about a screen's width, :data:`HTML_MAX_COLUMNS`)."""
@@ -942,7 +959,7 @@ def _rsr_plotly(go, fig, run, linear, num):
     for j, name in enumerate(_bearing_names(run)):
         fig.add_trace(go.Scatter(x=num(run.speed_rpm[::step]), y=num(rr[::step, j]), mode="lines",
                                  name=f"{kind}, {name}", line=dict(width=1, color=RUN_COLORS[j % len(RUN_COLORS)]),
-                                 legend="legend2"), 1, 2)
+                                 **RSR_LEGEND), 1, 2)
     if linear is not None:
         speeds, by_method, bearing_names = linear
         dashes = {"F": "solid", "I": "dashdot", "J": "dash"}
@@ -952,11 +969,12 @@ def _rsr_plotly(go, fig, run, linear, num):
                 fig.add_trace(go.Scatter(x=speeds, y=arr[:, j], mode="lines",
                                          name=f"method {m}{' (eq. 6)' if m == 'F' else ''}, {b}",
                                          line=dict(dash=dashes.get(m, "dot"), color=greys[j % len(greys)]),
-                                         legend="legend2"), 1, 2)
+                                         **RSR_LEGEND), 1, 2)
+    rsr = [t.y for t in fig.data if t.legend == "legend2"]
     fig.update_xaxes(title_text=_speed_label(kind, "rpm"), row=1, col=2)
-    fig.update_yaxes(title_text="RSR = ω_FR / ω_R [-]", row=1, col=2)
-    fig.update_layout(legend2=dict(x=1.0, xanchor="right", y=1.0, yanchor="top", bgcolor="rgba(255,255,255,0.75)",
-                                   font=dict(size=10)))  # (the panel's own legend, as in the PNG)
+    fig.update_yaxes(title_text="RSR = ω_FR / ω_R [-]", range=_rsr_headroom(rsr, len(rsr)), row=1, col=2)
+    fig.update_layout(legend2=dict(x=1.0, xanchor="right", y=1.0, yanchor="top", bgcolor="rgba(255,255,255,0.8)",
+                                   font=dict(size=10)))
 
 
 def waterfall_lines(sp, fmax_hz=None, amplitude="um", n_lines=40):
