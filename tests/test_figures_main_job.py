@@ -307,3 +307,17 @@ def test_composite_page_rsr_legend_above_the_data():
     lo, hi = fig.layout.yaxis2.range
     legend_fraction = len(rsr) * HTML_LEGEND_ENTRY_PX / HTML_PANEL_PX  # the legend hangs from the panel's top
     assert fig.layout.legend2.y == 1.0 and (hi - top) / (hi - lo) > legend_fraction
+
+
+def test_polar_speed_labels_do_not_pile_up(responses):
+    import matplotlib.pyplot as plt
+
+    from frbmodel.plots.unbalance import POLAR_LABEL_GAP, response_figure
+
+    fig = response_figure(responses["J"])
+    polar = next(ax for ax in fig.axes if ax.name == "polar")
+    pts = [t.xy[1] * np.exp(1j * t.xy[0]) for t in polar.texts]  # (angle, radius) -> x + iy
+    rmax = polar.get_rmax()
+    assert len(pts) >= 2
+    assert all(abs(a - b) > POLAR_LABEL_GAP * rmax for i, a in enumerate(pts) for b in pts[:i])
+    plt.close(fig)

@@ -22,6 +22,8 @@ RESULT_STYLES = ("-", "--", ":", "-.")
 PHASE_BREAK_DEG = 179.0
 #: the polar plot's radius is clipped at this multiple of the median amplitude (undamped peaks are unbounded)
 POLAR_CLIP = 20.0
+#: a speed label of the polar plot is left out within this fraction of the radius limit of a label drawn before
+POLAR_LABEL_GAP = 0.12
 
 
 def default_films(ur):
@@ -135,9 +137,12 @@ def _polar(ax, ur, names):
         X = ur.orbit(name)[0]
         ax.plot(np.angle(X), np.abs(X) * 1e6, color=f"C{c}", lw=1.2)
     X = ur.orbit(names[0])[0]
+    placed = []
     for k in np.linspace(0, X.size - 1, min(6, X.size)).astype(int):
-        if np.abs(X[k]) * 1e6 <= rmax:
-            ax.annotate(f"{ur.speeds_rpm[k] / 1e3:.0f}", (np.angle(X[k]), abs(X[k]) * 1e6), fontsize=7)
+        z = X[k] * 1e6
+        if abs(z) <= rmax and all(abs(z - p) > POLAR_LABEL_GAP * rmax for p in placed):  # (no label on another)
+            ax.annotate(f"{ur.speeds_rpm[k] / 1e3:.0f}", (np.angle(z), abs(z)), fontsize=7)
+            placed.append(z)
     ax.set_rlim(0, rmax)
     ax.set_title(f"polar: x amplitude [µm]{' (clipped)' if clipped else ''}, phase; labels krpm", fontsize=9)
 
