@@ -715,11 +715,9 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     for k in orders:
         ax.plot(s_all / 1e3, k * s_all / 60.0, ":", color="w" if k == 1 else "#bbbbbb", lw=1, label=order_label(k))
     if campbell is not None:
-        first = True
-        for sk, f, _ in _unstable_lines(campbell, fmax):
-            ax.plot(sk, f, "-", color="#00e5ff", lw=1.6,
-                    label=f"unstable modes, method {campbell.method}" if first else None)
-            first = False
+        for i, (sk, f, _) in enumerate(_unstable_lines(campbell, fmax)):
+            label = None if i else f"unstable modes, method {campbell.method}"
+            ax.plot(sk, f, "-", color="#00e5ff", lw=1.6, label=label)
         if whirl:
             _plot_whirl(ax, campbell, lw=1.2)
     marks, hidden = component_marks(sp) if components else ([], [])
