@@ -321,3 +321,21 @@ def test_polar_speed_labels_do_not_pile_up(responses):
     assert len(pts) >= 2
     assert all(abs(a - b) > POLAR_LABEL_GAP * rmax for i, a in enumerate(pts) for b in pts[:i])
     plt.close(fig)
+
+
+def test_stability_map_legend_beside_the_plot_and_parameter_in_words():
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from frbmodel.studies.sweep import stability_map_figures
+
+    kinds = [("linear", "J")] * 6 + [("runup", "run-up")] * 6  # twelve lines over the whole plot
+    rows = [{"kind": k, "method": m, "item": f"item {i}", "outer_clearance [m]": c,
+             "onset [rpm]": 1e3 * (i + 1) * c * 1e6, "f at onset [Hz]": 100.0}
+            for i, (k, m) in enumerate(kinds) for c in (36e-6, 40e-6, 46e-6)]
+    fig, page = stability_map_figures(pd.DataFrame(rows), "outer_clearance [m]")
+    ax = fig.axes[0]
+    assert not ax.get_legend().get_window_extent(fig.canvas.get_renderer()).overlaps(ax.bbox)
+    assert ax.get_xlabel() == "outer clearance [µm]" and page.layout.xaxis.title.text == "outer clearance [µm]"
+    assert page.layout.height <= HTML_HEIGHT_PX
+    plt.close(fig)
