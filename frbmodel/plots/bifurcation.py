@@ -67,18 +67,19 @@ def campbell_lines(cd, fmax_hz):
     Returns
     -------
     list of tuple
-        ``(kind, label, speeds [rpm], frequency [Hz] — NaN where not drawn, film index or None)``: kind
-        ``"mode"`` (a mode where it is unstable) or ``"whirl"`` (a film's whirl frequency past its onset).
+        ``(kind, label, speeds [rpm], frequency [Hz] — NaN where not drawn, style or None)``: kind ``"mode"`` (a
+        mode where it is unstable) or ``"whirl"`` (a film's whirl frequency past its onset, with its style of
+        :func:`frbmodel.plots.figures.whirl_lines`: coincident curves interleaved, both visible).
     """
-    from .figures import _unstable_lines, whirl_curves
+    from .figures import _unstable_lines, whirl_lines
 
     out = []
     for sk, f, j in _unstable_lines(cd, fmax_hz):
         kind = _mode_label(cd, j, f)
         onset = sk[np.flatnonzero(np.isfinite(f))[0]]
         out.append(("mode", f"unstable {kind or 'mode'} ({cd.method}), from {onset:.0f} krpm", sk * 1e3, f, None))
-    for k, name, s, w in whirl_curves(cd):
-        out.append(("whirl", f"whirl {name}", s, w, k))
+    for line in whirl_lines(cd):
+        out.append(("whirl", line["label"], line["speeds_rpm"], line["whirl_hz"], line))
     return out
 
 
@@ -168,19 +169,16 @@ def _draw_spectrogram(axf, sp):
 
 
 def _draw_campbell(axf, cd, fmax, speed_range):
-    from .figures import _whirl_style
-
     lo, hi = speed_range
     colors = iter(f"C{i}" for i in (0, 2, 4, 6, 8, 9, 1, 5))
-    for kind, label, s, f, k in campbell_lines(cd, fmax):
+    for kind, label, s, f, style in campbell_lines(cd, fmax):
         sel = (s >= lo) & (s <= hi)
         if not np.isfinite(f[sel]).any():
             continue
         if kind == "mode":
             axf.plot(s[sel], f[sel], "-", lw=1.3, alpha=0.8, color=next(colors, "C0"), label=label)
         else:
-            color, ls = _whirl_style(k)
-            axf.plot(s[sel], f[sel], ls=ls, lw=1.0, color=color, alpha=0.8, label=label)
+            axf.plot(s[sel], f[sel], ls=style["ls"], lw=1.0, color=style["color"], alpha=0.8, label=label)
 
 
 def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
@@ -214,10 +212,11 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
     fmax = _fmax(bd, None, campbell)
     if campbell is not None:
         lo, hi = _speed_range(bd, envelopes)
-        for kind, label, s, f, _ in campbell_lines(campbell, fmax):
+        for kind, label, s, f, style in campbell_lines(campbell, fmax):
             sel = (s >= lo) & (s <= hi)
-            fig.add_trace(go.Scatter(x=s[sel], y=f[sel], mode="lines", name=label, legendgroup=label,
-                                     line=dict(width=1.3, dash="solid" if kind == "mode" else "dash")), 2, 1)
+            line = dict(width=1.3) if kind == "mode" else dict(width=1.3, dash=style["dash"], color=style["color"])
+            fig.add_trace(go.Scatter(x=s[sel], y=f[sel], mode="lines", name=label, legendgroup=label, line=line),
+                          2, 1)
     hover = "%{x:.0f} rpm<br>%{y:.3g}<extra>%{fullData.name}</extra>"
     for stable, s, r, f in stability_runs(bd):
         name = "stable branch" if stable else "unstable branch"
