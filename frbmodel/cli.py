@@ -389,6 +389,7 @@ def write_composites(run, system, out, xscale="linear", title="run-up", orders=(
         The files written.
     """
     from .linear.campbell import campbell
+    from .plots.style import readable
     from .signals.spectral import spectrogram
 
     lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
@@ -396,7 +397,7 @@ def write_composites(run, system, out, xscale="linear", title="run-up", orders=(
     paths = []
     for node in run.displacement:  # the system's discs
         sp = spectrogram(run, node)
-        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {node}", orders=orders)
+        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {readable(node)}", orders=orders)
         tab = sp.components_table()
         print(f"components at the {node}:")
         print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
@@ -1586,7 +1587,31 @@ def build_parser():
     _add_warmup(sub)
     _add_losses(sub)
     _add_bifurcation(sub)
+    for name in HTML_COMMANDS:
+        _html_arg(sub.choices[name])
     return p
+
+
+#: the commands that write interactive HTML pages (they take ``--html``)
+HTML_COMMANDS = ("campbell", "unbalance", "bifurcation", "runup", "compare", "cosim", "sweep", "plot")
+#: ``--html`` choices: how the pages get plotly.js (:func:`frbmodel.plots.figures.write_html`)
+HTML_MODES = {"folder": "directory", "self-contained": True}
+
+
+def _html_arg(p):
+    p.add_argument("--html", choices=list(HTML_MODES), default=None,
+                   help="interactive pages: 'folder' (default) loads plotly.js from the one plotly.min.js written "
+                        "beside them (small pages; copy the folder as a whole), 'self-contained' embeds it in every "
+                        "page (+4.8 MB each; a page opens alone, e.g. mailed)")
+
+
+def _html_mode(args):
+    """How the command's pages get plotly.js (``--html``, :data:`HTML_MODES`); ``--html`` with ``--no-figure`` is
+    refused (no page is written)."""
+    mode = getattr(args, "html", None)
+    if mode is not None and getattr(args, "no_figure", False):
+        raise ParameterError(f"--html {mode} applies to the figures: with --no-figure no page is written")
+    return HTML_MODES[mode or "folder"]
 
 
 #: optional packages and the extra that installs them
@@ -1648,8 +1673,12 @@ def _finish_claims(code):
 def _dispatch(args):
     """Run the parsed command; its exit code (errors become messages and codes)."""
     try:
+        from .plots.figures import html_plotlyjs
+
+        mode = _html_mode(args)
         _first_run_notice(args.command)
-        return args.func(args) or 0
+        with html_plotlyjs(mode):
+            return args.func(args) or 0
     except FRBError as exc:
         print(f"frb {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -37,7 +37,7 @@ def test_plot_redraws_an_unbalance_folder(tmp_path, capsys):
                     np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=1e-12)
         # the Bode amplitude of the turbine wheel is the table's semi-major axis, in µm
         table = pd.read_csv(out / f"unbalance_{m}.csv")
-        bode = next(d for n, t, d in again if n == "turbine_wheel")
+        bode = next(d for n, t, d in again if n == "turbine wheel")  # (legend names read as words)
         np.testing.assert_allclose(bode["y"], table["turbine_wheel major semi-axis [m]"] * 1e6, rtol=1e-12)
 
 
@@ -46,7 +46,7 @@ def test_plot_unbalance_locations_and_bad_options(tmp_path, capsys):
     assert main(["unbalance", "--method", "A", "--speeds", "3000:30000:5", "--out", str(out)]) == 0
     assert main(["plot", str(out), "--locations", "node2,turbine_wheel"]) == 0
     names = {n for n, _, _ in _traces(out / "unbalance_A.html")}
-    assert {"node2", "turbine_wheel"} <= names and "compressor_wheel" not in names
+    assert {"node2", "turbine wheel"} <= names and "compressor wheel" not in names
     capsys.readouterr()
     assert main(["plot", str(out), "--locations", "nowhere"]) == 2
     assert "--locations 'nowhere' is unknown" in capsys.readouterr().err

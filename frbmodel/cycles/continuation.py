@@ -200,7 +200,7 @@ class BifurcationDiagram:
 
         return diagram_figure(self, title, envelopes, spectrogram, campbell)
 
-    def plot_html(self, path, title=None, envelopes=(), campbell=None, include_plotlyjs="directory"):
+    def plot_html(self, path, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
         """The diagram as an interactive HTML file (:func:`frbmodel.plots.bifurcation.diagram_html`); returns
         its path."""
         from ..plots.bifurcation import diagram_html

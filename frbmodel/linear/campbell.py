@@ -375,7 +375,7 @@ class CampbellResult(Result):
         return campbell_figure(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, ax=ax, title=title,
                                critical=critical)
 
-    def plot_html(self, path=None, fmax_hz=None, whirl=True, one_x=True, shapes=True, include_plotlyjs="directory"):
+    def plot_html(self, path=None, fmax_hz=None, whirl=True, one_x=True, shapes=True, include_plotlyjs=None):
         """Interactive plotly figure (hover: speed, frequency, D, stability, precession, mode kind and shape).
 
         Parameters
@@ -390,21 +390,23 @@ class CampbellResult(Result):
             List each point's mode shape in its hover text: orbit semi-major axis (largest = 1), phase of x and
             whirl direction at every disc, journal and ring (:func:`frbmodel.linear.modeshape.shape_hover_text`;
             needs the system in :attr:`meta`).
-        include_plotlyjs : {"directory", True}
-            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
-            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
-            :func:`frbmodel.plots.figures.write_html`.
+        include_plotlyjs : {"directory", True}, optional
+            ``"directory"``: plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small file, shown
+            offline); ``True``: embedded (self-contained, 4.8 MB larger). Default: ``"directory"``, or what
+            :func:`frbmodel.plots.figures.html_plotlyjs` set. See :func:`frbmodel.plots.figures.write_html`.
 
         Returns
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import _default_fmax, campbell_plotly, write_html
+        from ..plots.figures import campbell_plotly, full_fmax, write_html
+        from .critical import critical_speeds
         from .modeshape import shape_hover_text
 
-        shown = np.isfinite(self.frequencies_hz) & (self.frequencies_hz <= (fmax_hz or _default_fmax(self)))
+        shown = np.isfinite(self.frequencies_hz) & (self.frequencies_hz <= (fmax_hz or full_fmax(self)))
         hover = shape_hover_text(self, shown) if shapes else None
-        fig = campbell_plotly(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, hover=hover)
+        critical = critical_speeds(self, refine=False) if one_x and self.speeds_rpm.size >= 2 else None
+        fig = campbell_plotly(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, hover=hover, critical=critical)
         if path is not None:
             write_html(fig, path, include_plotlyjs)
         return fig

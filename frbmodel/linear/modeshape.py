@@ -268,17 +268,17 @@ class ModeShape:
         """
         return plot_mode_shape(self, ax=ax, n_phases=n_phases, title=title)
 
-    def plot_html(self, path=None, include_plotlyjs="directory"):
+    def plot_html(self, path=None, include_plotlyjs=None):
         """Interactive 3-D (plotly) figure of the whirling shaft; written to ``path`` if given.
 
         Parameters
         ----------
         path : str or Path, optional
             The HTML file.
-        include_plotlyjs : {"directory", True}
-            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
-            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
-            :func:`frbmodel.plots.figures.write_html`.
+        include_plotlyjs : {"directory", True}, optional
+            ``"directory"``: plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small file, shown
+            offline); ``True``: embedded (self-contained, 4.8 MB larger). Default: ``"directory"``, or what
+            :func:`frbmodel.plots.figures.html_plotlyjs` set. See :func:`frbmodel.plots.figures.write_html`.
 
         Returns
         -------
@@ -411,7 +411,7 @@ def plot_mode_shape(ms, ax=None, n_phases=8, title=None):
     return fig
 
 
-def plot_mode_shape_html(ms, path=None, n_frames=24, include_plotlyjs="directory"):
+def plot_mode_shape_html(ms, path=None, n_frames=24, include_plotlyjs=None):
     """Interactive 3-D (plotly) whirling shaft with a phase slider (see :meth:`ModeShape.plot_html`); written to
     ``path`` by :func:`frbmodel.plots.figures.write_html` if given."""
     import plotly.graph_objects as go
@@ -485,10 +485,22 @@ def plot_mode_shapes(shapes, ncols=2, n_phases=8, title=None):
         plot_mode_shape(ms, ax=ax, n_phases=n_phases)
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
-    if title:
-        fig.suptitle(title, fontsize=10)
     fig.tight_layout()
+    if title:
+        _suptitle_clear(fig, fig.suptitle(title, fontsize=10))
     return fig
+
+
+def _suptitle_clear(fig, text):
+    """Lower the panels until the figure title ``text`` covers none of their titles (a tall figure's tight layout
+    leaves too little room above the first row)."""
+    renderer = getattr(fig.canvas, "get_renderer", lambda: None)()
+    if renderer is None:
+        return
+    bottom = text.get_window_extent(renderer).y0
+    top = max(ax.title.get_window_extent(renderer).y1 for ax in fig.axes if ax.get_visible())
+    if top > bottom - 8:
+        fig.subplots_adjust(top=fig.subplotpars.top - (top - bottom + 10) / fig.bbox.height)
 
 
 def save_mode_shapes(cd, speed_rpm, out_dir, fmax_hz=None):

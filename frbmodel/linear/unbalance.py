@@ -30,6 +30,16 @@ from ..core.errors import ParameterError, check_real, check_system, read_json
 from ..core.progress import counter_bar
 from ..core.results import Result, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
+from ..plots.unbalance import (  # noqa: F401  (the figures, re-exported from where they were)
+    PHASE_BREAK_DEG,
+    POLAR_CLIP,
+    RESULT_STYLES,
+    bode_figure,
+    default_films,
+    phase_curve,
+    response_figure,
+    response_plotly,
+)
 from ..system.methods import get_method
 from .campbell import campbell as campbell_diagram
 from .campbell import check_speeds, progress_enabled
@@ -510,7 +520,7 @@ class UnbalanceResponse(Result):
         """
         return response_figure(self, names, films, title)
 
-    def plot_html(self, path=None, names=None, films=None, include_plotlyjs="directory"):
+    def plot_html(self, path=None, names=None, films=None, include_plotlyjs=None):
         """Interactive plotly Bode, clearance and polar plot (hover: speed, amplitude, phase).
 
         Parameters
@@ -519,10 +529,10 @@ class UnbalanceResponse(Result):
             Write the figure there as HTML.
         names, films : sequence of str, optional
             As for :meth:`plot`.
-        include_plotlyjs : {"directory", True}
-            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
-            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
-            :func:`frbmodel.plots.figures.write_html`.
+        include_plotlyjs : {"directory", True}, optional
+            ``"directory"``: plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small file, shown
+            offline); ``True``: embedded (self-contained, 4.8 MB larger). Default: ``"directory"``, or what
+            :func:`frbmodel.plots.figures.html_plotlyjs` set. See :func:`frbmodel.plots.figures.write_html`.
 
         Returns
         -------
@@ -792,232 +802,3 @@ def response_peaks(ur, cd=None, system=None, names=None, refine=True, **kw):
 
 
 # ---------------------------------------------------------------------- figures
-#: line styles of the results overlaid by :func:`bode_figure` (one per result)
-RESULT_STYLES = ("-", "--", ":", "-.")
-#: phase curves are broken where the phase jumps by this much or more between two speeds [deg]
-PHASE_BREAK_DEG = 179.0
-#: the polar plot's radius is clipped at this multiple of the median amplitude (undamped peaks are unbounded)
-POLAR_CLIP = 20.0
-
-
-def default_films(ur):
-    """The films of ``ur`` whose relative orbit is defined and not identically zero (method C's inner film is).
-
-    Parameters
-    ----------
-    ur : UnbalanceResponse
-
-    Returns
-    -------
-    list of str
-    """
-    out = []
-    for f in ur.film_names:
-        c = ur.clearance_fraction(f)
-        if np.isfinite(c).all() and np.any(c > 0):
-            out.append(f)
-    return out
-
-
-def _disc_names(ur):
-    return [d["name"] for d in ur.layout["discs"]]
-
-
-def phase_curve(ur, name):
-    """Speeds [krpm] and x phase [deg] of ``name`` for plotting: the phase in [−270°, 90°) (so that a phase of
-    ±180° is drawn at one place, −180°), NaN inserted where it jumps by :data:`PHASE_BREAK_DEG` or more (the
-    undamped methods jump by exactly 180° at each resonance and anti-resonance; the wrap point lies outside most
-    damped curves).
-
-    Parameters
-    ----------
-    ur : UnbalanceResponse
-    name : str
-
-    Returns
-    -------
-    x_krpm, phase_deg : ndarray
-
-    Examples
-    --------
-    >>> import frbmodel as frb
-    >>> ur = frb.unbalance_response(frb.turbocharger(), "A", [5e3, 6e3, 8e3, 9e3], critical=False)
-    >>> x, ph = phase_curve(ur, "turbine_wheel")      # through the 6.9 krpm resonance: 0° to -180°, broken
-    >>> x.tolist(), [round(float(p)) for p in ph if p == p]
-    ([5.0, 6.0, nan, 8.0, 9.0], [0, 0, -180, -180])
-    """
-    x = ur.speeds_rpm / 1e3
-    ph = (np.degrees(ur.phase(name)) + 270.0) % 360.0 - 270.0
-    cut = np.flatnonzero(np.abs(np.diff(ph)) >= PHASE_BREAK_DEG) + 1
-    return np.insert(x, cut, np.nan), np.insert(ph, cut, np.nan)
-
-
-def _bode_lines(ax_amp, ax_phase, ur, names, style="-", prefix=""):
-    """Semi-major axis [µm] (log) and x phase [deg] (:func:`phase_curve`) of each location vs speed [krpm]."""
-    x = ur.speeds_rpm / 1e3
-    for c, name in enumerate(names):
-        color = f"C{c}"
-        ax_amp.semilogy(x, ur.major_axis(name) * 1e6, ls=style, color=color, label=f"{prefix}{name}")
-        ax_phase.plot(*phase_curve(ur, name), ls=style, color=color)
-    ax_phase.set_yticks([-270, -180, -90, 0, 90])
-
-
-def _mark_crossings(ax, ur):
-    """Dotted vertical lines at the 1X crossings (forward: darker)."""
-    if ur.critical is None:
-        return
-    for r in ur.critical_speeds().itertuples(index=False):
-        if r.source == "1X crossing":
-            ax.axvline(r[1] / 1e3, color="0.35" if r.precession == "forward" else "0.75", ls=":", lw=0.9)
-
-
-def _polar(ax, ur, names):
-    """Polar plot of the x response: radius |X| [µm], angle φ (speeds marked in krpm along the first curve)."""
-    r_all = np.concatenate([np.abs(ur.orbit(n)[0]) for n in names]) * 1e6
-    r_all = r_all[np.isfinite(r_all)]
-    rmax = min(r_all.max(), POLAR_CLIP * np.median(r_all)) * 1.05 if r_all.size else 1.0
-    for c, name in enumerate(names):
-        X = ur.orbit(name)[0]
-        ax.plot(np.angle(X), np.abs(X) * 1e6, color=f"C{c}", lw=1.2)
-    X = ur.orbit(names[0])[0]
-    for k in np.linspace(0, X.size - 1, min(6, X.size)).astype(int):
-        if np.abs(X[k]) * 1e6 <= rmax:
-            ax.annotate(f"{ur.speeds_rpm[k] / 1e3:.0f}", (np.angle(X[k]), abs(X[k]) * 1e6), fontsize=7)
-    ax.set_rlim(0, rmax)
-    clipped = " (clipped)" if r_all.size and r_all.max() > rmax else ""
-    ax.set_title(f"polar: x amplitude [µm]{clipped}, phase; labels krpm", fontsize=9)
-
-
-def response_figure(ur, names=None, films=None, title=None):
-    """Bode plot (semi-major axis [µm], log; x phase [deg]), film orbits / clearance, and polar plot.
-
-    Parameters
-    ----------
-    ur : UnbalanceResponse
-    names : sequence of str, optional
-        Locations (default: the discs).
-    films : sequence of str, optional
-        Films of the clearance panel (default: :func:`default_films`).
-    title : str, optional
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    import matplotlib.pyplot as plt
-
-    names = list(names or _disc_names(ur))
-    films = default_films(ur) if films is None else list(films)
-    rows = 3 if films else 2
-    fig = plt.figure(figsize=(12.5, 2.9 * rows + 0.8))
-    gs = fig.add_gridspec(rows, 2, width_ratios=(1.7, 1.0))
-    ax_a = fig.add_subplot(gs[0, 0])
-    ax_p = fig.add_subplot(gs[1, 0], sharex=ax_a)
-    _bode_lines(ax_a, ax_p, ur, names)
-    axes = [ax_a, ax_p]
-    if films:
-        ax_f = fig.add_subplot(gs[2, 0], sharex=ax_a)
-        for k, f in enumerate(films):
-            ax_f.semilogy(ur.speeds_rpm / 1e3, ur.clearance_fraction(f), color=f"C{k + len(names)}", label=f)
-        ax_f.set_ylabel("film orbit semi-major\naxis / clearance [-]")
-        ax_f.legend(fontsize=8, ncol=2)
-        axes.append(ax_f)
-    for ax in axes:
-        _mark_crossings(ax, ur)
-        ax.grid(True, which="both", alpha=0.3)
-    ax_a.set_ylabel("semi-major axis [µm]")
-    ax_a.legend(fontsize=8)
-    ax_p.set_ylabel("phase of x [deg]")
-    axes[-1].set_xlabel("rotor speed [krpm] (dotted: 1X crossings of the Campbell branches)")
-    _polar(fig.add_subplot(gs[:, 1], projection="polar"), ur, names)
-    unb = ", ".join(f"{u['disc']} {u['m e [kg m]'] * 1e6:g} g mm at {u['phase [rad]']:g} rad" for u in ur.unbalance)
-    fig.suptitle(title or f"Unbalance response, method {ur.method} ({unb})", fontsize=11)
-    fig.tight_layout()
-    return fig
-
-
-def bode_figure(results, names=None, title=None):
-    """Bode plots of several unbalance responses (e.g. methods A and J) in one figure.
-
-    Parameters
-    ----------
-    results : sequence of UnbalanceResponse
-        Drawn with the line styles :data:`RESULT_STYLES`, colours per location.
-    names : sequence of str, optional
-        Locations (default: the discs of the first result).
-    title : str, optional
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-
-    Examples
-    --------
-    >>> import frbmodel as frb
-    >>> tc = frb.turbocharger()
-    >>> rs = [frb.unbalance_response(tc, m, [20e3, 40e3], critical=False) for m in "AJ"]
-    >>> len(bode_figure(rs).axes)
-    2
-    """
-    import matplotlib.pyplot as plt
-
-    names = list(names or _disc_names(results[0]))
-    fig, (ax_a, ax_p) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    for k, ur in enumerate(results):
-        _bode_lines(ax_a, ax_p, ur, names, RESULT_STYLES[k % len(RESULT_STYLES)], prefix=f"{ur.method}: ")
-    for ax in (ax_a, ax_p):
-        ax.grid(True, which="both", alpha=0.3)
-    ax_a.set_ylabel("semi-major axis [µm]")
-    ax_a.legend(fontsize=8, ncol=len(results))
-    ax_p.set_ylabel("phase of x [deg]")
-    ax_p.set_xlabel("rotor speed [krpm]")
-    unb = ", ".join(f"{u['disc']} {u['m e [kg m]'] * 1e6:g} g mm" for u in results[0].unbalance)
-    fig.suptitle(title or f"Unbalance response, methods {', '.join(r.method for r in results)} ({unb})")
-    fig.tight_layout()
-    return fig
-
-
-def response_plotly(ur, names=None, films=None):
-    """Interactive version of :func:`response_figure` (plotly).
-
-    Parameters
-    ----------
-    ur : UnbalanceResponse
-    names, films : sequence of str, optional
-
-    Returns
-    -------
-    plotly.graph_objects.Figure
-    """
-    import plotly.graph_objects as go
-    from plotly.subplots import make_subplots
-
-    names = list(names or _disc_names(ur))
-    films = default_films(ur) if films is None else list(films)
-    rows = 3 if films else 2
-    specs = [[{}, {"type": "polar", "rowspan": rows}]] + [[{}, None] for _ in range(rows - 1)]
-    fig = make_subplots(rows=rows, cols=2, specs=specs, column_widths=[0.62, 0.38], shared_xaxes=True,
-                        vertical_spacing=0.06)
-    x = ur.speeds_rpm / 1e3
-    for c, name in enumerate(names):
-        X = ur.orbit(name)[0]
-        amp, (xp, ph) = ur.major_axis(name) * 1e6, phase_curve(ur, name)
-        color = f"hsl({(c * 137) % 360}, 65%, 40%)"
-        fig.add_trace(go.Scatter(x=x, y=amp, name=name, legendgroup=name, line={"color": color},
-                                 hovertemplate="%{x:.1f} krpm: %{y:.4g} µm<extra>" + name + "</extra>"), 1, 1)
-        fig.add_trace(go.Scatter(x=xp, y=ph, name=name, legendgroup=name, showlegend=False, line={"color": color},
-                                 hovertemplate="%{x:.1f} krpm: %{y:.1f} deg<extra>" + name + "</extra>"), 2, 1)
-        fig.add_trace(go.Scatterpolar(r=np.abs(X) * 1e6, theta=np.degrees(np.angle(X)), name=name, legendgroup=name,
-                                      showlegend=False, line={"color": color}, text=[f"{s:.1f} krpm" for s in x],
-                                      hovertemplate="%{text}: %{r:.4g} µm, %{theta:.1f} deg<extra>" + name
-                                                    + "</extra>"), 1, 2)
-    for f in films:
-        fig.add_trace(go.Scatter(x=x, y=ur.clearance_fraction(f), name=f,
-                                 hovertemplate="%{x:.1f} krpm: %{y:.4g}<extra>" + f + "</extra>"), 3, 1)
-    fig.update_yaxes(type="log", title_text="semi-major axis [µm]", row=1, col=1)
-    fig.update_yaxes(title_text="phase of x [deg]", row=2, col=1)
-    if films:
-        fig.update_yaxes(type="log", title_text="film orbit / clearance [-]", row=3, col=1)
-    fig.update_xaxes(title_text="rotor speed [krpm]", row=rows, col=1)
-    fig.update_layout(title=f"Unbalance response, method {ur.method}", height=300 * rows + 120)
-    return fig

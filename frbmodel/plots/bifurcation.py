@@ -67,18 +67,19 @@ def campbell_lines(cd, fmax_hz):
     Returns
     -------
     list of tuple
-        ``(kind, label, speeds [rpm], frequency [Hz] — NaN where not drawn, film index or None)``: kind
-        ``"mode"`` (a mode where it is unstable) or ``"whirl"`` (a film's whirl frequency past its onset).
+        ``(kind, label, speeds [rpm], frequency [Hz] — NaN where not drawn, style or None)``: kind ``"mode"`` (a
+        mode where it is unstable) or ``"whirl"`` (a film's whirl frequency past its onset, with its style of
+        :func:`frbmodel.plots.figures.whirl_lines`: coincident curves interleaved, both visible).
     """
-    from .figures import _unstable_lines, whirl_curves
+    from .figures import _unstable_lines, whirl_lines
 
     out = []
     for sk, f, j in _unstable_lines(cd, fmax_hz):
         kind = _mode_label(cd, j, f)
         onset = sk[np.flatnonzero(np.isfinite(f))[0]]
         out.append(("mode", f"unstable {kind or 'mode'} ({cd.method}), from {onset:.0f} krpm", sk * 1e3, f, None))
-    for k, name, s, w in whirl_curves(cd):
-        out.append(("whirl", f"whirl {name}", s, w, k))
+    for line in whirl_lines(cd):
+        out.append(("whirl", line["label"], line["speeds_rpm"], line["whirl_hz"], line))
     return out
 
 
@@ -168,22 +169,19 @@ def _draw_spectrogram(axf, sp):
 
 
 def _draw_campbell(axf, cd, fmax, speed_range):
-    from .figures import _whirl_style
-
     lo, hi = speed_range
     colors = iter(f"C{i}" for i in (0, 2, 4, 6, 8, 9, 1, 5))
-    for kind, label, s, f, k in campbell_lines(cd, fmax):
+    for kind, label, s, f, style in campbell_lines(cd, fmax):
         sel = (s >= lo) & (s <= hi)
         if not np.isfinite(f[sel]).any():
             continue
         if kind == "mode":
             axf.plot(s[sel], f[sel], "-", lw=1.3, alpha=0.8, color=next(colors, "C0"), label=label)
         else:
-            color, ls = _whirl_style(k)
-            axf.plot(s[sel], f[sel], ls=ls, lw=1.0, color=color, alpha=0.8, label=label)
+            axf.plot(s[sel], f[sel], ls=style["ls"], lw=1.0, color=style["color"], alpha=0.8, label=label)
 
 
-def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plotlyjs="directory"):
+def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
     """The bifurcation diagram as an interactive HTML page (plotly; the content of :func:`diagram_figure` without
     the spectrogram; hover shows speed, radius, frequency and each bifurcation point's type, mode and film).
 
@@ -195,7 +193,7 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
     title : str, optional
     envelopes, campbell
         As for :func:`diagram_figure`.
-    include_plotlyjs : {"directory", True}
+    include_plotlyjs : {"directory", True}, optional
         See :func:`frbmodel.plots.figures.write_html`.
 
     Returns
@@ -206,6 +204,7 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
     from plotly.subplots import make_subplots
 
     from .figures import write_html
+    from .style import html_layout, log_axis
 
     fig = make_subplots(rows=2, cols=1, shared_xaxes=True, vertical_spacing=0.06)
     for label, s, r in envelopes:
@@ -213,10 +212,11 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
     fmax = _fmax(bd, None, campbell)
     if campbell is not None:
         lo, hi = _speed_range(bd, envelopes)
-        for kind, label, s, f, _ in campbell_lines(campbell, fmax):
+        for kind, label, s, f, style in campbell_lines(campbell, fmax):
             sel = (s >= lo) & (s <= hi)
-            fig.add_trace(go.Scatter(x=s[sel], y=f[sel], mode="lines", name=label, legendgroup=label,
-                                     line=dict(width=1.3, dash="solid" if kind == "mode" else "dash")), 2, 1)
+            line = dict(width=1.3) if kind == "mode" else dict(width=1.3, dash=style["dash"], color=style["color"])
+            fig.add_trace(go.Scatter(x=s[sel], y=f[sel], mode="lines", name=label, legendgroup=label, line=line),
+                          2, 1)
     hover = "%{x:.0f} rpm<br>%{y:.3g}<extra>%{fullData.name}</extra>"
     for stable, s, r, f in stability_runs(bd):
         name = "stable branch" if stable else "unstable branch"
@@ -235,8 +235,14 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
                                      name=kind, legendgroup=kind, showlegend=row == 1, text=text,
                                      marker=dict(symbol=symbol, size=10, color="crimson"),
                                      hovertemplate="%{x:.0f} rpm, %{y:.4g}<br>%{text}<extra></extra>"), row, 1)
-    fig.update_yaxes(title_text="turbine wheel orbit radius [µm]", type="log" if envelopes else "linear", row=1)
+    radius = "turbine wheel orbit radius [µm]"
+    if envelopes:  # (decade ticks with plain numbers, over the radii drawn)
+        radii = [t.y for t in fig.data if t.yaxis == "y" and t.y is not None]
+        fig.update_yaxes(**log_axis(radius, np.concatenate([np.ravel(r) for r in radii])), row=1)
+    else:
+        fig.update_yaxes(title_text=radius, row=1)
     fig.update_yaxes(title_text="orbit frequency [Hz]", row=2, range=[0, fmax] if fmax else None)
     fig.update_xaxes(title_text="rotor speed [rpm]", row=2)
-    fig.update_layout(title=title or "limit-cycle branches (solid: stable, dashed: unstable)", height=800)
+    fig.update_layout(title=title or "limit-cycle branches (solid: stable, dashed: unstable)",
+                      **html_layout(legend_below=False))
     return write_html(fig, path, include_plotlyjs)

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
+from ..plots.style import HTML_HEIGHT_PX, readable
 
 #: :meth:`Orbits.plot` zooms its µm panel onto a film orbit narrower than this share of the clearance diameter
 ZOOM_FRACTION = 0.1
@@ -320,13 +321,14 @@ class Orbits(Result):
         """
         um, eps = [], []
         for b, (ci, co) in self.clearances.items():
-            j, r = self.journal_in_ring[b], self.ring[b]
+            j, r, e_in, e_out = self.journal_in_ring[b], self.ring[b], self.eps_inner(b), self.eps_outer(b)
+            b = readable(b)
             um += [(f"{b}: journal in ring", j[:, 0] * 1e6, j[:, 1] * 1e6, ci * 1e6, "µm"),
                    (f"{b}: ring in housing", r[:, 0] * 1e6, r[:, 1] * 1e6, co * 1e6, "µm")]
-            eps += [(f"{b}: journal in ring", self.eps_inner(b)[:, 0], self.eps_inner(b)[:, 1], 1.0, "ε"),
-                    (f"{b}: ring in housing", self.eps_outer(b)[:, 0], self.eps_outer(b)[:, 1], 1.0, "ε")]
+            eps += [(f"{b}: journal in ring", e_in[:, 0], e_in[:, 1], 1.0, "ε"),
+                    (f"{b}: ring in housing", e_out[:, 0], e_out[:, 1], 1.0, "ε")]
         for d, xy in self.wheels.items():
-            um.append((f"{d}", xy[:, 0] * 1e6, xy[:, 1] * 1e6, None, "µm"))
+            um.append((readable(d), xy[:, 0] * 1e6, xy[:, 1] * 1e6, None, "µm"))
         return [um, eps]
 
     def plot(self, title=None, zoom=True):
@@ -380,7 +382,7 @@ class Orbits(Result):
         fig.tight_layout()
         return fig
 
-    def plot_html(self, path=None, title=None, include_plotlyjs="directory"):
+    def plot_html(self, path=None, title=None, include_plotlyjs=None):
         """Interactive orbits (plotly), the panels of :meth:`plot`; written to ``path`` (HTML) if given.
 
         Parameters
@@ -389,10 +391,10 @@ class Orbits(Result):
             The HTML file.
         title : str, optional
             Figure title.
-        include_plotlyjs : {"directory", True}
-            ``"directory"`` (default): plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small
-            file, shown offline); ``True``: embedded (self-contained, 4.8 MB larger). See
-            :func:`frbmodel.plots.figures.write_html`.
+        include_plotlyjs : {"directory", True}, optional
+            ``"directory"``: plotly.js from ``plotly.min.js`` beside the file, one copy per folder (small file, shown
+            offline); ``True``: embedded (self-contained, 4.8 MB larger). Default: ``"directory"``, or what
+            :func:`frbmodel.plots.figures.html_plotlyjs` set. See :func:`frbmodel.plots.figures.write_html`.
 
         Returns
         -------
@@ -406,7 +408,8 @@ class Orbits(Result):
         rows = self.panels()
         ncol = max(len(r) for r in rows)
         titles = [row[j][0] if j < len(row) else "" for row in rows for j in range(ncol)]
-        fig = make_subplots(rows=2, cols=ncol, subplot_titles=titles)
+        fig = make_subplots(rows=2, cols=ncol, subplot_titles=titles, horizontal_spacing=min(0.2, 0.4 / ncol),
+                            vertical_spacing=0.16)  # (room for each panel's y title beside its neighbour's ticks)
         th = np.linspace(0, 2 * np.pi, 100)
         for i, row in enumerate(rows):
             for j, (name, x, y, c, unit) in enumerate(row):
@@ -418,7 +421,7 @@ class Orbits(Result):
                 fig.update_xaxes(title_text=f"x [{unit}]", row=i + 1, col=j + 1)
                 fig.update_yaxes(title_text=f"y [{unit}]", scaleanchor=f"x{i * ncol + j + 1}", row=i + 1,
                                  col=j + 1)
-        fig.update_layout(title=title or f"Orbits, {self.label}", showlegend=False)
+        fig.update_layout(title=title or f"Orbits, {self.label}", showlegend=False, height=HTML_HEIGHT_PX)
         if path is not None:
             write_html(fig, path, include_plotlyjs)
         return fig
@@ -444,7 +447,7 @@ def orbits_figure(windows, title=None):
     fig, axs = plt.subplots(len(windows), ncol, figsize=(2.6 * ncol, 2.7 * len(windows)), squeeze=False)
     th = np.linspace(0, 2 * np.pi, 200)
     for i, o in enumerate(windows):
-        cells = [(f"{b}: {w}", e) for b in bearings
+        cells = [(f"{readable(b)}: {w}", e) for b in bearings
                  for w, e in (("journal in ring", o.eps_inner(b)), ("ring in housing", o.eps_outer(b)))]
         for j, (name, e) in enumerate(cells):
             ax = axs[i, j]
@@ -456,7 +459,7 @@ def orbits_figure(windows, title=None):
             ax.set_title(f"{name}, ε", fontsize=8)
         ax = axs[i, -1]
         for d, xy in o.wheels.items():
-            ax.plot(xy[:, 0] * 1e6, xy[:, 1] * 1e6, lw=0.7, label=d)
+            ax.plot(xy[:, 0] * 1e6, xy[:, 1] * 1e6, lw=0.7, label=readable(d))
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_title("wheels [µm]", fontsize=8)
         ax.legend(fontsize=6, loc="upper right")

@@ -167,7 +167,7 @@ class SpectrogramResult(Result):
 
     # ---------------------------------------------------------------- figures
     def plot(self, campbell=None, whirl=True, rsr=True, fmax_hz=None, components=True, title=None, xscale="linear",
-             amplitude="db_max", orders=(1.0,)):
+             amplitude="db_max", orders=(1.0,), linear_rsr=None):
         """Spectrogram vs speed; with ``campbell`` (a method-J :class:`CampbellResult`) its unstable-mode
         frequencies as solid lines and the film whirl curves dashed, and — with ``rsr`` — the run-up RSR vs the
         linear methods beside it (the paper's Figs. 12–14).
@@ -175,7 +175,9 @@ class SpectrogramResult(Result):
         ``amplitude`` is the colour scale: ``"db_max"`` (dB re the largest, default), ``"um"`` (µm) or
         ``"db_um"`` (dB re 1 µm); ``orders`` the order lines k × f_rot (1X by default); the frequency axis ends
         by default a little above the highest component within the colour range
-        (:func:`frbmodel.plots.figures.content_fmax`). See :func:`frbmodel.plots.figures.composite_figure`.
+        (:func:`frbmodel.plots.figures.content_fmax`); ``linear_rsr`` the linear methods' RSR of the RSR panel
+        (default: :func:`frbmodel.linear.equilibrium.linear_rsr` over the run's speeds, when the run carries its
+        system). See :func:`frbmodel.plots.figures.composite_figure`.
 
         Returns
         -------
@@ -183,36 +185,46 @@ class SpectrogramResult(Result):
         """
         from ..plots.figures import composite_figure
 
-        lin = None
-        sys_d = (getattr(self.run, "meta", None) or {}).get("system") if rsr and self.run is not None else None
-        if sys_d:
-            from ..linear.equilibrium import linear_rsr
-            from ..system.parameters import Turbocharger
-
-            speed = self.run.speed_rpm
-            lin = linear_rsr(Turbocharger.from_dict(sys_d), np.linspace(max(speed.min(), 1e3), speed.max(), 25))
         return composite_figure(self, campbell=campbell, whirl=whirl, rsr=rsr, fmax_hz=fmax_hz,
                                 components=components, title=title, xscale=xscale, amplitude=amplitude,
-                                orders=orders, linear_rsr=lin)
+                                orders=orders, linear_rsr=linear_rsr if linear_rsr is not None or not rsr
+                                else self._linear_rsr())
+
+    def _linear_rsr(self):
+        """The linear methods' RSR over the run's speeds (:func:`frbmodel.linear.equilibrium.linear_rsr`) for the
+        composites' RSR panel, when the run carries its system; else None."""
+        sys_d = (getattr(self.run, "meta", None) or {}).get("system") if self.run is not None else None
+        if not sys_d:
+            return None
+        from ..linear.equilibrium import linear_rsr
+        from ..system.parameters import Turbocharger
+
+        speed = self.run.speed_rpm
+        return linear_rsr(Turbocharger.from_dict(sys_d), np.linspace(max(speed.min(), 1e3), speed.max(), 25))
 
     def plot_html(self, path=None, campbell=None, fmax_hz=None, amplitude="db_max", orders=(1.0,), compact=True,
-                  include_plotlyjs="directory"):
-        """Interactive spectrogram (plotly); written to ``path`` (HTML) if given (options as :meth:`plot`).
+                  include_plotlyjs=None, rsr=True, linear_rsr=None):
+        """Interactive composite (plotly): spectrogram with the overlays and component marks of :meth:`plot` and
+        the RSR panel; written to ``path`` (HTML) if given (options as :meth:`plot`).
 
         Parameters
         ----------
         path : str or Path, optional
             The HTML file.
-        campbell, fmax_hz, amplitude, orders
+        campbell, fmax_hz, amplitude, orders, rsr
             As for :meth:`plot`.
+        linear_rsr : tuple, optional
+            The linear methods' RSR of the RSR panel (default: computed as :meth:`plot` does, when the run carries
+            its system).
         compact : bool
             Keep the file small (:func:`frbmodel.plots.figures.composite_plotly`): at most about a screen of heatmap
             cells,
             every peak kept, single precision.
-        include_plotlyjs : {"directory", True}
-            How the file gets plotly.js (:func:`frbmodel.plots.figures.write_html`): ``"directory"`` (default, as every
+        include_plotlyjs : {"directory", True}, optional
+            How the file gets plotly.js (:func:`frbmodel.plots.figures.write_html`): ``"directory"`` (as every
             interactive figure of a results folder: ``plotly.min.js`` beside the file, one copy per folder; small
-            files, shown offline) or ``True`` (embedded: a self-contained file, 4.8 MB larger).
+            files, shown offline) or ``True`` (embedded: a self-contained file, 4.8 MB larger). Default:
+            ``"directory"``, or what :func:`frbmodel.plots.figures.html_plotlyjs` set.
 
         Returns
         -------
@@ -220,8 +232,10 @@ class SpectrogramResult(Result):
         """
         from ..plots.figures import composite_plotly, write_html
 
+        if rsr and linear_rsr is None:
+            linear_rsr = self._linear_rsr()
         fig = composite_plotly(self, campbell=campbell, fmax_hz=fmax_hz, amplitude=amplitude, orders=orders,
-                               compact=compact)
+                               compact=compact, rsr=rsr, linear_rsr=linear_rsr)
         if path is not None:
             write_html(fig, path, include_plotlyjs)
         return fig
@@ -254,17 +268,17 @@ class SpectrogramResult(Result):
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         stem = out / f"composite_{self.node}"
-        paths = []
+        paths, lin = [], self._linear_rsr()
         if png:
             import matplotlib.pyplot as plt
 
-            fig = self.plot(campbell=campbell, xscale=xscale, title=title, orders=orders)
+            fig = self.plot(campbell=campbell, xscale=xscale, title=title, orders=orders, linear_rsr=lin)
             paths.append(stem.with_suffix(".png"))
             fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
             plt.close(fig)
         if html:
             paths.append(stem.with_suffix(".html"))
-            self.plot_html(paths[-1], campbell=campbell, orders=orders)
+            self.plot_html(paths[-1], campbell=campbell, orders=orders, linear_rsr=lin)
         paths.append(out / f"components_{self.node}.csv")
         self.components_table().to_csv(paths[-1], index=False)
         return paths
@@ -282,10 +296,10 @@ class SpectrogramResult(Result):
         return waterfall_figure(self, fmax_hz, amplitude, orders, n_lines, title)
 
     def waterfall_html(self, path=None, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40,
-                       include_plotlyjs="directory"):
+                       include_plotlyjs=None):
         """Interactive 3-D waterfall (plotly); written to ``path`` (HTML) if given.
 
-        ``include_plotlyjs`` as for :meth:`plot_html` (default: ``plotly.min.js`` beside the file).
+        ``include_plotlyjs`` as for :meth:`plot_html`.
 
         Returns
         -------

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..linear.campbell import campbell
 from ..nonlinear.runup import RunupStopped, SpeedProfile, runup
+from ..plots.style import readable
 from ..signals.spectral import spectrogram
 
 
@@ -260,7 +261,7 @@ def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_spe
         run, status = exc.result, "stopped"
     paths += [out / tag / "runup.csv", out / tag / "runup.json"]
     sp = spectrogram(run, node, segment_s=min(segment_s, duration / 8))
-    title = f"c_o = {c * 1e6:.0f} um: {kind} spectrogram ({node}) vs method J"
+    title = f"c_o = {c * 1e6:.0f} µm: {kind} spectrogram ({readable(node)}) vs method J"
     paths += write_spectrogram(sp, cd, out / tag, title, "log" if profile == "exponential" else "linear", fmax_hz)
     rows = comparison_rows(c, sp, sp.components(), cd, status)
     if check_convergence:

@@ -175,7 +175,7 @@ def unstable_markdown(cd) -> str:
     --------
     >>> import frbmodel as frb
     >>> print(unstable_markdown(frb.campbell(frb.turbocharger(), "A", [50e3], whirl=False)).splitlines()[0])
-    Unstable modes, method A (Table 2 turbocharger, c_o = 36 um); max. 0 unstable and 16 neutral modes at one speed.
+    Unstable modes, method A (Table 2 turbocharger, c_o = 36 µm); max. 0 unstable and 16 neutral modes at one speed.
     """
     ur = cd.unstable_ranges()
     lines = [f"Unstable modes, method {cd.method} ({cd.system_name}); max. {int(cd.n_unstable.max())} unstable and "

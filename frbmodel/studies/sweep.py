@@ -968,7 +968,6 @@ def plot_stability_map(out_dir, parameter=None):
         The CSV and, if there are onsets, the PNG and HTML figures.
     """
     import matplotlib.pyplot as plt
-    import plotly.graph_objects as go
 
     from ..plots.figures import write_html
 
@@ -980,7 +979,42 @@ def plot_stability_map(out_dir, parameter=None):
         return paths
     pcols = [c for c in df.columns if c.split(" [")[0] in PARAMETERS]
     pcol = next((c for c in pcols if parameter and c.startswith(parameter)), pcols[0] if pcols else None)
-    scale, xlabel = (1e6, pcol.replace("[m]", "[um]")) if pcol and pcol.endswith("[m]") else (1.0, pcol)
+    fig, pfig = stability_map_figures(df, pcol)
+    p = out / "stability_map.png"
+    fig.savefig(p, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    paths.append(p)
+    p = out / "stability_map.html"
+    write_html(pfig, p)
+    paths.append(p)
+    if len(pcols) >= 2:
+        paths += plot_stability_chart(out_dir, pcols[0].split(" [")[0], pcols[1].split(" [")[0])
+    return paths
+
+
+def stability_map_figures(df, pcol):
+    """The stability map's figures: onset speed vs the parameter ``pcol``, one line per linear mode / nonlinear
+    component (markers only for bifurcation points), the legend beside the plot (not on the data), the parameter
+    named in words and metres shown in µm.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        :func:`stability_map` (not empty).
+    pcol : str
+        Its parameter column, e.g. ``"outer_clearance [m]"``.
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    pfig : plotly.graph_objects.Figure
+    """
+    import matplotlib.pyplot as plt
+    import plotly.graph_objects as go
+
+    from ..plots.style import html_layout, readable
+
+    scale, xlabel = (1e6, readable(pcol).replace("[m]", "[µm]")) if pcol.endswith("[m]") else (1.0, readable(pcol))
     fig, ax = plt.subplots(figsize=(9, 5.5))
     pfig = go.Figure()
     for (kind, method, item), g in df.groupby(["kind", "method", "item"]):
@@ -1001,18 +1035,11 @@ def plot_stability_map(out_dir, parameter=None):
     ax.set_ylabel("onset speed [krpm]")
     ax.set_title("Stability map: linear (solid) and nonlinear (dashed) onsets", fontsize=10)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6, ncol=2)
-    p = out / "stability_map.png"
-    fig.savefig(p, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    paths.append(p)
-    pfig.update_layout(xaxis_title=xlabel, yaxis_title="onset speed [krpm]", title="Stability map")
-    p = out / "stability_map.html"
-    write_html(pfig, p)
-    paths.append(p)
-    if len(pcols) >= 2:
-        paths += plot_stability_chart(out_dir, pcols[0].split(" [")[0], pcols[1].split(" [")[0])
-    return paths
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the plot, never on the data
+    fig.tight_layout()
+    pfig.update_layout(xaxis_title=xlabel, yaxis_title="onset speed [krpm]", title="Stability map",
+                       **html_layout(legend_below=False))
+    return fig, pfig
 
 
 def plot_stability_chart(out_dir, x, y, item=None):
@@ -1036,6 +1063,8 @@ def plot_stability_chart(out_dir, x, y, item=None):
     """
     import matplotlib.pyplot as plt
 
+    from ..plots.style import readable
+
     out = Path(out_dir)
     df = stability_map(out)
     if df.empty:
@@ -1058,8 +1087,8 @@ def plot_stability_chart(out_dir, x, y, item=None):
                      cmap="viridis")
     ax.contour(cs, colors="k", linewidths=0.4)
     fig.colorbar(cs, ax=ax, label=f"onset of {item} [krpm]")
-    ax.set_xlabel(xc.replace("[m]", "[um]") if sx != 1 else xc)
-    ax.set_ylabel(yc.replace("[m]", "[um]") if sy != 1 else yc)
+    ax.set_xlabel(readable(xc).replace("[m]", "[µm]"))  # (metres are drawn in µm)
+    ax.set_ylabel(readable(yc).replace("[m]", "[µm]"))
     ax.set_title(f"Stability chart: rotor speed at which {item} sets in", fontsize=10)
     fig.savefig(paths[1], dpi=120, bbox_inches="tight")
     plt.close(fig)

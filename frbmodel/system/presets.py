@@ -88,4 +88,4 @@ def turbocharger(outer_clearance: float = PAPER_OUTER_CLEARANCES[0], film_model:
         bearings.append(FloatingRingBearing(node=node, inner=inner, outer=outer, ring_mass=7.2e-3,
                                             ring_inertia=33.641e-8, name=name))
     return Turbocharger(rotor=table2_rotor(), bearings=tuple(bearings), film_model=film_model,
-                        name=f"Table 2 turbocharger, c_o = {outer_clearance * 1e6:g} um")
+                        name=f"Table 2 turbocharger, c_o = {outer_clearance * 1e6:g} µm")
