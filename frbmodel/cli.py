@@ -397,7 +397,8 @@ def write_composites(run, system, out, xscale="linear", title="run-up", orders=(
     paths = []
     for node in run.displacement:  # the system's discs
         sp = spectrogram(run, node)
-        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {readable(node)}", orders=orders)
+        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {readable(node)}", orders=orders,
+                         nc=False)
         tab = sp.components_table()
         print(f"components at the {node}:")
         print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")

@@ -120,6 +120,28 @@ def variable(dims, data, units, description):
     return tuple(dims), data, {"units": units, "long_name": description}
 
 
+def netcdf_file(path, pattern="*.nc", what="result"):
+    """``path`` if it is a file, else the one file matching ``pattern`` in the folder ``path``.
+
+    Raises
+    ------
+    ParameterError
+        Neither (the message names the folder, the pattern and what it holds).
+    """
+    from .errors import ParameterError
+
+    path = Path(path)
+    if path.is_dir():
+        found = sorted(path.glob(pattern))
+        if len(found) != 1:
+            raise ParameterError(f"{path}: {len(found)} {what} files ({pattern}) found {[p.name for p in found]}; "
+                                 "name the .nc file")
+        path = found[0]
+    if not path.is_file():
+        raise ParameterError(f"{path}: no {what} there (file not found)")
+    return path
+
+
 class Result:
     """Base of the analysis results: the labelled-array and netCDF part of their common contract.
 
@@ -139,6 +161,9 @@ class Result:
     m finished
     """
 
+    #: glob of the netCDF file of this type in a results folder (``Type.load(folder)``)
+    NC_GLOB = "*.nc"
+
     def to_xarray(self):
         """The result as an :class:`xarray.Dataset` (units in the attributes of every variable).
 
@@ -147,6 +172,29 @@ class Result:
         xarray.Dataset
         """
         raise NotImplementedError(f"{type(self).__name__} has no to_xarray()")
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The result from a dataset of :meth:`to_xarray` (the inverse; each result type implements it)."""
+        raise NotImplementedError(f"{cls.__name__} has no from_xarray()")
+
+    @classmethod
+    def load(cls, path):
+        """Read a result saved by ``save``: its ``.nc`` file, or the folder holding exactly one file of this type
+        (:attr:`NC_GLOB`).
+
+        Parameters
+        ----------
+        path : str or Path
+
+        Raises
+        ------
+        ParameterError
+            No such file, or a folder with none or several of them.
+        """
+        import xarray as xr
+
+        return cls.from_xarray(xr.load_dataset(netcdf_file(path, cls.NC_GLOB, cls.__name__), engine=NETCDF_ENGINE))
 
     def to_netcdf(self, path):
         """Write :meth:`to_xarray` as a netCDF-4 file (engine :data:`NETCDF_ENGINE`).
@@ -175,4 +223,4 @@ class Result:
         return path
 
 
-__all__ = ["NETCDF_ENGINE", "Result", "decode_attr", "netcdf_attrs", "variable"]
+__all__ = ["NETCDF_ENGINE", "Result", "decode_attr", "netcdf_attrs", "netcdf_file", "variable"]

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ParameterError
+from ..core.results import Result
 from .branch import (
     COLLAPSE,
     FOLD_MIN_REL,
@@ -75,7 +76,7 @@ def _classify(a, b):
 
 
 @dataclass
-class BifurcationDiagram:
+class BifurcationDiagram(Result):
     """Branches of limit cycles vs rotor speed and their bifurcation points (:func:`continuation`).
 
     Attributes
@@ -91,6 +92,7 @@ class BifurcationDiagram:
         System, film model, tolerances, steps taken.
     """
 
+    NC_GLOB = "branch.nc"  # (Result.load of a folder)
     points: list
     bifurcations: list
     meta: dict = field(default_factory=dict)
@@ -141,31 +143,25 @@ class BifurcationDiagram:
         return ds
 
     @classmethod
-    def load(cls, path):
-        """Read a diagram written by :meth:`save` (``branch.nc``, or the folder holding it).
+    def from_xarray(cls, ds):
+        """The diagram from a dataset of :meth:`to_xarray` (e.g. ``branch.nc`` of :meth:`save`; :meth:`load` reads
+        it, or the folder holding it).
 
         Parameters
         ----------
-        path : str or Path
+        ds : xarray.Dataset
 
         Returns
         -------
         BifurcationDiagram
         """
-        from pathlib import Path
+        from ..core.results import decode_attr
 
-        import xarray as xr
-
-        from ..core.results import NETCDF_ENGINE, decode_attr
-
-        path = Path(path)
-        path = path / "branch.nc" if path.is_dir() else path
-        with xr.open_dataset(path, engine=NETCDF_ENGINE) as ds:
-            mult = ds["multiplier_real"].values + 1j * ds["multiplier_imag"].values
-            pts = [BranchPoint(float(s), 1.0 / float(f), m, bool(st), float(r), e) for s, f, m, st, r, e in
-                   zip(ds["speed"].values, ds["frequency"].values, mult, ds["stable"].values,
-                       ds["turbine_radius"].values, ds["max_eps"].values)]
-            meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
+        mult = ds["multiplier_real"].values + 1j * ds["multiplier_imag"].values
+        pts = [BranchPoint(float(s), 1.0 / float(f), m, bool(st), float(r), e) for s, f, m, st, r, e in
+               zip(ds["speed"].values, ds["frequency"].values, mult, ds["stable"].values,
+                   ds["turbine_radius"].values, ds["max_eps"].values)]
+        meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
         return cls(pts, meta.pop("bifurcations", []), meta)
 
     def save(self, out_dir, envelopes=(), spectrogram=None, campbell=None):
@@ -200,9 +196,9 @@ class BifurcationDiagram:
 
         return diagram_figure(self, title, envelopes, spectrogram, campbell)
 
-    def plot_html(self, path, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
-        """The diagram as an interactive HTML file (:func:`frbmodel.plots.bifurcation.diagram_html`); returns
-        its path."""
+    def plot_html(self, path=None, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
+        """The diagram as an interactive figure, written to ``path`` (HTML) if given
+        (:func:`frbmodel.plots.bifurcation.diagram_html`); returns the plotly figure."""
         from ..plots.bifurcation import diagram_html
 
         return diagram_html(self, path, title, envelopes, campbell, include_plotlyjs)

@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..core.errors import ConvergenceError, ParameterError
-from ..core.results import Result, netcdf_attrs, variable
+from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import RPM
 from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
 
@@ -55,6 +56,7 @@ class LimitCycle(Result):
         Speed, film model, tolerances, Newton iterations and residual, guess.
     """
 
+    NC_GLOB = "limit_cycle*.nc"  # (Result.load of a folder)
     speed_rpm: float
     period: float
     orbit: object
@@ -144,9 +146,52 @@ class LimitCycle(Result):
                                                       **self.meta}}))
         return ds
 
-    def save(self, path):
-        """Write :meth:`to_xarray` to a netCDF file (``.nc``); returns the path."""
-        return self.to_netcdf(path)
+    @classmethod
+    def from_xarray(cls, ds):
+        """The limit cycle from a dataset of :meth:`to_xarray` (e.g. a ``limit_cycle_<rpm>.nc`` of :meth:`save`).
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        LimitCycle
+            Without the monodromy matrix (not stored).
+        """
+        from ..nonlinear.recorder import RunupResult
+
+        lc = decode_attr(ds.attrs["limit_cycle"])
+        orbit = RunupResult.from_xarray(ds.drop_vars(["multiplier_real", "multiplier_imag", "state"]))
+        orbit.meta.pop("limit_cycle", None)
+        head = {k: lc.pop(k) for k in ("speed_rpm", "period_s", "stable", "autonomous")}
+        return cls(float(head["speed_rpm"]), float(head["period_s"]), orbit,
+                   ds["multiplier_real"].values + 1j * ds["multiplier_imag"].values, bool(head["stable"]),
+                   ds["state"].values.copy(), bool(head["autonomous"]), lc)
+
+    @property
+    def stem(self) -> str:
+        """File stem of :meth:`save`: ``limit_cycle_<rpm>``."""
+        return f"limit_cycle_{self.speed_rpm:.0f}"
+
+    def save(self, out_dir):
+        """Write ``<stem>.nc`` (:meth:`to_xarray`), ``<stem>.csv`` (:meth:`to_dataframe`) and the figures
+        ``<stem>.png`` / ``.html`` into the folder ``out_dir`` (created if missing); a path ending in ``.nc`` writes
+        only that file. Returns the paths."""
+        import matplotlib.pyplot as plt
+
+        out = Path(out_dir)
+        if out.suffix == ".nc":
+            return self.to_netcdf(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / f"{self.stem}{ext}" for ext in (".nc", ".csv", ".png", ".html")]
+        self.to_netcdf(paths[0])
+        self.to_dataframe().to_csv(paths[1], index=False)
+        fig = self.plot()
+        fig.savefig(paths[2], dpi=130)
+        plt.close(fig)
+        self.plot_html(paths[3])
+        return paths
 
     def plot(self, title=None):
         """Orbits over one period (journal in ring, ring in housing, wheels;

@@ -112,6 +112,7 @@ class CampbellResult(Result):
     0
     """
 
+    NC_GLOB = "campbell*.nc"  # (Result.load of a folder)
     method: str
     speeds_rpm: np.ndarray
     frequencies_hz: np.ndarray
@@ -533,20 +534,7 @@ class CampbellResult(Result):
         >>> back.method, bool(np.array_equal(back.damping, cd.damping)), back.meta["system_name"] == cd.system_name
         ('A', True, True)
         """
-        import xarray as xr
-
-        from ..core.results import NETCDF_ENGINE
-
-        path = Path(path)
-        if path.is_dir():
-            found = sorted(path.glob("campbell*.nc"))
-            if len(found) != 1:
-                raise ParameterError(f"{path}: {len(found)} Campbell result files (campbell*.nc) found "
-                                     f"{[p.name for p in found]}; name the .nc file")
-            path = found[0]
-        if not path.is_file():
-            raise ParameterError(f"{path}: no Campbell result there (file not found)")
-        return cls.from_xarray(xr.load_dataset(path, engine=NETCDF_ENGINE))
+        return super().load(path)
 
     def save(self, out_dir, stem=None, fmax_hz=None, png=True, html=True, nc=True):
         """Write the tables, the metadata, the dataset and the figures into ``out_dir``.

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..core.errors import ConvergenceError, ParameterError, check_real, check_speed, check_system
+from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
 from ..physics.bearing import ring_speed_ratio, static_ring_torque
 from ..physics.film import check_model, film_coefficients, film_force, static_position_kernel
@@ -82,7 +84,7 @@ class BearingEquilibrium:
 
 
 @dataclass
-class EquilibriumResult:
+class EquilibriumResult(Result):
     """Equilibrium of both bearings at one speed (from :func:`equilibrium`).
 
     Attributes
@@ -105,6 +107,7 @@ class EquilibriumResult:
     ['turbine', 'compressor']
     """
 
+    NC_GLOB = "equilibrium*.nc"  # (Result.load of a folder)
     method: str
     speed_rpm: float
     bearings: tuple
@@ -134,6 +137,103 @@ class EquilibriumResult:
                          "ring speed [rad/s]": b.ring_speed, "RSR [-]": b.ring_speed_ratio,
                          "iterations [-]": b.iterations, "evaluations [-]": b.evaluations})
         return pd.DataFrame(rows)
+
+    def to_xarray(self):
+        """The equilibrium as an :class:`xarray.Dataset` over ``bearing`` (× ``axis`` x, y), units in the attributes.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        import xarray as xr
+
+        bs, ba = ("bearing",), ("bearing", "axis")
+        b = self.bearings
+        data = {"r_inner": variable(ba, [e.r_inner for e in b], "m", "journal centre minus ring centre"),
+                "ring": variable(ba, [e.ring for e in b], "m", "ring centre relative to the housing"),
+                "eps_inner": variable(bs, [e.eps_inner for e in b], "-", "inner film eccentricity ratio"),
+                "eps_outer": variable(bs, [e.eps_outer for e in b], "-", "outer film eccentricity ratio"),
+                "ring_speed": variable(bs, [e.ring_speed for e in b], "rad/s", "ring speed"),
+                "ring_speed_ratio": variable(bs, [e.ring_speed_ratio for e in b], "-", "ring-speed ratio"),
+                "rotor_speed": variable(bs, [e.rotor_speed for e in b], "rad/s", "rotor speed"),
+                "iterations": variable(bs, [e.iterations for e in b], "-", "solver iterations"),
+                "evaluations": variable(bs, [e.evaluations for e in b], "-", "film evaluations")}
+        attrs = {"method": self.method, "speed_rpm": self.speed_rpm, "cpu_time_s": self.cpu_time_s, **self.meta}
+        return xr.Dataset(data, {"bearing": [e.name for e in b], "axis": ["x", "y"]}, attrs=netcdf_attrs(attrs))
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The equilibrium from a dataset of :meth:`to_xarray`.
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        EquilibriumResult
+        """
+        meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
+        v = {k: ds[k].values for k in ds.data_vars}
+        bearings = tuple(BearingEquilibrium(str(n), v["r_inner"][i].copy(), v["ring"][i].copy(),
+                                            float(v["eps_inner"][i]), float(v["eps_outer"][i]),
+                                            float(v["ring_speed"][i]), float(v["ring_speed_ratio"][i]),
+                                            float(v["rotor_speed"][i]), int(v["iterations"][i]),
+                                            int(v["evaluations"][i]))
+                         for i, n in enumerate(ds["bearing"].values))
+        return cls(str(meta.pop("method")), float(meta.pop("speed_rpm")), bearings, float(meta.pop("cpu_time_s")),
+                   meta)
+
+    def _figure_rows(self):
+        """Positions and clearances per bearing for :mod:`frbmodel.plots.equilibrium` (clearances from
+        ``meta["clearances_m"]``)."""
+        clear = self.meta.get("clearances_m") or {}
+        if set(clear) != {e.name for e in self.bearings}:
+            raise ParameterError("this EquilibriumResult has no film clearances in meta['clearances_m'] (made by "
+                                 "frbmodel.equilibrium): its figure draws the eccentricity vectors in them")
+        return [{"name": e.name, "inner": e.r_inner, "outer": e.ring, "inner_clearance": clear[e.name][0],
+                 "outer_clearance": clear[e.name][1]} for e in self.bearings]
+
+    def plot(self, title=None):
+        """Journal in ring and ring in housing of every bearing, in their clearance circles (matplotlib;
+        :func:`frbmodel.plots.equilibrium.equilibrium_figure`)."""
+        from ..plots.equilibrium import equilibrium_figure
+
+        return equilibrium_figure(self._figure_rows(), title or self._title())
+
+    def plot_html(self, path=None, title=None, include_plotlyjs=None):
+        """The panels of :meth:`plot` as an interactive page, written to ``path`` (HTML) if given."""
+        from ..plots.equilibrium import equilibrium_figure_html
+        from ..plots.figures import write_html
+
+        fig = equilibrium_figure_html(self._figure_rows(), title or self._title())
+        if path is not None:
+            write_html(fig, path, include_plotlyjs)
+        return fig
+
+    def _title(self):
+        return f"method {self.method} equilibrium at {self.speed_rpm:,.0f} rpm"
+
+    @property
+    def stem(self) -> str:
+        """File stem of :meth:`save`: ``equilibrium_<M>_<rpm>``."""
+        return f"equilibrium_{self.method}_{self.speed_rpm:.0f}"
+
+    def save(self, out_dir):
+        """Write ``<stem>.csv`` (:meth:`to_dataframe`), ``<stem>.nc`` (:meth:`to_xarray`) and the figures
+        ``<stem>.png`` / ``.html`` into ``out_dir`` (created if missing); returns the paths."""
+        import matplotlib.pyplot as plt
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / f"{self.stem}{ext}" for ext in (".csv", ".nc", ".png", ".html")]
+        self.to_dataframe().to_csv(paths[0], index=False)
+        self.to_netcdf(paths[1])
+        fig = self.plot()
+        fig.savefig(paths[2], dpi=130)
+        plt.close(fig)
+        self.plot_html(paths[3])
+        return paths
 
     def __str__(self):
         lines = [f"method {self.method} equilibrium at {self.speed_rpm:.0f} rpm "
@@ -344,7 +444,8 @@ def equilibrium(system, method="J", speed_rpm=150e3) -> EquilibriumResult:
     loads = system.bearing_loads
     res = tuple(bearing_equilibrium(b, loads[i], rpm_to_rad_s(speed_rpm), m.letter, system.film_model, system.gravity)
                 for i, b in enumerate(system.bearings))
-    return EquilibriumResult(m.letter, speed_rpm, res, time.perf_counter() - t0)
+    clearances = {b.name: (b.inner.clearance, b.outer.clearance) for b in system.bearings}
+    return EquilibriumResult(m.letter, speed_rpm, res, time.perf_counter() - t0, {"clearances_m": clearances})
 
 
 def linear_rsr(system, speeds_rpm, methods="FIJ"):

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ParameterError
+from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..system.parameters import system_from_meta
 from .assembly import linear_system
 from .modal import modes
@@ -117,7 +118,7 @@ def ellipse(a, b):
 
 
 @dataclass
-class ModeShape:
+class ModeShape(Result):
     """One mode of a linear system at one speed, normalised (see :func:`normalise`).
 
     Attributes
@@ -149,6 +150,7 @@ class ModeShape:
         System name, method options.
     """
 
+    NC_GLOB = "mode_shape*.nc"  # (Result.load of a folder)
     method: str
     speed_rpm: float
     mode: int
@@ -285,6 +287,75 @@ class ModeShape:
         plotly.graph_objects.Figure
         """
         return plot_mode_shape_html(self, path, include_plotlyjs=include_plotlyjs)
+
+    def to_xarray(self):
+        """The mode as an :class:`xarray.Dataset`: the complex shape over ``dof`` (real and imaginary part), the
+        node positions over ``node``, the ring energy shares over ``bearing``; the scalars and the layout in the
+        attributes.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        import xarray as xr
+
+        energy = np.zeros(len(self.bearings)) if self.ring_energy is None else np.asarray(self.ring_energy)
+        data = {"shape_re": variable(("dof",), self.shape.real, "-", "normalised eigenvector, real part (rotations "
+                                     "1/m)"),
+                "shape_im": variable(("dof",), self.shape.imag, "-", "imaginary part"),
+                "node_z": variable(("node",), self.node_z, "m", "axial node position"),
+                "ring_energy": variable(("bearing",), energy, "-", "share of the modal kinetic energy in the ring")}
+        attrs = {"method": self.method, "speed_rpm": self.speed_rpm, "mode": self.mode,
+                 "eigenvalue_re": self.eigenvalue.real, "eigenvalue_im": self.eigenvalue.imag, "discs": self.discs,
+                 "bearings": self.bearings, "ring_dofs": [list(map(int, r)) for r in self.ring_dofs],
+                 "kind": self.kind, "precession": self.precession, "has_ring_energy": self.ring_energy is not None,
+                 **self.meta}
+        return xr.Dataset(data, attrs=netcdf_attrs(attrs))
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The mode from a dataset of :meth:`to_xarray`.
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        ModeShape
+        """
+        a = {k: decode_attr(v) for k, v in ds.attrs.items()}
+        head = {k: a.pop(k) for k in ("method", "speed_rpm", "mode", "eigenvalue_re", "eigenvalue_im", "discs",
+                                      "bearings", "ring_dofs", "kind", "precession", "has_ring_energy")}
+        return cls(str(head["method"]), float(head["speed_rpm"]), int(head["mode"]),
+                   complex(head["eigenvalue_re"], head["eigenvalue_im"]),
+                   ds["shape_re"].values + 1j * ds["shape_im"].values, ds["node_z"].values.copy(), head["discs"],
+                   head["bearings"], [tuple(r) for r in head["ring_dofs"]],
+                   ds["ring_energy"].values.copy() if head["has_ring_energy"] else None, str(head["kind"]),
+                   str(head["precession"]), a)
+
+    @property
+    def stem(self) -> str:
+        """File stem of :meth:`save`: ``mode_shape_<M>_<rpm>_mode<k>``."""
+        return f"mode_shape_{self.method}_{self.speed_rpm:.0f}_mode{self.mode}"
+
+    def save(self, out_dir):
+        """Write ``<stem>.csv`` (:meth:`to_dataframe`), ``<stem>.nc`` (:meth:`to_xarray`) and the figures
+        ``<stem>.png`` / ``.html`` into ``out_dir`` (created if missing); returns the paths."""
+        from pathlib import Path
+
+        import matplotlib.pyplot as plt
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / f"{self.stem}{ext}" for ext in (".csv", ".nc", ".png", ".html")]
+        self.to_dataframe().to_csv(paths[0], index=False)
+        self.to_netcdf(paths[1])
+        fig = self.plot()
+        fig.savefig(paths[2], dpi=130)
+        plt.close(fig)
+        self.plot_html(paths[3])
+        return paths
 
 
 def _match_mode(cd, speed_rpm, mode, lam):

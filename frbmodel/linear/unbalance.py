@@ -28,7 +28,7 @@ import numpy as np
 
 from ..core.errors import ParameterError, check_real, check_system, read_json
 from ..core.progress import counter_bar
-from ..core.results import Result, netcdf_attrs, variable
+from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
 from ..plots.unbalance import (  # noqa: F401  (the figures, re-exported from where they were)
     PHASE_BREAK_DEG,
@@ -488,9 +488,32 @@ class UnbalanceResponse(Result):
         ds = {k: variable(dims, v, "m", text) for k, (v, text) in data.items()}
         ds["clearance_fraction"] = variable(("speed", "film"), np.stack(
             [self.clearance_fraction(f) for f in self.film_names], 1), "-", "film orbit semi-major axis / clearance")
+        ds["response_re"] = variable(("speed", "dof"), self.response.real, "SI", "complex amplitude of every DoF "
+                                     "(m, rad), real part")
+        ds["response_im"] = variable(("speed", "dof"), self.response.imag, "SI", "imaginary part")
         coords = {"speed": ("speed", self.speeds_rpm, {"units": "rpm", "long_name": "rotor speed"}),
-                  "location": names, "film": list(self.film_names)}
-        return xr.Dataset(ds, coords=coords, attrs=netcdf_attrs(self.metadata()))
+                  "location": names, "film": list(self.film_names), "dof": list(self.dof_labels)}
+        attrs = {**self.metadata(), "critical": self.critical}
+        return xr.Dataset(ds, coords=coords, attrs=netcdf_attrs(attrs))
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The response from a dataset of :meth:`to_xarray` (e.g. ``unbalance_<M>.nc`` of :meth:`save`).
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        UnbalanceResponse
+        """
+        meta = {k: decode_attr(v) for k, v in ds.attrs.items()}
+        for k in ("speeds_rpm", "force_rule", "frbmodel_version", "units", "dof_labels"):
+            meta.pop(k, None)
+        resp = ds["response_re"].values + 1j * ds["response_im"].values
+        return cls(meta.pop("method"), ds["speed"].values, resp, [str(d) for d in ds["dof"].values],
+                   meta.pop("unbalance"), meta, critical=meta.pop("critical", None))
 
     def metadata(self) -> dict:
         """What the result was computed with, JSON-ready (the content of :meth:`save`'s JSON)."""

@@ -642,6 +642,40 @@ class RunupResult(Result):
                    per("displacement", "disc"), meta.get("status", "finished"), meta.get("message", ""), meta,
                    per("journal_torque", "bearing"), per("power_loss", "bearing"))
 
+    def _overview_args(self):
+        """The arrays of the run-up overview figure (:mod:`frbmodel.plots.runup`)."""
+        rsr = {b: self.ring_speed_ratio[:, k] for k, b in enumerate(self.journal)}
+        eps = {f: self.eccentricity[:, k] for k, f in enumerate(self.film_labels)}
+        return self.time, self.speed_rpm, rsr, eps, self.displacement
+
+    def plot(self, title=None):
+        """Overview figure: rotor speed, ring-speed ratios, film eccentricity ratios and disc orbit radii over time
+        (:func:`frbmodel.plots.runup.runup_overview`; the spectral composites are :func:`frbmodel.spectrogram`'s).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from ..plots.runup import runup_overview
+
+        return runup_overview(*self._overview_args(), title=title or f"run ({self.status})")
+
+    def plot_html(self, path=None, title=None, include_plotlyjs=None):
+        """The panels of :meth:`plot` as an interactive page, written to ``path`` (HTML) if given
+        (:func:`frbmodel.plots.figures.write_html`).
+
+        Returns
+        -------
+        plotly.graph_objects.Figure
+        """
+        from ..plots.figures import write_html
+        from ..plots.runup import runup_overview_html
+
+        fig = runup_overview_html(*self._overview_args(), title=title or f"run ({self.status})")
+        if path is not None:
+            write_html(fig, path, include_plotlyjs)
+        return fig
+
     def save(self, out_dir, nc=True):
         """Write ``runup.csv`` (:meth:`to_dataframe`), ``runup.json`` (:attr:`meta` with status and message) and
         ``runup.nc`` (:meth:`to_xarray`) into ``out_dir`` — the files a streamed run writes, for a run kept in

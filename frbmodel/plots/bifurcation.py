@@ -181,15 +181,15 @@ def _draw_campbell(axf, cd, fmax, speed_range):
             axf.plot(s[sel], f[sel], ls=style["ls"], lw=1.0, color=style["color"], alpha=0.8, label=label)
 
 
-def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
+def diagram_html(bd, path=None, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
     """The bifurcation diagram as an interactive HTML page (plotly; the content of :func:`diagram_figure` without
     the spectrogram; hover shows speed, radius, frequency and each bifurcation point's type, mode and film).
 
     Parameters
     ----------
     bd : BifurcationDiagram
-    path : str or Path
-        The HTML file.
+    path : str or Path, optional
+        The HTML file (None: only the figure).
     title : str, optional
     envelopes, campbell
         As for :func:`diagram_figure`.
@@ -198,7 +198,7 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
 
     Returns
     -------
-    Path
+    plotly.graph_objects.Figure
     """
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
@@ -245,4 +245,6 @@ def diagram_html(bd, path, title=None, envelopes=(), campbell=None, include_plot
     fig.update_xaxes(title_text="rotor speed [rpm]", row=2)
     fig.update_layout(title=title or "limit-cycle branches (solid: stable, dashed: unstable)",
                       **html_layout(legend_below=False))
-    return write_html(fig, path, include_plotlyjs)
+    if path is not None:
+        write_html(fig, path, include_plotlyjs)
+    return fig

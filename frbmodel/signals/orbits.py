@@ -118,6 +118,7 @@ class Orbits(Result):
         window (``speed_rpm`` [rpm] and ``revolutions`` or ``span_rpm`` [rpm], or ``time_s`` [s]).
     """
 
+    NC_GLOB = "orbits*.nc"  # (Result.load of a folder)
     time: np.ndarray
     speed_rpm: np.ndarray
     journal_in_ring: dict
@@ -280,7 +281,7 @@ class Orbits(Result):
 
     @classmethod
     def load(cls, path):
-        """Read orbits saved by :meth:`save` (the ``.nc`` file).
+        """Read orbits saved by :meth:`save` (the ``.nc`` file, or a folder holding exactly one ``orbits*.nc``).
 
         Parameters
         ----------
@@ -301,14 +302,7 @@ class Orbits(Result):
         >>> bool(np.array_equal(back.ring["b"], o.ring["b"])), back.clearances, back.label
         (True, {'b': (4e-05, 5e-05)}, 'test')
         """
-        import xarray as xr
-
-        from ..core.results import NETCDF_ENGINE
-
-        path = Path(path)
-        if not path.is_file():
-            raise ParameterError(f"{path}: no orbits file there (file not found)")
-        return cls.from_xarray(xr.load_dataset(path, engine=NETCDF_ENGINE))
+        return super().load(path)
 
     def panels(self):
         """The panels of the figures: (title, x [unit], y [unit], clearance circle radius or None, unit).

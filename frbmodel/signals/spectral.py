@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ParameterError
-from ..core.results import Result, netcdf_attrs, variable
+from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from .tracking import RESONANCE_TOL, SYNC_TOL, Component, components_table, find_components, internal_resonances
 
 
@@ -44,6 +44,7 @@ class SpectrogramResult(Result):
         The run-up (for the RSR panel of :meth:`plot`).
     """
 
+    NC_GLOB = "spectrogram*.nc"  # (Result.load of a folder)
     times: np.ndarray
     speeds_rpm: np.ndarray
     freqs_hz: np.ndarray
@@ -109,6 +110,35 @@ class SpectrogramResult(Result):
         attrs = {"title": f"spectrogram of the {self.node} orbit x + iy", "node": self.node,
                  "direction": self.direction, "db_range_dB": float(self.db_range), **self.meta}
         return xr.Dataset(data, coords, attrs=netcdf_attrs(attrs))
+
+    @classmethod
+    def from_xarray(cls, ds):
+        """The spectrogram from a dataset of :meth:`to_xarray` (e.g. ``spectrogram_<node>.nc`` of :meth:`save`);
+        without the run (no RSR panel in its figures).
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+
+        Returns
+        -------
+        SpectrogramResult
+        """
+        meta = {k: decode_attr(v) for k, v in ds.attrs.items() if k not in ("title", "direction")}
+        node, db_range = str(meta.pop("node")), float(meta.pop("db_range_dB"))
+        return cls(ds["time"].values, ds["speed"].values, ds["frequency"].values,
+                   ds["forward"].transpose("frequency", "time").values,
+                   ds["backward"].transpose("frequency", "time").values, node, db_range, meta)
+
+    def to_dataframe(self):
+        """The spectrogram as a long table: one row per segment and frequency, ``time [s]``, ``speed [rpm]``,
+        ``frequency [Hz]``, ``forward [m]``, ``backward [m]`` (orbit amplitudes of forward / backward whirl)."""
+        import pandas as pd
+
+        k, f = self.times.size, self.freqs_hz.size
+        return pd.DataFrame({"time [s]": np.repeat(self.times, f), "speed [rpm]": np.repeat(self.speeds_rpm, f),
+                             "frequency [Hz]": np.tile(self.freqs_hz, k), "forward [m]": self.forward.T.ravel(),
+                             "backward [m]": self.backward.T.ravel()})
 
     # ---------------------------------------------------------------- components
     def components(self, min_segments=6, min_amplitude=None):
@@ -240,7 +270,7 @@ class SpectrogramResult(Result):
             write_html(fig, path, include_plotlyjs)
         return fig
 
-    def save(self, out_dir, campbell=None, xscale="linear", title=None, orders=(1.0,), png=True, html=True):
+    def save(self, out_dir, campbell=None, xscale="linear", title=None, orders=(1.0,), png=True, html=True, nc=True):
         """Write the composite figure and the component table of this spectrogram into ``out_dir``.
 
         Parameters
@@ -257,11 +287,13 @@ class SpectrogramResult(Result):
             Order lines k × f_rot.
         png, html : bool
             Write ``composite_<node>.png`` / ``.html``.
+        nc : bool
+            Write ``spectrogram_<node>.nc`` (:meth:`to_xarray`; :meth:`load` reads it back).
 
         Returns
         -------
         list of Path
-            The figures written and ``components_<node>.csv`` (:meth:`components_table`).
+            The figures written, ``components_<node>.csv`` (:meth:`components_table`) and the ``.nc``.
         """
         from pathlib import Path
 
@@ -281,6 +313,8 @@ class SpectrogramResult(Result):
             self.plot_html(paths[-1], campbell=campbell, orders=orders, linear_rsr=lin)
         paths.append(out / f"components_{self.node}.csv")
         self.components_table().to_csv(paths[-1], index=False)
+        if nc:
+            paths.append(self.to_netcdf(out / f"spectrogram_{self.node}.nc"))
         return paths
 
     def waterfall(self, fmax_hz=None, amplitude="um", orders=(1.0,), n_lines=40, title=None):
