@@ -327,7 +327,7 @@ def test_stability_map_legend_beside_the_plot_and_parameter_in_words():
     import matplotlib.pyplot as plt
     import pandas as pd
 
-    from frbmodel.studies.sweep import stability_map_figures
+    from frbmodel.plots.studies import stability_map_figures
 
     kinds = [("linear", "J")] * 6 + [("runup", "run-up")] * 6  # twelve lines over the whole plot
     rows = [{"kind": k, "method": m, "item": f"item {i}", "outer_clearance [m]": c,

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError, check_real, read_json
+from ..plots.studies import stability_chart_figure, stability_map_figures
 
 #: parameters a study can vary (name -> (unit, description)); "<bearing>" and "<disc>" are the names in the system
 #: (the Table 2 system has the bearings "turbine", "compressor" and the discs "turbine_wheel", "compressor_wheel")
@@ -979,7 +980,7 @@ def plot_stability_map(out_dir, parameter=None):
         return paths
     pcols = [c for c in df.columns if c.split(" [")[0] in PARAMETERS]
     pcol = next((c for c in pcols if parameter and c.startswith(parameter)), pcols[0] if pcols else None)
-    fig, pfig = stability_map_figures(df, pcol)
+    fig, pfig = stability_map_figures(df, pcol)  # (frbmodel.plots.studies)
     p = out / "stability_map.png"
     fig.savefig(p, dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -990,56 +991,6 @@ def plot_stability_map(out_dir, parameter=None):
     if len(pcols) >= 2:
         paths += plot_stability_chart(out_dir, pcols[0].split(" [")[0], pcols[1].split(" [")[0])
     return paths
-
-
-def stability_map_figures(df, pcol):
-    """The stability map's figures: onset speed vs the parameter ``pcol``, one line per linear mode / nonlinear
-    component (markers only for bifurcation points), the legend beside the plot (not on the data), the parameter
-    named in words and metres shown in µm.
-
-    Parameters
-    ----------
-    df : pandas.DataFrame
-        :func:`stability_map` (not empty).
-    pcol : str
-        Its parameter column, e.g. ``"outer_clearance [m]"``.
-
-    Returns
-    -------
-    fig : matplotlib.figure.Figure
-    pfig : plotly.graph_objects.Figure
-    """
-    import matplotlib.pyplot as plt
-    import plotly.graph_objects as go
-
-    from ..plots.style import html_layout, readable
-
-    scale, xlabel = (1e6, readable(pcol).replace("[m]", "[µm]")) if pcol.endswith("[m]") else (1.0, readable(pcol))
-    fig, ax = plt.subplots(figsize=(9, 5.5))
-    pfig = go.Figure()
-    for (kind, method, item), g in df.groupby(["kind", "method", "item"]):
-        g = g.sort_values(pcol)
-        x = g[pcol].to_numpy() * scale
-        y = g["onset [rpm]"].to_numpy() / 1e3
-        lab = f"{method}: {item}"
-        # a case can have several bifurcation points of one type (two folds): markers only, no line joining them
-        ls = "-" if kind == "linear" else "--" if kind != "bifurcation" else "none"
-        mk = "o" if kind == "linear" else "s" if kind != "bifurcation" else "D"
-        ax.plot(x, y, ls, marker=mk, label=lab)
-        pfig.add_trace(go.Scatter(x=x, y=y, mode="markers" if kind == "bifurcation" else "lines+markers", name=lab,
-                                  line=dict(dash="solid" if kind == "linear" else "dash"),
-                                  customdata=g["f at onset [Hz]"].to_numpy(),
-                                  hovertemplate=f"{xlabel} %{{x:.4g}}<br>onset %{{y:.1f}} krpm<br>"
-                                                f"f %{{customdata:.1f}} Hz<extra>{lab}</extra>"))
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("onset speed [krpm]")
-    ax.set_title("Stability map: linear (solid) and nonlinear (dashed) onsets", fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the plot, never on the data
-    fig.tight_layout()
-    pfig.update_layout(xaxis_title=xlabel, yaxis_title="onset speed [krpm]", title="Stability map",
-                       **html_layout(legend_below=False))
-    return fig, pfig
 
 
 def plot_stability_chart(out_dir, x, y, item=None):
@@ -1063,8 +1014,6 @@ def plot_stability_chart(out_dir, x, y, item=None):
     """
     import matplotlib.pyplot as plt
 
-    from ..plots.style import readable
-
     out = Path(out_dir)
     df = stability_map(out)
     if df.empty:
@@ -1080,16 +1029,7 @@ def plot_stability_chart(out_dir, x, y, item=None):
         return []
     paths = [out / "stability_chart.csv", out / "stability_chart.png"]
     grid_.to_csv(paths[0])
-    sx = 1e6 if xc.endswith("[m]") else 1.0
-    sy = 1e6 if yc.endswith("[m]") else 1.0
-    fig, ax = plt.subplots(figsize=(7, 5))
-    cs = ax.contourf(grid_.columns.to_numpy() * sx, grid_.index.to_numpy() * sy, grid_.to_numpy() / 1e3, levels=12,
-                     cmap="viridis")
-    ax.contour(cs, colors="k", linewidths=0.4)
-    fig.colorbar(cs, ax=ax, label=f"onset of {item} [krpm]")
-    ax.set_xlabel(readable(xc).replace("[m]", "[µm]"))  # (metres are drawn in µm)
-    ax.set_ylabel(readable(yc).replace("[m]", "[µm]"))
-    ax.set_title(f"Stability chart: rotor speed at which {item} sets in", fontsize=10)
+    fig = stability_chart_figure(grid_.columns.to_numpy(), grid_.index.to_numpy(), grid_.to_numpy(), xc, yc, item)
     fig.savefig(paths[1], dpi=120, bbox_inches="tight")
     plt.close(fig)
     return paths
