@@ -57,6 +57,19 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
     return speeds
 
 
+def check_method_speeds(option, text, speeds, letters):
+    """Refuse, before any folder is made, speeds that the methods ``letters`` cannot take (film methods need speeds
+    > 0; :func:`frbmodel.linear.campbell.check_speeds`), naming the option and its value."""
+    from .linear.campbell import check_speeds
+    from .system.methods import get_method
+
+    for letter in letters:
+        try:
+            check_speeds(speeds, get_method(letter).needs_films, get_method(letter).letter)
+        except ParameterError as exc:
+            raise ParameterError(f"{option} = {text!r}: {exc}") from None
+
+
 def load_from_args(args):
     """The system of a command: ``--system FILE`` or the Table 2 system, with ``--outer-clearance`` and
     ``--film-model`` applied.
@@ -124,6 +137,7 @@ def cmd_campbell(args):
     from .linear.campbell import campbell
 
     speeds = parse_speeds(args.speeds)
+    check_method_speeds("--speeds", args.speeds, speeds, [args.method])
     fmax = None if args.fmax is None else check_positive("--fmax", args.fmax, "Hz")
     if args.mode_shapes is not None and args.from_fmu:
         raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
@@ -233,6 +247,7 @@ def cmd_unbalance(args):
     speeds = parse_speeds(args.speeds)
     kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
     methods = _unbalance_methods(args.method, kw)
+    check_method_speeds("--speeds", args.speeds, speeds, [letter for letter, _ in methods])
     unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"])
     tc = load_from_args(args)
     names = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
@@ -261,8 +276,10 @@ def cmd_unbalance(args):
 
 def cmd_equilibrium(args):
     """``frb equilibrium``: static equilibrium of both bearings at one speed, printed (and written as CSV)."""
+    from .core.errors import check_speed
     from .linear.equilibrium import equilibrium
 
+    check_speed("--speed-rpm", check_positive("--speed-rpm", args.speed_rpm, "rpm"))
     tc = load_from_args(args)
     out = writable_dir(args.out) if args.out else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
@@ -1013,6 +1030,7 @@ def cmd_losses(args):
     oil = _oil_from_args(args, tc)
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
+    check_method_speeds("--speeds", args.speeds, speeds, [args.method])
     run = RunupResult.load(args.run) if args.run else None
     out = writable_dir(args.out)
     if oil is None:
@@ -1099,6 +1117,7 @@ def cmd_cosim(args):
             overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque, "N m"))
         elif args.drive_torque:
             raise ParameterError("--drive-torque applies only with --speed-source torque")
+    _check_ssp(args.ssp, args.parameter_set)
     out = writable_dir(args.out)
     trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
     kw = dict(progress=True, rollback=args.rollback, unvalidated_step=args.unvalidated_step, overrides=overrides,
@@ -1138,6 +1157,15 @@ _SPLIT_ONLY = (("rollback", "--rollback"), ("speed_source", "--speed-source"), (
                ("check_convergence", "--check-convergence"), ("unvalidated_step", "--unvalidated-step"))
 
 
+def _check_ssp(path, parameter_set):
+    """Read the SSP ``path`` (archive, SSD, FMUs, the parameter set) before any folder is made: a missing or
+    broken SSP or an unknown set is a one-line error, with nothing written."""
+    from .cosim.ssp import read_ssp
+
+    with read_ssp(path) as ssp:
+        ssp.parameters(parameter_set)
+
+
 def _cosim_system(args):
     """``frb cosim`` of an SSP with the turbocharger FMU (e.g. build/engine_turbocharger.ssp): the fixed-step
     Jacobi master, the FMU's own record at 20 kHz, the composite figures."""
@@ -1149,6 +1177,7 @@ def _cosim_system(args):
         raise ParameterError(f"{' / '.join(given)} applies to the bearing + rotor split; {args.ssp} holds the "
                              "turbocharger FMU, which integrates itself with error control at any macro step (set its "
                              "speed_source and drive_torque in the SSP's parameter set)")
+    _check_ssp(args.ssp, args.parameter_set)
     out = writable_dir(args.out)
     trace = (lambda line: print(line, file=sys.stderr)) if args.trace_fmi else None
     master = SystemMaster(args.ssp, args.parameter_set, args.stop_time, args.step, trace=trace)
@@ -1178,9 +1207,12 @@ def _cosim_system(args):
 
 def cmd_linearize(args):
     """``frb linearize``: global state matrix from the FMUs at one operating point; prints its modes."""
+    from .core.errors import check_speed
     from .cosim.linearize import linearize
     from .linear.modal import modes_from_state
 
+    check_speed("--speed-rpm", check_positive("--speed-rpm", args.speed_rpm, "rpm"))
+    _check_ssp(args.ssp, args.parameter_set)
     out = writable_dir(args.out) if args.out else None
     A, tc = linearize(args.ssp, args.speed_rpm, args.method, args.parameter_set)
     md = modes_from_state(A, A.shape[0] // 2)

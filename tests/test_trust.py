@@ -223,6 +223,13 @@ def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, 
                                                           "film clearance = -1e-06 m is invalid: valid range"]),
     (["sweep", "--param", "ring_mass=0"], ["study parameter ring_mass = 0 [kg]", "ring_mass = 0.0 kg is invalid"]),
     (["sweep", "--param", "unbalance_turbine=-1"], ["unbalance_turbine = -1.0 kg m is invalid"]),
+    # a folder was made before these were refused (the check sat in the analysis, after --out)
+    (["campbell", "--speeds", "0:1000:3"], ["--speeds = '0:1000:3'", "invalid for method J", "speeds > 0"]),
+    (["unbalance", "--speeds", "0:1000:3"], ["--speeds = '0:1000:3'", "speeds > 0"]),
+    (["losses", "--speeds", "0:1000:3"], ["--speeds = '0:1000:3'", "speeds > 0"]),
+    (["equilibrium", "--speed-rpm", "0"], ["--speed-rpm = 0.0 rpm is invalid: valid range is finite and > 0"]),
+    (["cosim", "nofile.ssp"], ["SSP = 'nofile.ssp' does not exist"]),
+    (["linearize", "nofile.ssp"], ["SSP = 'nofile.ssp' does not exist"]),
 ])
 def test_misleading_or_late_messages_are_clear_and_early(argv, words, tmp_path, capsys):
     """Issue #24 item 7: an infinite speed gave a numpy RuntimeWarning and then 'contains nan'; a grid of 1e8
