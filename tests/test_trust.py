@@ -417,3 +417,20 @@ def test_an_interrupted_campbell_diagram_writes_the_speeds_it_has(monkeypatch, t
     whole = frb.campbell(frb.turbocharger(36e-6), "J", np.linspace(20e3, 120e3, 11)[:5])
     np.testing.assert_allclose(part.speeds_rpm, whole.speeds_rpm)
     np.testing.assert_allclose(part.frequencies_hz, whole.frequencies_hz, rtol=1e-12)  # netCDF stores float64
+
+
+def test_api_inputs_that_were_misread_or_ignored_are_refused():
+    """runup(speed_rpm="fast") was read character by character ("start speed = 'f'"); speed_rpm given with a
+    profile was ignored; spectrogram(segment_s=-1) (or 0) silently fell back to the default segment. Each is now
+    one ParameterError naming the argument."""
+    tc = frb.turbocharger()
+    with pytest.raises(ParameterError, match=r"speed_rpm = 'fast' is invalid: give \(start, end\) in rpm"):
+        frb.runup(tc, speed_rpm="fast", duration=0.01)
+    with pytest.raises(ParameterError, match="speed_rpm = .* and profile are mutually exclusive"):
+        frb.runup(tc, speed_rpm=(2e4, 3e4), profile=SpeedProfile.constant(2e4, 0.01), duration=0.01)
+    t = np.arange(0.0, 0.1, 1e-4)
+    run = frb.RunupResult(t, np.full(t.size, 3e4), np.zeros((t.size, 1)), {"b": np.zeros((t.size, 2))},
+                          {"b": np.zeros((t.size, 2))}, np.zeros((t.size, 2)), {"w": np.zeros((t.size, 2))})
+    for bad in (-1.0, 0.0):
+        with pytest.raises(ParameterError, match="segment_s = "):
+            frb.spectrogram(run, "w", segment_s=bad)

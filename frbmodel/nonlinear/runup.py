@@ -51,6 +51,13 @@ __all__ = ["CHUNK_SAMPLES", "DEFAULT_ATOL_M", "DEFAULT_RTOL", "INTEGRATORS", "MA
 # --------------------------------------------------------------------------------------------------
 
 
+def _speed_pair(speed_rpm):
+    """(start, end) [rpm] of ``runup``'s ``speed_rpm``: two real numbers (each checked by the ramp)."""
+    if isinstance(speed_rpm, (str, bytes)) or np.ndim(speed_rpm) != 1 or len(speed_rpm) != 2:
+        raise ParameterError(f"speed_rpm = {speed_rpm!r} is invalid: give (start, end) in rpm, e.g. (20e3, 250e3)")
+    return speed_rpm[0], speed_rpm[1]
+
+
 def check_output_rate(output_rate_hz, duration):
     """Return ``float(output_rate_hz)`` [Hz] or raise :class:`ParameterError`: finite, > 0, and at most
     :data:`MAX_SAMPLES` samples over ``duration`` [s] (a run-up's result is held in memory, ~210 bytes a sample for
@@ -1504,7 +1511,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
     return status, message, counts, last
 
 
-def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_model=None, unbalance=(),
+def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, unbalance=(),
           output_rate_hz=20e3, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL_M, perturbation=0.05, out_dir=None, progress=False,
           contact_eps=0.98, linear_springs=None, initial="equilibrium", max_step=None, nsteps=500_000,
           integrator="rodas"):
@@ -1514,8 +1521,8 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     ----------
     system : Turbocharger
         The system (two bearings).
-    speed_rpm : (float, float)
-        Start and end speed [rpm] of a linear ramp (ignored if ``profile`` is given).
+    speed_rpm : (float, float), optional
+        Start and end speed [rpm] of a linear ramp; default (20 000, 250 000). Refused together with ``profile``.
     duration : float
         Simulated time [s].
     profile : SpeedProfile or callable, optional
@@ -1577,7 +1584,10 @@ def runup(system, speed_rpm=(20e3, 250e3), duration=1.0, profile=None, film_mode
     output_rate_hz = check_output_rate(output_rate_hz, duration)
     rtol, atol = check_tolerances(system, rtol, atol)
     if profile is None:
-        profile = SpeedProfile.ramp(speed_rpm[0], speed_rpm[1], duration)
+        profile = SpeedProfile.ramp(*_speed_pair((20e3, 250e3) if speed_rpm is None else speed_rpm), duration)
+    elif speed_rpm is not None:
+        raise ParameterError(f"speed_rpm = {speed_rpm!r} and profile are mutually exclusive: the profile gives the "
+                             "rotor speed (leave speed_rpm out)")
     elif not isinstance(profile, SpeedProfile):
         profile = SpeedProfile.from_function(profile, duration)
     if duration > float(profile.t[-1]) * (1 + 1e-9) and not profile.torque_driven:

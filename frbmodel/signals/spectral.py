@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.errors import ParameterError
+from ..core.errors import ParameterError, check_real
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from .tracking import RESONANCE_TOL, SYNC_TOL, Component, components_table, find_components, internal_resonances
 
@@ -456,6 +456,12 @@ def spectrogram(run, node=None, segment_s=None, overlap=0.75, db_range=25.0, zer
     dt = t[1] - t[0]
     fs = 1.0 / dt
     dur = t[-1] - t[0]
+    if segment_s is not None:  # (a negative or zero segment was taken as the default)
+        check_real("segment_s", segment_s, "s", minimum=0.0)
+    if not (np.isfinite(db_range) and db_range > 0):
+        raise ParameterError(f"db_range = {db_range!r} dB is invalid: valid range is finite and > 0 dB")
+    if not (isinstance(zero_pad, (int, np.integer)) and zero_pad >= 1):
+        raise ParameterError(f"zero_pad = {zero_pad!r} is invalid: valid range integer >= 1")
     seg = segment_s or min(max(dur / 40.0, 0.01), 0.05, dur / 4.0)
     nper = max(32, int(round(seg * fs)))
     if nper > t.size:
