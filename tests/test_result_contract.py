@@ -43,6 +43,18 @@ def _branch():
                                      "turbine_radius_um": 1.0, "between": [2, 3]}], {"branches": [4]})
 
 
+def _study():
+    """A stability map of two cases (the columns of frbmodel.studies.sweep.stability_map)."""
+    from frbmodel.studies.result import StudyResult
+
+    table = pd.DataFrame({"case_id": ["a", "a", "b", "b"], "analysis": ["campbell"] * 4,
+                          "outer_clearance [m]": [36e-6, 36e-6, 40e-6, 40e-6], "kind": ["linear"] * 4,
+                          "method": ["J"] * 4, "item": ["forward conical #1", "forward cylindrical #1"] * 2,
+                          "onset [rpm]": [58.5e3, 14.1e3, 51.1e3, 13.0e3],
+                          "f at onset [Hz]": [107.5, 123.3, 99.0, 120.1]})
+    return StudyResult(table, "outer_clearance [m]", {"cases": 2})
+
+
 def _limit_cycle():
     run = _run()
     return LimitCycle(45e3, 0.02, run, np.array([1.0, 0.3 + 0.1j, 0.3 - 0.1j]), True, np.arange(5.0), True,
@@ -67,11 +79,13 @@ def _make(kind):
         return orbits(_run(), time_s=(0.1, 0.12))
     if kind == "limit cycle":
         return _limit_cycle()
+    if kind == "study":
+        return _study()
     return _branch()
 
 
 KINDS = ("campbell", "equilibrium", "unbalance", "mode shape", "run-up", "spectrogram", "orbits", "limit cycle",
-         "bifurcation diagram")
+         "bifurcation diagram", "study")
 
 
 @pytest.mark.parametrize("kind", KINDS)

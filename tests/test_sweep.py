@@ -114,3 +114,18 @@ def test_workers_import_the_clients_frbmodel(tmp_path, monkeypatch):
         client.close()
         cluster.close()
     assert set(packages.values()) == {str(Path(frbmodel.__file__).resolve().parent)}
+
+
+def test_a_study_folder_loads_as_a_result(tmp_path):
+    """The folder run_study writes reads back as a StudyResult (the one result contract) whose table is the
+    stability map of that folder; saved and loaded again, the table is the same."""
+    from frbmodel.studies.result import StudyResult
+
+    cases = grid({"outer_clearance": [36e-6, 46e-6]}, "campbell", methods=["J"], speeds_rpm=(1e3, 250e3, 20))
+    run_study(cases, tmp_path / "s", scheduler="serial")
+    study = StudyResult.load(tmp_path / "s")
+    pd.testing.assert_frame_equal(study.to_dataframe(), stability_map(tmp_path / "s"))
+    assert study.parameter == "outer_clearance [m]" and study.meta["cases"] == 2
+    study.save(tmp_path / "copy")
+    pd.testing.assert_frame_equal(StudyResult.load(tmp_path / "copy").to_dataframe(), study.to_dataframe(),
+                                  check_dtype=False)
