@@ -196,6 +196,23 @@ class Result:
 
         return cls.from_xarray(xr.load_dataset(netcdf_file(path, cls.NC_GLOB, cls.__name__), engine=NETCDF_ENGINE))
 
+    def save_files(self, out_dir, stem, dpi=130):
+        """Write ``<stem>.csv`` (``to_dataframe()``), ``<stem>.nc`` (:meth:`to_xarray`), ``<stem>.png`` (``plot()``)
+        and ``<stem>.html`` (``plot_html(path)``) into ``out_dir`` (created if missing): the ``save`` of a result
+        with no files of its own. Returns the paths."""
+        import matplotlib.pyplot as plt
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / f"{stem}{ext}" for ext in (".csv", ".nc", ".png", ".html")]
+        self.to_dataframe().to_csv(paths[0], index=False)
+        self.to_netcdf(paths[1])
+        fig = self.plot()
+        fig.savefig(paths[2], dpi=dpi, bbox_inches="tight")
+        plt.close(fig)
+        self.plot_html(paths[3])
+        return paths
+
     def to_netcdf(self, path):
         """Write :meth:`to_xarray` as a netCDF-4 file (engine :data:`NETCDF_ENGINE`).
 

@@ -175,23 +175,12 @@ class LimitCycle(Result):
         return f"limit_cycle_{self.speed_rpm:.0f}"
 
     def save(self, out_dir):
-        """Write ``<stem>.nc`` (:meth:`to_xarray`), ``<stem>.csv`` (:meth:`to_dataframe`) and the figures
+        """Write ``<stem>.csv`` (:meth:`to_dataframe`), ``<stem>.nc`` (:meth:`to_xarray`) and the figures
         ``<stem>.png`` / ``.html`` into the folder ``out_dir`` (created if missing); a path ending in ``.nc`` writes
         only that file. Returns the paths."""
-        import matplotlib.pyplot as plt
-
-        out = Path(out_dir)
-        if out.suffix == ".nc":
-            return self.to_netcdf(out)
-        out.mkdir(parents=True, exist_ok=True)
-        paths = [out / f"{self.stem}{ext}" for ext in (".nc", ".csv", ".png", ".html")]
-        self.to_netcdf(paths[0])
-        self.to_dataframe().to_csv(paths[1], index=False)
-        fig = self.plot()
-        fig.savefig(paths[2], dpi=130)
-        plt.close(fig)
-        self.plot_html(paths[3])
-        return paths
+        if Path(out_dir).suffix == ".nc":
+            return self.to_netcdf(out_dir)
+        return self.save_files(out_dir, self.stem)
 
     def plot(self, title=None):
         """Orbits over one period (journal in ring, ring in housing, wheels;

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -222,18 +221,7 @@ class EquilibriumResult(Result):
     def save(self, out_dir):
         """Write ``<stem>.csv`` (:meth:`to_dataframe`), ``<stem>.nc`` (:meth:`to_xarray`) and the figures
         ``<stem>.png`` / ``.html`` into ``out_dir`` (created if missing); returns the paths."""
-        import matplotlib.pyplot as plt
-
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        paths = [out / f"{self.stem}{ext}" for ext in (".csv", ".nc", ".png", ".html")]
-        self.to_dataframe().to_csv(paths[0], index=False)
-        self.to_netcdf(paths[1])
-        fig = self.plot()
-        fig.savefig(paths[2], dpi=130)
-        plt.close(fig)
-        self.plot_html(paths[3])
-        return paths
+        return self.save_files(out_dir, self.stem)
 
     def __str__(self):
         lines = [f"method {self.method} equilibrium at {self.speed_rpm:.0f} rpm "

@@ -348,20 +348,7 @@ class ModeShape(Result):
     def save(self, out_dir):
         """Write ``<stem>.csv`` (:meth:`to_dataframe`), ``<stem>.nc`` (:meth:`to_xarray`) and the figures
         ``<stem>.png`` / ``.html`` into ``out_dir`` (created if missing); returns the paths."""
-        from pathlib import Path
-
-        import matplotlib.pyplot as plt
-
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        paths = [out / f"{self.stem}{ext}" for ext in (".csv", ".nc", ".png", ".html")]
-        self.to_dataframe().to_csv(paths[0], index=False)
-        self.to_netcdf(paths[1])
-        fig = self.plot()
-        fig.savefig(paths[2], dpi=130)
-        plt.close(fig)
-        self.plot_html(paths[3])
-        return paths
+        return self.save_files(out_dir, self.stem)
 
 
 def _match_mode(cd, speed_rpm, mode, lam):

@@ -98,18 +98,7 @@ class StudyResult(Result):
     def save(self, out_dir):
         """Write ``study.csv``, ``study.nc`` and the figures ``study.png`` / ``.html`` into ``out_dir`` (created if
         missing); returns the paths."""
-        import matplotlib.pyplot as plt
-
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        paths = [out / f"study{ext}" for ext in (".csv", ".nc", ".png", ".html")]
-        self.table.to_csv(paths[0], index=False)
-        self.to_netcdf(paths[1])
-        fig = self.plot()
-        fig.savefig(paths[2], dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        self.plot_html(paths[3])
-        return paths
+        return self.save_files(out_dir, "study", dpi=110)
 
 
 def study_result(out_dir, parameter=None):
