@@ -135,22 +135,28 @@ def cmd_campbell(args):
         from .cosim.linearize import campbell_from_fmu
 
         args.parameter_set = args.parameter_set or "co36"
-        _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky"))
+        _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky", "oil",
+                                "supply_temperature", "supply_pressure"))
         out = writable_dir(args.out)
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
         tc, kw = None, {}
     else:
         tc = load_from_args(args)  # (a system the checks refuse is refused before the folder exists)
+        supply = _oil_supply_from_args(args, tc)
         out = writable_dir(args.out)
         kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
         try:
-            cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, **kw)
+            cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, oil_supply=supply, **kw)
         except KeyboardInterrupt as exc:
             if getattr(exc, "result", None) is None:
                 raise
             return _save_interrupted_campbell(exc, out, fmax)
     paths = cd.save(out, fmax_hz=fmax)
     print(f"method {cd.method}: {cd.meta.get('method_title', cd.meta.get('source', ''))}; {speeds.size} speeds")
+    if "oil_supply" in cd.meta:
+        o = cd.meta["oil_supply"]
+        print(f"  thermal model: {o['oil']['name']}, supply {o['supply_temperature_K']:g} K, "
+              f"{o['supply_pressure_Pa']:g} Pa; the films' viscosities at each speed's operating point")
     if not args.no_whirl:
         for _, r in cd.onsets_dataframe().iterrows():
             s = r["onset [rpm]"]
@@ -261,11 +267,20 @@ def cmd_unbalance(args):
 
 def cmd_equilibrium(args):
     """``frb equilibrium``: static equilibrium of both bearings at one speed, printed (and written as CSV)."""
+    from .core.errors import check_speed
     from .linear.equilibrium import equilibrium
+    from .linear.thermal import at_operating_point
 
     tc = load_from_args(args)
+    supply = _oil_supply_from_args(args, tc)
+    if supply is not None:
+        tc = at_operating_point(tc, check_speed("--speed-rpm", args.speed_rpm), supply)
     out = writable_dir(args.out) if args.out else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
+    if supply is not None:
+        print(f"thermal operating point: {supply.oil.name}, supply {supply.supply_temperature_K:g} K, "
+              f"{supply.supply_pressure_Pa:g} Pa; film viscosities [Pa s]: " + ", ".join(
+                  f"{b.name} inner {b.inner.viscosity:.5g}, outer {b.outer.viscosity:.5g}" for b in tc.bearings))
     print(eq)
     if out is not None:
         p = out / f"equilibrium_{eq.method}_{args.speed_rpm:.0f}rpm.csv"
@@ -976,10 +991,38 @@ def _oil_from_args(args, system):
     elif args.method != "J":
         raise ParameterError(f"--method {args.method} cannot be combined with an oil: the thermal operating point is "
                              "the method-J equilibrium (ring torque balanced); use --method J")
-    elif args.run:
+    elif getattr(args, "run", None):
         raise ParameterError("--run cannot be combined with an oil: a run-up's recorded losses are at the films' "
                              "constant viscosities; leave --oil (or the system's [oil]) out to overlay them")
     return oil
+
+
+def _oil_args(p, what):
+    """``--oil``, ``--supply-temperature`` (one value [K]) and ``--supply-pressure`` of a command that takes one
+    oil supply (:class:`frbmodel.linear.thermal.OilSupply`); ``what`` says what the thermal model changes."""
+    p.add_argument("--oil", default=None, metavar="NAME",
+                   help=f"thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46; or an "
+                        f"[oil] table in --system): {what} (method J)")
+    p.add_argument("--supply-temperature", type=float, default=None, metavar="K",
+                   help="oil supply temperature [K] (default 363.15; needs an oil)")
+    p.add_argument("--supply-pressure", type=float, default=None, metavar="PA",
+                   help="oil supply pressure above ambient [Pa] (default 3e5; needs an oil)")
+
+
+def _oil_supply_from_args(args, system):
+    """The :class:`OilSupply` of ``--oil`` (else the system file's ``[oil]``) at ``--supply-temperature`` [K] and
+    ``--supply-pressure`` [Pa]; None without an oil (the supply options are then refused, as is a method other
+    than J with an oil)."""
+    from .linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, check_supply_pressure
+    from .system.oil import T_MIN_K, check_temperature
+
+    oil = _oil_from_args(args, system)
+    if oil is None:
+        return None
+    t_s = 363.15 if args.supply_temperature is None else args.supply_temperature
+    t_s = check_temperature("--supply-temperature", t_s, T_MIN_K, oil.max_temperature_K)
+    p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
+    return OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s))
 
 
 def _supply_from_args(args, oil):
@@ -1289,6 +1332,7 @@ def _add_campbell(sub):
     c.add_argument("--from-fmu", metavar="SSP", default=None,
                    help="assemble the linear system from the FMUs of this SSP (methods F, G, I, J)")
     c.add_argument("--parameter-set", default=None, help="SSP parameter set for --from-fmu (default co36)")
+    _oil_args(c, "every speed at its thermal operating point (film viscosities, whirl curves, exact onsets)")
     _system_args(c)
     c.set_defaults(func=cmd_campbell)
 
@@ -1339,6 +1383,7 @@ def _add_equilibrium(sub):
     e.add_argument("--method", default="J", type=str.upper, choices=list(METHODS), help="bearing model (Table 1)")
     e.add_argument("--speed-rpm", type=float, default=150e3, help="rotor speed [rpm]")
     e.add_argument("--out", default=None, help="also write a CSV into this folder")
+    _oil_args(e, "the films' viscosities at the thermal operating point of --speed-rpm")
     _system_args(e)
     e.set_defaults(func=cmd_equilibrium)
 
