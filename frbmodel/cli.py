@@ -1056,6 +1056,9 @@ def cmd_losses(args):
 
     tc = load_from_args(args)
     oil = _oil_from_args(args, tc)
+    if args.onsets and oil is None:
+        raise ParameterError("--onsets needs an oil: give --oil NAME or an [oil] table in --system (the onsets are "
+                             "computed at each supply temperature's thermal operating points)")
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
     run = RunupResult.load(args.run) if args.run else None
@@ -1076,8 +1079,31 @@ def cmd_losses(args):
     fig.savefig(p_png, dpi=130)
     plt.close(fig)
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
-    print(f"wrote:\n  {p_csv}\n  {p_png}")
+    paths = [p_csv, p_png] + (_write_onsets(tc, oil, temps, p_s, speeds, out) if args.onsets else [])
+    print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
+
+
+def _write_onsets(tc, oil, temps, p_s, speeds, out):
+    """``frb losses --onsets``: whirl onsets versus supply temperature (:func:`frbmodel.studies.thermal.
+    onsets_vs_supply`, Campbell grid = ``--speeds``) as whirl_onsets.csv, whirl_onsets_modes.csv and the figure."""
+    import matplotlib.pyplot as plt
+
+    from .plots.thermal import plot_onsets_vs_supply
+    from .studies.thermal import onsets_vs_supply
+
+    films, modes = onsets_vs_supply(tc, oil, temps, p_s, speeds_rpm=speeds, progress=True)
+    paths = [out / "whirl_onsets.csv", out / "whirl_onsets_modes.csv", out / "whirl_onsets.png"]
+    films.to_csv(paths[0], index=False)
+    modes.to_csv(paths[1], index=False)
+    fig = plot_onsets_vs_supply(films, modes)
+    fig.savefig(paths[2], dpi=130)
+    plt.close(fig)
+    print("film whirl onsets (exact, each at the temperatures of its speed):")
+    cols = ["supply temperature [K]", "film", "onset [rpm]", "constant-viscosity onset [rpm]", "RSR at onset [-]",
+            "film temperature at onset [K]"]
+    print(films[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
+    return paths
 
 
 def cmd_warmup(args):
@@ -1561,6 +1587,9 @@ def _add_losses(sub):
                          "needs an oil)")
     lo.add_argument("--supply-pressure", type=float, default=None, metavar="PA",
                     help="oil supply pressure above ambient [Pa] (default 3e5; needs an oil)")
+    lo.add_argument("--onsets", action="store_true",
+                    help="with an oil, also the whirl onset speeds versus the supply temperature(s): each film's exact "
+                         "onset and the Campbell modes' (grid = --speeds): whirl_onsets.csv, _modes.csv, .png")
     lo.add_argument("--out", default="results/losses", help="output folder")
     _system_args(lo)
     lo.set_defaults(func=cmd_losses)

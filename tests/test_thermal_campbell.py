@@ -162,3 +162,101 @@ def test_cli_refuses_bad_thermal_options_with_one_line_and_writes_nothing(capsys
     err = capsys.readouterr().err
     assert code == 2 and message in err and "Traceback" not in err, err
     assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+# ------------------------------------------------------------------ onsets versus supply temperature
+def _unstable_pairs(speed_rpm, t_s):
+    """Eigenvalues with Re > 0 in the upper half plane of the first-order state matrix of the linearized system at
+    the thermal operating point (numpy eigvals of [[0, I], [−M⁻¹K, −M⁻¹C]]: not the Campbell's solver path)."""
+    from frbmodel.linear.assembly import linear_system
+
+    ls = linear_system(thermal_system(TC, speed_rpm, OIL, t_s), "J", speed_rpm)
+    n, m_inv = ls.M.shape[0], np.linalg.inv(ls.M)
+    a = np.block([[np.zeros((n, n)), np.eye(n)], [-m_inv @ ls.K, -m_inv @ ls.C]])
+    lam = np.linalg.eigvals(a)
+    return int(np.sum((lam.real > 0) & (lam.imag > 0)))
+
+
+def test_a_campbell_mode_onset_is_the_bisected_eigenvalue_crossing():
+    """The ring mode (~118 Hz) that loses stability near the outer films' onset at 333.15 K: its grid-interpolated
+    onset on a 10 krpm grid against a bisection (24 halvings, 6e-4 rpm) of the speed where the number of unstable
+    eigenvalues of the state matrix rises. Tolerance 1e-3 relative: the modal damping is interpolated linearly over
+    10 krpm (measured 7.7e-5; 1.3e-5 on a 2.4 krpm grid)."""
+    from frbmodel.studies.thermal import onsets_vs_supply
+
+    grid = np.linspace(60e3, 160e3, 11)
+    films, modes = onsets_vs_supply(TC, OIL, [333.15], speeds_rpm=grid)
+    inside = modes[~modes["unstable at grid start"]]
+    assert len(inside) == 1 and 110 < inside["frequency at onset [Hz]"].iloc[0] < 125
+    s = float(inside["onset [rpm]"].iloc[0])
+    i = int(np.searchsorted(grid, s))
+    a, b = grid[i - 1], grid[i]
+    n_a = _unstable_pairs(a, 333.15)
+    assert _unstable_pairs(b, 333.15) == n_a + 1
+    for _ in range(24):
+        c = 0.5 * (a + b)
+        a, b = (a, c) if _unstable_pairs(c, 333.15) > n_a else (c, b)
+    assert s == pytest.approx(0.5 * (a + b), rel=1e-3)
+
+
+def test_onsets_vs_supply_tables_are_the_thermal_onsets_with_their_states(onsets):
+    """The film table's onsets are film_onset_speeds with the thermal model (the fixture's, computed directly:
+    equal to the last bit, the same search), the constant-viscosity column that of the system's own viscosities;
+    at every onset the film runs above the supply temperature (it dissipates: conservation) and the RSR is the ring
+    speed over the rotor speed (1e-12)."""
+    from frbmodel.studies.thermal import onsets_vs_supply
+
+    films, _ = onsets_vs_supply(TC, OIL, [333.15, 393.15], speeds_rpm=[50e3, 150e3])
+    const = frb.film_onset_speeds(TC)
+    for t_s in (333.15, 393.15):
+        grp = films[films["supply temperature [K]"] == t_s]
+        np.testing.assert_array_equal(grp["onset [rpm]"], onsets[t_s])
+        np.testing.assert_array_equal(grp["constant-viscosity onset [rpm]"], const)
+        assert (grp["film temperature at onset [K]"] > t_s).all()
+        np.testing.assert_allclose(grp["RSR at onset [-]"],
+                                   grp["ring speed at onset [rad/s]"] / (grp["onset [rpm]"] * 2 * math.pi / 60),
+                                   rtol=1e-12)
+    with pytest.raises(ParameterError, match="supply_temperature_K = 90.0 K is invalid"):
+        onsets_vs_supply(TC, OIL, [333.15, 90.0])
+
+
+def test_cli_losses_onsets_writes_the_library_tables_and_the_figure(capsys, tmp_path):
+    """frb losses --oil --onsets: whirl_onsets.csv equals onsets_vs_supply at the same inputs (to the CSV's
+    round trip, 1e-15), and the figure is written; without an oil --onsets is refused (exit 2, nothing written)."""
+    import pandas as pd
+
+    from frbmodel.studies.thermal import onsets_vs_supply
+
+    out = tmp_path / "on"
+    assert main(["losses", "--oil", "SAE 5W-30", "--supply-temperature", "363.15", "--speeds", "50000,150000",
+                 "--onsets", "--out", str(out)]) == 0
+    assert "film whirl onsets (exact" in capsys.readouterr().out
+    ref, _ = onsets_vs_supply(TC, OIL, [363.15], speeds_rpm=[50e3, 150e3])
+    csv = pd.read_csv(out / "whirl_onsets.csv")
+    np.testing.assert_allclose(csv["onset [rpm]"], ref["onset [rpm]"], rtol=1e-15)
+    assert (out / "whirl_onsets_modes.csv").exists() and (out / "whirl_onsets.png").stat().st_size > 10_000
+    bad = tmp_path / "bad"
+    assert main(["losses", "--onsets", "--out", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "--onsets needs an oil" in err and len(err.strip().splitlines()) == 1 and not bad.exists()
+
+
+def test_onsets_figure_takes_the_tables_with_units():
+    """plot_onsets_vs_supply: K on the axis, °C on the top, krpm, a line per film, constant-viscosity references."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import pandas as pd
+
+    from frbmodel.plots.thermal import plot_onsets_vs_supply
+
+    films = pd.DataFrame({"supply temperature [K]": [333.15, 393.15] * 2, "film": ["a inner"] * 2 + ["a outer"] * 2,
+                          "onset [rpm]": [1e4, 1.1e4, 1e5, 7e4], "oil": ["X"] * 4,
+                          "constant-viscosity onset [rpm]": [1e4] * 2 + [6e4] * 2})
+    modes = pd.DataFrame({"supply temperature [K]": [333.15], "onset [rpm]": [9e4], "unstable at grid start": [False]})
+    fig = plot_onsets_vs_supply(films, modes)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "oil supply temperature [K]" and ax.get_ylabel() == "whirl onset speed [krpm]"
+    assert [c.get_xlabel() for c in ax.child_axes] == ["[°C]"]
+    labels = ax.get_legend_handles_labels()[1]
+    assert "a outer film (thermal model)" in labels and "constant viscosities (system file)" in labels
