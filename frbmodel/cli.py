@@ -426,19 +426,24 @@ def cmd_runup(args):
     prof = _profile(args)
     duration = float(prof.t[-1]) if args.duration is None else args.duration
     check_output_rate(args.rate, duration)
-    from .nonlinear.runup import check_drive_torque, check_tolerances
+    from .nonlinear.runup import check_drive_torque, check_runup_oil, check_tolerances
 
     rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
     check_drive_torque(tc, prof, "--drive-torque")
+    supply = check_runup_oil(_oil_supply_from_args(args, tc), prof, args.integrator, None,
+                             ("--integrator", "--profile"))
     unbalance = _parse_unbalance(args.unbalance)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
+    if supply is not None:
+        print(f"  thermal model: {supply.oil.name}, supply {supply.supply_temperature_K:g} K, "
+              f"{supply.supply_pressure_Pa:g} Pa; film temperatures quasi-static in rotor speed")
 
     def run_at(tighten, folder):
         return runup(tc, profile=prof, duration=duration, unbalance=unbalance,
                      output_rate_hz=args.rate, rtol=rtol * tighten, atol=atol * tighten, out_dir=folder,
-                     progress=True, integrator=args.integrator)
+                     progress=True, integrator=args.integrator, oil_supply=supply)
 
     run, code = _stoppable("runup", lambda: run_at(1.0, out), out)
     if "wall_time_s" in run.meta:
@@ -988,7 +993,7 @@ def _oil_from_args(args, system):
         if given:
             raise ParameterError(f"{given[0]} needs an oil: give --oil NAME or an [oil] table in --system (without an "
                                  "oil the films keep their constant viscosities)")
-    elif args.method != "J":
+    elif getattr(args, "method", "J") != "J":
         raise ParameterError(f"--method {args.method} cannot be combined with an oil: the thermal operating point is "
                              "the method-J equilibrium (ring torque balanced); use --method J")
     elif getattr(args, "run", None):
@@ -1451,6 +1456,8 @@ def _add_runup(sub):
                         "by round-off")
     r.add_argument("--no-figure", action="store_true")
     r.add_argument("--out", default="results/runup")
+    _oil_args(r, "the films' viscosities follow the rotor speed (quasi-static temperatures of the thermal operating "
+                 "points); prescribed speed profiles, --integrator rodas or lsoda")
     _system_args(r)
     r.set_defaults(func=cmd_runup)
 

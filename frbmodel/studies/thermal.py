@@ -1,8 +1,9 @@
-"""Whirl onset speeds versus the oil supply temperature (issue #25 stage 2, docs/theory/thermal.md#whirl-onsets-versus-
-supply-temperature): per supply temperature the method-J Campbell diagram with the thermal model
-(:func:`frbmodel.linear.campbell.campbell` with an :class:`~frbmodel.linear.thermal.OilSupply`), its exact film whirl
-onsets (each at the temperatures of its own speed) with the RSR, temperature and viscosity of the film there, and
-the speeds where the diagram's modes lose stability (interpolated between the grid speeds)."""
+"""Whirl onset speeds versus the oil supply temperature (issue #25 stage 2; theory:
+docs/theory/thermal.md#whirl-onsets-versus-supply-temperature): per supply temperature the method-J Campbell
+diagram with the thermal model (:func:`frbmodel.linear.campbell.campbell` with an
+:class:`~frbmodel.linear.thermal.OilSupply`), its exact film whirl onsets (each at the temperatures of its own speed)
+with the RSR, temperature and viscosity of the film there, and the speeds where the diagram's modes lose stability
+(interpolated between the grid speeds)."""
 from __future__ import annotations
 
 import numpy as np
