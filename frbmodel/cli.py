@@ -1303,6 +1303,8 @@ def cmd_sweep(args):
                 if not args.ssp:
                     raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
                 opts["ssp"] = str(Path(args.ssp).resolve())
+        if args.oil is not None:
+            opts["oil"] = args.oil
         cases = grid(params, args.analysis, **opts)
     scheduler = "serial" if args.serial else args.scheduler
     check_scheduler(scheduler)  # (before the folder is made: a wrong address leaves nothing behind)
@@ -1547,7 +1549,12 @@ def _add_sweep(sub):
     sw.add_argument("--example", choices=["outer-clearance"], help="built-in study: outer clearance 36-46 um")
     sw.add_argument("--param", action="append", metavar="NAME=V1,V2",
                     help="swept parameter (repeatable; SI): outer_clearance, inner_clearance, viscosity_turbine, "
-                         "viscosity_compressor, viscosity_scale, ring_mass, unbalance_turbine, unbalance_compressor")
+                         "viscosity_compressor, viscosity_scale, ring_mass, unbalance_turbine, unbalance_compressor, "
+                         "supply_temperature [K], supply_pressure [Pa] (these two with --oil)")
+    sw.add_argument("--oil", default=None, metavar="NAME",
+                    help="thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46): "
+                         "every case at its supply temperature (default 363.15 K) and pressure (3e5 Pa); campbell "
+                         "(method J) and runup")
     sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default="campbell",
                     help="'hopf': the Hopf points of the full model (linear onsets) in --speeds START:END; two swept "
                          "parameters give a stability chart; 'bifurcation': the limit-cycle branches from those Hopf "
