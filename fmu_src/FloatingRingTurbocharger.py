@@ -26,7 +26,13 @@ INPUTS = (("speed_in", "rad/s", "rotor speed held over the step (speed_source = 
            "minus compressor (speed_source = torque)", -math.inf),
           ("housing_acceleration.x", "m/s2", "translational acceleration of the rigid bearing housing, x (base "
            "excitation; positions are relative to the housing)", -math.inf),
-          ("housing_acceleration.y", "m/s2", "translational acceleration of the rigid bearing housing, y", -math.inf))
+          ("housing_acceleration.y", "m/s2", "translational acceleration of the rigid bearing housing, y", -math.inf),
+          ("oil_supply_temperature", "K", "oil supply temperature held over the step (thermal model: parameter oil; "
+           "a change recomputes the thermal table, ~0.45 s)", 243.15),
+          ("oil_supply_pressure", "Pa", "oil supply pressure above ambient held over the step (thermal model: "
+           "parameter oil)", 0.0))
+#: start values of the inputs that do not start at 0 (speed_in: the default start speed, set in __init__)
+INPUT_STARTS = {"oil_supply_temperature": 363.15, "oil_supply_pressure": 3e5}
 
 
 class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
@@ -34,9 +40,13 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
 
     Parameters (all ``fixed``): ``system_file``, films and rings per bearing, ``film_model``, unbalance per disc,
     gravity, ``speed_source`` with its ramp, ``rtol``, ``atol``, ``speed_scale``, ``contact_eps``, the initial
-    state (``initial``, ``perturbation``), ``check_rate`` and ``record_folder``. Inputs: ``speed_in`` [rad/s],
-    ``drive_torque`` [N m], ``housing_acceleration.x/y`` [m/s2]. Outputs:
-    :func:`frbmodel.nonlinear.turbocharger_component.output_names`. FMI behaviour and statuses:
+    state (``initial``, ``perturbation``), ``check_rate``, ``record_folder`` and ``oil`` (the thermal model: a named
+    oil, or empty for the films' constant viscosities). Inputs: ``speed_in`` [rad/s], ``drive_torque`` [N m],
+    ``housing_acceleration.x/y`` [m/s2], ``oil_supply_temperature`` [K] and ``oil_supply_pressure`` [Pa] (used with
+    an oil; without one they must keep their start values). Outputs:
+    :func:`frbmodel.nonlinear.turbocharger_component.output_names`, then
+    :func:`~frbmodel.nonlinear.turbocharger_component.thermal_output_names` (film temperatures [K] and oil flow
+    [m3/s] per bearing; 0 without an oil). FMI behaviour and statuses:
     :class:`_fmu_common.FrbSlaveMixin`; a film reaching ``contact_eps`` inside a step discards it.
     """
 
@@ -57,7 +67,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         from frbmodel.core.units import rpm_to_rad_s
 
         for name, unit, desc, low in INPUTS:
-            start = rpm_to_rad_s(20e3) if name == "speed_in" else 0.0
+            start = rpm_to_rad_s(20e3) if name == "speed_in" else INPUT_STARTS.get(name, 0.0)
             self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low)
         self._in_idx = np.array([self._input_pos[n] for n, *_ in INPUTS])
         self._outputs()
@@ -121,6 +131,11 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
                     "thickness over the step, record_folder rows", unit="Hz", low=100.0, high=1e7)
         self._param("record_folder", "", "folder for frb.runup's result files (runup.csv, runup.json) written at "
                     "check_rate while the FMU steps; empty = no record", "str")
+        from frbmodel.system.oil import OILS
+
+        self._param("oil", "", "thermal model: the oil (" + ", ".join(OILS) + "); the films' viscosities follow "
+                    "the rotor speed at the inputs' supply temperature and pressure (docs/theory/thermal.md); empty = "
+                    "the films' constant viscosity parameters", "str", choices=("", *OILS))
 
     def _outputs(self):
         """All outputs are one array of the component (:meth:`_out`), computed once per step; none depends directly
@@ -134,9 +149,20 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
                 low, high = -math.inf, math.inf
             self._output(name, f"{desc} [{unit}]", lambda k=k: self._out()[k], unit=unit, block=(self._out, k),
                          depends=(), init_depends=("speed_in",), low=low, high=high)
+        from frbmodel.nonlinear.turbocharger_component import thermal_output_names
+
+        for k, (name, unit, desc) in enumerate(thermal_output_names(self._built_for)):
+            self._output(name, f"{desc}; 0 without an oil [{unit}]", lambda k=k: self._thermal_out()[k], unit=unit,
+                         block=(self._thermal_out, k), depends=(),
+                         init_depends=("speed_in", "oil_supply_temperature", "oil_supply_pressure"), low=0.0)
 
     def _out(self):
         return self._comp.outputs()
+
+    def _thermal_out(self):
+        if self._values["oil"]:
+            return self._comp.thermal_outputs()
+        return np.zeros(3 * len(self._bearings))
 
     # ------------------------------------------------------------------ FMI (FrbSlaveMixin hooks)
     def _system(self):
@@ -176,7 +202,8 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
             unbalance=unb, rtol=float(v["rtol"]), atol=float(v["atol"]),
             speed_scale=float(v["speed_scale"]) or None, contact_eps=float(v["contact_eps"]),
             perturbation=float(v["perturbation"]), initial=v["initial"], initial_speed=self._in("speed_in"),
-            check_rate_hz=float(v["check_rate"]))
+            check_rate_hz=float(v["check_rate"]), oil=frb.OILS[v["oil"]] if v["oil"] else None,
+            supply_temperature_K=self._in("oil_supply_temperature"), supply_pressure_Pa=self._in("oil_supply_pressure"))
         comp.warm_up()
         if v["record_folder"]:
             comp.record(v["record_folder"], {"fmu_instance": self.instance_name})
@@ -184,9 +211,18 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         self._changed()
 
     def _advance(self, current_time, step_size):
-        w, tq, ax, ay = self._input_values[self._in_idx]
+        w, tq, ax, ay, t_s, p_s = self._input_values[self._in_idx]
+        supply = {}
+        if self._values["oil"]:
+            supply = {"supply_temperature_K": float(t_s), "supply_pressure_Pa": float(p_s)}
+        else:
+            for name, value in (("oil_supply_temperature", t_s), ("oil_supply_pressure", p_s)):
+                if value != INPUT_STARTS[name]:
+                    raise ValueError(f"{name} = {value!r} needs the thermal model: set the parameter oil (the films "
+                                     "have constant viscosities); leave the input at its start value "
+                                     f"{INPUT_STARTS[name]!r} otherwise")
         self._comp.step(step_size, speed_in=float(w), drive_torque=float(tq), housing_acc=(float(ax), float(ay)),
-                        t=current_time)
+                        t=current_time, **supply)
 
     def _step_context(self):
         from frbmodel.core.units import rad_s_to_rpm

@@ -28,7 +28,7 @@ from .linear.campbell import CampbellResult, campbell
 from .linear.equilibrium import BearingEquilibrium, EquilibriumResult, equilibrium
 from .linear.losses import bearing_losses
 from .linear.modal import Modes, modes
-from .linear.thermal import thermal_losses, thermal_system
+from .linear.thermal import OilSupply, thermal_losses, thermal_system
 from .linear.unbalance import UnbalanceResponse, unbalance_response
 from .linear.whirl import film_onset_speeds
 from .nonlinear.recorder import Recorder, RunupResult, RunupSchema
@@ -57,7 +57,7 @@ __all__ = [
     "__version__", "BearingEquilibrium", "CampbellResult", "Component", "ConvergenceError", "CosimStopped", "Disc",
     "EquilibriumResult", "FILM_MODELS", "FRBError", "Film", "FilmContactError", "FloatingRingBearing",
     "IntegrationError", "LimitCycle", "LinearSystem", "METHODS", "Method", "Modes", "PAPER_OUTER_CLEARANCES",
-    "OILS", "Oil", "ParameterError", "ThermalModel", "thermal_losses", "thermal_system",
+    "OILS", "Oil", "OilSupply", "ParameterError", "ThermalModel", "thermal_losses", "thermal_system",
     "Recorder", "Rotor", "RunStopped", "RunupResult", "RunupSchema", "RunupStopped", "ShaftElement",
     "SpectrogramResult", "SpeedProfile", "Turbocharger", "Unbalance", "bearing_loss", "bearing_losses", "campbell",
     "equilibrium", "film_coefficients", "film_force", "film_onset_speeds", "film_torques", "get_method", "limit_cycle",

@@ -149,22 +149,28 @@ def cmd_campbell(args):
         from .cosim.linearize import campbell_from_fmu
 
         args.parameter_set = args.parameter_set or "co36"
-        _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky"))
+        _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky", "oil",
+                                "supply_temperature", "supply_pressure"))
         out = writable_dir(args.out)
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
         tc, kw = None, {}
     else:
         tc = load_from_args(args)  # (a system the checks refuse is refused before the folder exists)
+        supply = _oil_supply_from_args(args, tc)
         out = writable_dir(args.out)
         kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
         try:
-            cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, **kw)
+            cd = campbell(tc, args.method, speeds, whirl=not args.no_whirl, progress=True, oil_supply=supply, **kw)
         except KeyboardInterrupt as exc:
             if getattr(exc, "result", None) is None:
                 raise
             return _save_interrupted_campbell(exc, out, fmax)
     paths = cd.save(out, fmax_hz=fmax)
     print(f"method {cd.method}: {cd.meta.get('method_title', cd.meta.get('source', ''))}; {speeds.size} speeds")
+    if "oil_supply" in cd.meta:
+        o = cd.meta["oil_supply"]
+        print(f"  thermal model: {o['oil']['name']}, supply {o['supply_temperature_K']:g} K, "
+              f"{o['supply_pressure_Pa']:g} Pa; the films' viscosities at each speed's operating point")
     if not args.no_whirl:
         for _, r in cd.onsets_dataframe().iterrows():
             s = r["onset [rpm]"]
@@ -278,11 +284,19 @@ def cmd_equilibrium(args):
     """``frb equilibrium``: static equilibrium of both bearings at one speed, printed (and written as CSV)."""
     from .core.errors import check_speed
     from .linear.equilibrium import equilibrium
+    from .linear.thermal import at_operating_point
 
     check_speed("--speed-rpm", check_positive("--speed-rpm", args.speed_rpm, "rpm"))
     tc = load_from_args(args)
+    supply = _oil_supply_from_args(args, tc)
+    if supply is not None:
+        tc = at_operating_point(tc, check_speed("--speed-rpm", args.speed_rpm), supply)
     out = writable_dir(args.out) if args.out else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
+    if supply is not None:
+        print(f"thermal operating point: {supply.oil.name}, supply {supply.supply_temperature_K:g} K, "
+              f"{supply.supply_pressure_Pa:g} Pa; film viscosities [Pa s]: " + ", ".join(
+                  f"{b.name} inner {b.inner.viscosity:.5g}, outer {b.outer.viscosity:.5g}" for b in tc.bearings))
     print(eq)
     if out is not None:
         p = out / f"equilibrium_{eq.method}_{args.speed_rpm:.0f}rpm.csv"
@@ -430,19 +444,24 @@ def cmd_runup(args):
     prof = _profile(args)
     duration = float(prof.t[-1]) if args.duration is None else args.duration
     check_output_rate(args.rate, duration)
-    from .nonlinear.runup import check_drive_torque, check_tolerances
+    from .nonlinear.runup import check_drive_torque, check_runup_oil, check_tolerances
 
     rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
     check_drive_torque(tc, prof, "--drive-torque")
+    supply = check_runup_oil(_oil_supply_from_args(args, tc), prof, args.integrator, None,
+                             ("--integrator", "--profile"))
     unbalance = _parse_unbalance(args.unbalance)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
+    if supply is not None:
+        print(f"  thermal model: {supply.oil.name}, supply {supply.supply_temperature_K:g} K, "
+              f"{supply.supply_pressure_Pa:g} Pa; film temperatures quasi-static in rotor speed")
 
     def run_at(tighten, folder):
         return runup(tc, profile=prof, duration=duration, unbalance=unbalance,
                      output_rate_hz=args.rate, rtol=rtol * tighten, atol=atol * tighten, out_dir=folder,
-                     progress=True, integrator=args.integrator)
+                     progress=True, integrator=args.integrator, oil_supply=supply)
 
     run, code = _stoppable("runup", lambda: run_at(1.0, out), out)
     if "wall_time_s" in run.meta:
@@ -988,13 +1007,41 @@ def _oil_from_args(args, system):
         if given:
             raise ParameterError(f"{given[0]} needs an oil: give --oil NAME or an [oil] table in --system (without an "
                                  "oil the films keep their constant viscosities)")
-    elif args.method != "J":
+    elif getattr(args, "method", "J") != "J":
         raise ParameterError(f"--method {args.method} cannot be combined with an oil: the thermal operating point is "
                              "the method-J equilibrium (ring torque balanced); use --method J")
-    elif args.run:
+    elif getattr(args, "run", None):
         raise ParameterError("--run cannot be combined with an oil: a run-up's recorded losses are at the films' "
                              "constant viscosities; leave --oil (or the system's [oil]) out to overlay them")
     return oil
+
+
+def _oil_args(p, what):
+    """``--oil``, ``--supply-temperature`` (one value [K]) and ``--supply-pressure`` of a command that takes one
+    oil supply (:class:`frbmodel.linear.thermal.OilSupply`); ``what`` says what the thermal model changes."""
+    p.add_argument("--oil", default=None, metavar="NAME",
+                   help=f"thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46; or an "
+                        f"[oil] table in --system): {what} (method J)")
+    p.add_argument("--supply-temperature", type=float, default=None, metavar="K",
+                   help="oil supply temperature [K] (default 363.15; needs an oil)")
+    p.add_argument("--supply-pressure", type=float, default=None, metavar="PA",
+                   help="oil supply pressure above ambient [Pa] (default 3e5; needs an oil)")
+
+
+def _oil_supply_from_args(args, system):
+    """The :class:`OilSupply` of ``--oil`` (else the system file's ``[oil]``) at ``--supply-temperature`` [K] and
+    ``--supply-pressure`` [Pa]; None without an oil (the supply options are then refused, as is a method other
+    than J with an oil)."""
+    from .linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, check_supply_pressure
+    from .system.oil import T_MIN_K, check_temperature
+
+    oil = _oil_from_args(args, system)
+    if oil is None:
+        return None
+    t_s = 363.15 if args.supply_temperature is None else args.supply_temperature
+    t_s = check_temperature("--supply-temperature", t_s, T_MIN_K, oil.max_temperature_K)
+    p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
+    return OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s))
 
 
 def _supply_from_args(args, oil):
@@ -1028,6 +1075,9 @@ def cmd_losses(args):
 
     tc = load_from_args(args)
     oil = _oil_from_args(args, tc)
+    if args.onsets and oil is None:
+        raise ParameterError("--onsets needs an oil: give --oil NAME or an [oil] table in --system (the onsets are "
+                             "computed at each supply temperature's thermal operating points)")
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
@@ -1049,8 +1099,31 @@ def cmd_losses(args):
     fig.savefig(p_png, dpi=130)
     plt.close(fig)
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
-    print(f"wrote:\n  {p_csv}\n  {p_png}")
+    paths = [p_csv, p_png] + (_write_onsets(tc, oil, temps, p_s, speeds, out) if args.onsets else [])
+    print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
+
+
+def _write_onsets(tc, oil, temps, p_s, speeds, out):
+    """``frb losses --onsets``: whirl onsets versus supply temperature (:func:`frbmodel.studies.thermal.
+    onsets_vs_supply`, Campbell grid = ``--speeds``) as whirl_onsets.csv, whirl_onsets_modes.csv and the figure."""
+    import matplotlib.pyplot as plt
+
+    from .plots.thermal import plot_onsets_vs_supply
+    from .studies.thermal import onsets_vs_supply
+
+    films, modes = onsets_vs_supply(tc, oil, temps, p_s, speeds_rpm=speeds, progress=True)
+    paths = [out / "whirl_onsets.csv", out / "whirl_onsets_modes.csv", out / "whirl_onsets.png"]
+    films.to_csv(paths[0], index=False)
+    modes.to_csv(paths[1], index=False)
+    fig = plot_onsets_vs_supply(films, modes)
+    fig.savefig(paths[2], dpi=130)
+    plt.close(fig)
+    print("film whirl onsets (exact, each at the temperatures of its speed):")
+    cols = ["supply temperature [K]", "film", "onset [rpm]", "constant-viscosity onset [rpm]", "RSR at onset [-]",
+            "film temperature at onset [K]"]
+    print(films[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
+    return paths
 
 
 def cmd_warmup(args):
@@ -1259,6 +1332,8 @@ def cmd_sweep(args):
                 if not args.ssp:
                     raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
                 opts["ssp"] = str(Path(args.ssp).resolve())
+        if args.oil is not None:
+            opts["oil"] = args.oil
         cases = grid(params, args.analysis, **opts)
     scheduler = "serial" if args.serial else args.scheduler
     check_scheduler(scheduler)  # (before the folder is made: a wrong address leaves nothing behind)
@@ -1319,6 +1394,7 @@ def _add_campbell(sub):
     c.add_argument("--from-fmu", metavar="SSP", default=None,
                    help="assemble the linear system from the FMUs of this SSP (methods F, G, I, J)")
     c.add_argument("--parameter-set", default=None, help="SSP parameter set for --from-fmu (default co36)")
+    _oil_args(c, "every speed at its thermal operating point (film viscosities, whirl curves, exact onsets)")
     _system_args(c)
     c.set_defaults(func=cmd_campbell)
 
@@ -1369,6 +1445,7 @@ def _add_equilibrium(sub):
     e.add_argument("--method", default="J", type=str.upper, choices=list(METHODS), help="bearing model (Table 1)")
     e.add_argument("--speed-rpm", type=float, default=150e3, help="rotor speed [rpm]")
     e.add_argument("--out", default=None, help="also write a CSV into this folder")
+    _oil_args(e, "the films' viscosities at the thermal operating point of --speed-rpm")
     _system_args(e)
     e.set_defaults(func=cmd_equilibrium)
 
@@ -1410,6 +1487,8 @@ def _add_runup(sub):
                         "by round-off")
     r.add_argument("--no-figure", action="store_true")
     r.add_argument("--out", default="results/runup")
+    _oil_args(r, "the films' viscosities follow the rotor speed (quasi-static temperatures of the thermal operating "
+                 "points); prescribed speed profiles, --integrator rodas or lsoda")
     _system_args(r)
     r.set_defaults(func=cmd_runup)
 
@@ -1499,7 +1578,12 @@ def _add_sweep(sub):
     sw.add_argument("--example", choices=["outer-clearance"], help="built-in study: outer clearance 36-46 um")
     sw.add_argument("--param", action="append", metavar="NAME=V1,V2",
                     help="swept parameter (repeatable; SI): outer_clearance, inner_clearance, viscosity_turbine, "
-                         "viscosity_compressor, viscosity_scale, ring_mass, unbalance_turbine, unbalance_compressor")
+                         "viscosity_compressor, viscosity_scale, ring_mass, unbalance_turbine, unbalance_compressor, "
+                         "supply_temperature [K], supply_pressure [Pa] (these two with --oil)")
+    sw.add_argument("--oil", default=None, metavar="NAME",
+                    help="thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46): "
+                         "every case at its supply temperature (default 363.15 K) and pressure (3e5 Pa); campbell "
+                         "(method J) and runup")
     sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default="campbell",
                     help="'hopf': the Hopf points of the full model (linear onsets) in --speeds START:END; two swept "
                          "parameters give a stability chart; 'bifurcation': the limit-cycle branches from those Hopf "
@@ -1546,6 +1630,9 @@ def _add_losses(sub):
                          "needs an oil)")
     lo.add_argument("--supply-pressure", type=float, default=None, metavar="PA",
                     help="oil supply pressure above ambient [Pa] (default 3e5; needs an oil)")
+    lo.add_argument("--onsets", action="store_true",
+                    help="with an oil, also the whirl onset speeds versus the supply temperature(s): each film's exact "
+                         "onset and the Campbell modes' (grid = --speeds): whirl_onsets.csv, _modes.csv, .png")
     lo.add_argument("--out", default="results/losses", help="output folder")
     _system_args(lo)
     lo.set_defaults(func=cmd_losses)

@@ -40,6 +40,7 @@ from .modal import (
     stability_labels,
     track,
 )
+from .thermal import at_operating_point, check_oil_supply
 from .whirl import FILM_NAMES, ONSET_SEARCH_RPM, bearing_whirl, film_names, film_onset_speeds
 
 #: a mode is called a ring mode when the rings carry more than this share of its kinetic energy
@@ -639,7 +640,7 @@ def speed_grid_order(speeds_rpm) -> str:
     return "ascending" if np.all(d >= 0) else "descending" if np.all(d <= 0) else "unsorted"
 
 
-def exact_onsets(system, speeds_rpm):
+def exact_onsets(system, speeds_rpm, oil_supply=None):
     """Film whirl onsets [rpm] of ``system`` by :func:`frbmodel.film_onset_speeds` over a range that covers the
     default search range and the grid.
 
@@ -648,6 +649,8 @@ def exact_onsets(system, speeds_rpm):
     system : Turbocharger
     speeds_rpm : ndarray
         The sweep's speeds [rpm].
+    oil_supply : OilSupply, optional
+        The thermal model (each onset at the film temperatures of its speed), see :func:`film_onset_speeds`.
 
     Returns
     -------
@@ -667,10 +670,11 @@ def exact_onsets(system, speeds_rpm):
     lo = min(ONSET_SEARCH_RPM[0], pos.min()) if pos.size else ONSET_SEARCH_RPM[0]
     hi = max(ONSET_SEARCH_RPM[1], speeds_rpm.max())
     try:
-        on = film_onset_speeds(system, "J", (lo, hi))
+        on = film_onset_speeds(system, "J", (lo, hi), oil_supply)
     except (ConvergenceError, FilmContactError) as exc:
         return None, f"{GRID_ONSET_SOURCE} (the exact search in {lo:g}..{hi:g} rpm failed: {exc})"
-    return on, f"{EXACT_ONSET_SOURCE}, searched in {lo:g}..{hi:g} rpm"
+    where = "" if oil_supply is None else ", each at the film viscosities of its speed's thermal operating point"
+    return on, f"{EXACT_ONSET_SOURCE}{where}, searched in {lo:g}..{hi:g} rpm"
 
 
 def _system_meta(system, m, kw):
@@ -680,25 +684,29 @@ def _system_meta(system, m, kw):
             "films": list(film_names(system)), "bearings": [b.name for b in system.bearings]}
 
 
-def _sweep(system, m, speeds, whirl, bar, kw):
-    """Per speed: film equilibria, linear systems (film methods) and whirl rows. Returns the arrays (cut to the
-    speeds done), the timing and the Ctrl-C / SIGTERM that stopped the sweep (else None)."""
+def _sweep(system, m, speeds, whirl, bar, kw, oil_supply=None):
+    """Per speed: film equilibria, linear systems (film methods) and whirl rows, with an oil supply at that speed's
+    thermal operating point. Returns the arrays (cut to the speeds done), the films' viscosities [Pa s] per speed,
+    the timing and the Ctrl-C / SIGTERM that stopped the sweep (else None)."""
     loads = system.bearing_loads
     nb = len(system.bearings)
     rsr = np.full((speeds.size, nb), np.nan)
     ecc, whirl_hz, margin = (np.full((speeds.size, 2 * nb), np.nan) for _ in range(3))
+    mu = np.full((speeds.size, 2 * nb), np.nan)
     t_eq = 0.0
     systems = []
     i, stopped = 0, None
     try:
         for i, s in enumerate(speeds):
-            t_eq += _speed_row(system, m, s, whirl, kw, loads, systems, (rsr, ecc, whirl_hz, margin), i)
+            sys_s = at_operating_point(system, s, oil_supply)
+            mu[i] = [f.viscosity for b in sys_s.bearings for f in (b.inner, b.outer)]
+            t_eq += _speed_row(sys_s, m, s, whirl, kw, loads, systems, (rsr, ecc, whirl_hz, margin), i)
             bar.update(1)
         i = speeds.size
     except KeyboardInterrupt as exc:  # keep the speeds done: the caller returns them with the interruption
         stopped = exc
         del systems[i:]
-    return systems, rsr[:i], ecc[:i], whirl_hz[:i], margin[:i], t_eq, stopped
+    return systems, rsr[:i], ecc[:i], whirl_hz[:i], margin[:i], mu[:i], t_eq, stopped
 
 
 def _speed_row(system, m, s, whirl, kw, loads, systems, rows, i):
@@ -746,7 +754,8 @@ def progress_enabled(progress) -> bool:
     return bool(progress)
 
 
-def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = False, **kw) -> CampbellResult:
+def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = False, oil_supply=None,
+             **kw) -> CampbellResult:
     """Holistic Campbell diagram of ``system`` for bearing-modelling ``method``.
 
     Parameters
@@ -761,6 +770,11 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
         film (:func:`frbmodel.film_onset_speeds`, independent of the grid).
     progress : bool
         Show a progress bar over the speeds (tqdm, on stderr).
+    oil_supply : OilSupply, optional
+        The thermal model (method J only): at each speed the films' viscosities are those of that speed's thermal
+        operating point (:func:`frbmodel.linear.thermal.thermal_system`), and so are the whirl curves and the exact
+        onsets (each at the temperatures of its onset speed). ``meta`` records it (``oil_supply``) and the films'
+        viscosities per speed (``film_viscosities_Pa_s``). None (default): the constant viscosities, bit for bit.
     **kw
         Spring stiffnesses of A, B, E: ``k``, ``kx``, ``ky`` [N/m].
 
@@ -772,7 +786,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     Raises
     ------
     ParameterError
-        Not a system, an unknown method or option, invalid speeds.
+        Not a system, an unknown method or option, invalid speeds, an oil supply with a method other than J.
     KeyboardInterrupt
         Ctrl-C (or :class:`~frbmodel.core.interrupt.Terminated`, SIGTERM) during the sweep; after the first speed its
         ``.result`` is the diagram of the speeds done, ``meta["status"] = "interrupted"``.
@@ -788,6 +802,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     """
     check_system(system)
     m = get_method(method)
+    supply = check_oil_supply(oil_supply, m.letter)
     given = np.linspace(*PAPER_SPEED_RANGE_RPM, 100) if speeds_rpm is None else speeds_rpm
     speeds = check_speeds(given, m.needs_films, m.letter)
     order = speed_grid_order(speeds)
@@ -795,7 +810,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     m.options(**kw)  # validate early
     t0 = time.perf_counter()
     with counter_bar(speeds.size, f"campbell {m.letter}", progress_enabled(progress), unit="speed") as bar:
-        systems, rsr, ecc, whirl_hz, margin, t_eq, stopped = _sweep(system, m, speeds, whirl, bar, kw)
+        systems, rsr, ecc, whirl_hz, margin, mu, t_eq, stopped = _sweep(system, m, speeds, whirl, bar, kw, supply)
     if stopped is not None and not rsr.shape[0]:
         raise stopped
     requested, speeds = speeds.size, speeds[:rsr.shape[0]]
@@ -809,10 +824,12 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
         mode_sets = speed_modes(ls0.M, ls0.K, ls0.C, G, rpm_to_rad_s(speeds), ls0.planes())
         mass, ring_dofs = ls0.M, ls0.ring_dofs
     skipped = "not computed (interrupted)" if stopped is not None else "not computed (whirl=False)"
-    onsets, source = exact_onsets(system, speeds) if whirl and stopped is None else (
+    onsets, source = exact_onsets(system, speeds, supply) if whirl and stopped is None else (
         np.full(2 * len(system.bearings), np.nan), skipped)
     meta = {**_system_meta(system, m, kw), "source": "frbmodel.linear.campbell", "whirl": bool(whirl),
             "speed_grid_order": order, "equilibrium_time_s": t_eq, "whirl_onset_source": source}
+    if supply is not None:
+        meta.update(oil_supply=supply.to_dict(), film_viscosities_Pa_s=mu.tolist())
     res = campbell_from_modes(m.letter, speeds, mode_sets, system.rotor, mass, ring_dofs, rsr, ecc, whirl_hz, margin,
                               meta, whirl_onset_rpm=onsets)
     res.meta["cpu_time_s"] = time.perf_counter() - t0

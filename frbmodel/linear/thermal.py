@@ -4,12 +4,13 @@ Per bearing and speed, the fixed point film temperatures → viscosities μ(T) o
 (ring speed, eccentricities) → friction powers (:func:`frbmodel.linear.losses.equilibrium_loss`) and oil flows
 (:func:`frbmodel.physics.thermal.bearing_flows`) → temperatures (:func:`frbmodel.physics.thermal.film_temperatures`)
 is solved for the two film temperatures with a Newton-type root (MINPACK hybr). :func:`thermal_system` returns the
-Turbocharger with its film viscosities at those temperatures: the entry point of the Campbell diagram, run-ups and
-FMUs at an oil temperature (stage 2 of issue #25).
+Turbocharger with its film viscosities at those temperatures; :class:`OilSupply` (oil, supply temperature and
+pressure, coefficients) is the one option by which the Campbell diagram and the film whirl onsets take the thermal
+model (``oil_supply=``), each speed at its own operating point (stage 2 of issue #25).
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -17,10 +18,12 @@ from ..core.errors import ConvergenceError, ParameterError, check_real, check_sp
 from ..core.units import RPM
 from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, heat_flows
 from ..system.oil import T_MIN_K, Oil, check_temperature
+from ..system.rotor import GRAVITY
 from .equilibrium import bearing_equilibrium
 from .losses import bearing_losses, equilibrium_loss, with_ring_speed_ratio
 
-__all__ = ["MAX_SUPPLY_PRESSURE_PA", "thermal_losses", "thermal_system"]
+__all__ = ["MAX_SUPPLY_PRESSURE_PA", "OilSupply", "at_operating_point", "thermal_bearing", "thermal_losses",
+           "thermal_system"]
 
 #: the highest oil supply pressure accepted [Pa] (gauge): 20 bar; turbocharger oil circuits run at 1 ... 6 bar
 MAX_SUPPLY_PRESSURE_PA = 2e6
@@ -35,6 +38,72 @@ def check_supply_pressure(name, pressure_Pa):
         raise ParameterError(f"{name} = {pressure_Pa!r} Pa is invalid: valid range 0 ... {MAX_SUPPLY_PRESSURE_PA:g} "
                              "Pa (gauge; 1 bar = 1e5 Pa)")
     return p
+
+
+@dataclass(frozen=True)
+class OilSupply:
+    """The oil and its supply state: what an analysis needs to put every film at its thermal operating point
+    (:func:`thermal_losses`) at each rotor speed.
+
+    Parameters
+    ----------
+    oil : Oil
+        The lubricant (:data:`frbmodel.OILS` or an :class:`~frbmodel.system.oil.Oil` of datasheet values).
+    supply_temperature_K : float
+        Oil supply (inlet) temperature [K], 243.15 ... the oil's upper limit. Default 363.15 (90 °C).
+    supply_pressure_Pa : float
+        Supply pressure above ambient [Pa], 0 ... 2e6. Default 3e5.
+    model : ThermalModel, optional
+        Coefficients of the balance; default :class:`ThermalModel()`.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> OilSupply(frb.OILS["SAE 5W-30"], 333.15).supply_pressure_Pa
+    300000.0
+    >>> try:
+    ...     OilSupply(frb.OILS["SAE 5W-30"], 90.0)
+    ... except ParameterError as exc:
+    ...     print(exc)
+    supply_temperature_K = 90.0 K is invalid: valid range 243.15 ... 473.15 K (-30 ... 200 °C); temperatures are in K
+    """
+
+    oil: Oil
+    supply_temperature_K: float = 363.15
+    supply_pressure_Pa: float = SUPPLY_PRESSURE_PA
+    model: ThermalModel = None
+
+    def __post_init__(self):
+        if not isinstance(self.oil, Oil):
+            raise ParameterError(f"oil = {self.oil!r:.60} is a {type(self.oil).__name__}; expected an Oil "
+                                 "(frbmodel.OILS[name])")
+        model = ThermalModel() if self.model is None else self.model
+        if not isinstance(model, ThermalModel):
+            raise ParameterError(f"model = {model!r:.60} is a {type(model).__name__}; expected a ThermalModel")
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "supply_temperature_K", check_temperature(
+            "supply_temperature_K", self.supply_temperature_K, T_MIN_K, self.oil.max_temperature_K))
+        object.__setattr__(self, "supply_pressure_Pa", check_supply_pressure("supply_pressure_Pa",
+                                                                             self.supply_pressure_Pa))
+
+    def to_dict(self) -> dict:
+        """Plain data for a result's metadata: the oil, the supply temperature [K] and pressure [Pa], the model."""
+        return {"oil": self.oil.to_dict(), "supply_temperature_K": self.supply_temperature_K,
+                "supply_pressure_Pa": self.supply_pressure_Pa, "model": self.model.to_dict()}
+
+
+def check_oil_supply(oil_supply, method="J"):
+    """``oil_supply`` if it is None or an :class:`OilSupply` used with method J, else a :class:`ParameterError`
+    (the thermal operating point is the method-J equilibrium: other methods would mix two equilibria)."""
+    if oil_supply is None:
+        return None
+    if not isinstance(oil_supply, OilSupply):
+        raise ParameterError(f"oil_supply = {oil_supply!r:.60} is a {type(oil_supply).__name__}; expected an "
+                             "OilSupply(oil, supply_temperature_K, supply_pressure_Pa) or None")
+    if str(method).upper() != "J":
+        raise ParameterError(f"method = {method!r} cannot be combined with an oil supply: the thermal operating point "
+                             "is the method-J equilibrium (ring torque balanced); use method J")
+    return oil_supply
 
 
 def _with_viscosities(bearing, mu_inner, mu_outer):
@@ -189,6 +258,43 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
                                      system.gravity)
                 rows.append(_row(rpm, t_s, p_s, oil, model, s))
     return pd.DataFrame(rows)
+
+
+def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", gravity=GRAVITY):
+    """One bearing with its films' viscosities [Pa s] at their temperatures of the thermal operating point at
+    ``speed_rpm`` (the per-bearing step of :func:`thermal_system`, for searches over speed such as the film whirl
+    onsets).
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    load_N : float
+        Static load of the bearing [N].
+    speed_rpm : float
+        Rotor speed [rpm], > 0.
+    oil_supply : OilSupply
+    film_model : str
+    gravity : float
+        The system's gravitational acceleration [m/s²].
+
+    Returns
+    -------
+    FloatingRingBearing
+    """
+    sup = check_oil_supply(oil_supply)
+    s = _operating_point(bearing, float(load_N), check_speed("speed_rpm", speed_rpm) * RPM, sup.oil,
+                         sup.supply_temperature_K, sup.supply_pressure_Pa, sup.model, film_model,
+                         gravity)
+    return s["bearing"]
+
+
+def at_operating_point(system, speed_rpm, oil_supply):
+    """``system`` itself without an oil supply (the films' constant viscosities, bit for bit), else
+    :func:`thermal_system` at ``speed_rpm`` with ``oil_supply``."""
+    if oil_supply is None:
+        return system
+    return thermal_system(system, speed_rpm, oil_supply.oil, oil_supply.supply_temperature_K,
+                          oil_supply.supply_pressure_Pa, oil_supply.model)
 
 
 def thermal_system(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,

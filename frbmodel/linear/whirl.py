@@ -17,6 +17,7 @@ from ..system.films import FILM_NAMES  # noqa: F401  (the default order of the w
 from ..system.methods import get_method
 from ..system.rotor import GRAVITY
 from .equilibrium import bearing_equilibrium
+from .thermal import check_oil_supply, thermal_bearing
 
 #: default search range [rpm] of :func:`film_onset_speeds`
 ONSET_SEARCH_RPM = (500.0, 400e3)
@@ -206,7 +207,7 @@ def _check_search_range(speed_range_rpm):
     return lo, hi
 
 
-def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM):
+def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM, oil_supply=None):
     """Rotor speeds at which each film passes its whirl threshold, to 1e-6 rpm (docs/theory/whirl.md#film-whirl).
 
     The margins of :func:`bearing_whirl` at the ``method`` equilibria are sampled at 40 geometrically spaced
@@ -219,6 +220,11 @@ def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM):
         Method of the static equilibria (default J: full torque balance).
     speed_range_rpm : (float, float)
         Search range [rpm], 0 < low < high.
+    oil_supply : OilSupply, optional
+        With the thermal model: at every speed of the search each bearing's films have their viscosities at the
+        thermal operating point of that speed (:func:`frbmodel.linear.thermal.thermal_bearing`), so an onset is at
+        the film temperatures of the onset speed. Method J only. None: the constant viscosities (bit for bit as
+        without the option).
 
     Returns
     -------
@@ -230,7 +236,8 @@ def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM):
     Raises
     ------
     ParameterError
-        ``system`` is not a system, ``method`` has no film equilibrium, or the range is invalid.
+        ``system`` is not a system, ``method`` has no film equilibrium, the range is invalid, or an oil supply with
+        a method other than J.
 
     Examples
     --------
@@ -245,12 +252,14 @@ def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM):
     m = get_method(method)
     if m.equilibrium is None:
         raise ParameterError(f"method = {method!r} has no film equilibrium; film onsets need one of C, D, F, G, I, J")
+    supply = check_oil_supply(oil_supply, m.letter)
     lo, hi = _check_search_range(speed_range_rpm)
     film_model = check_model(system.film_model)
     loads = system.bearing_loads
     res = []
-    for i, b in enumerate(system.bearings):
-        def margins(rpm, i=i, b=b):
+    for i, b0 in enumerate(system.bearings):
+        def margins(rpm, i=i, b0=b0):
+            b = b0 if supply is None else thermal_bearing(b0, loads[i], rpm, supply, film_model, system.gravity)
             eq = bearing_equilibrium(b, loads[i], rpm_to_rad_s(rpm), m.letter, film_model, system.gravity)
             return bearing_whirl(b, eq, film_model, system.gravity)[2:]
 

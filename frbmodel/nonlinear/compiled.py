@@ -62,7 +62,7 @@ def pack_problem(problem):
     parts = [np.array(head, dtype=float), *(m.ravel() for m in eom), f_grav, jn, geom.ravel(), polys.ravel(), ring_m,
              ring_i, unb_node, unb_me, unb_phase, tg, wg, wdg]
     if torque:
-        parts.append(problem.args[-1])
+        parts.append(problem.args[21])
     return np.ascontiguousarray(np.concatenate([np.asarray(a, dtype=float).ravel() for a in parts]))
 
 

@@ -23,7 +23,7 @@ from numba import njit
 from ..core.errors import MAX_SPEED_RPM
 from ..core.linalg import lu_factor, lu_solve
 from ..physics.bearing import ring_rhs_kernel
-from ..physics.dynamics import interp_uniform, monolithic_rhs
+from ..physics.dynamics import film_data_at_speed, interp_uniform, monolithic_rhs
 from ..physics.losses import journal_torque_kernel
 
 #: typical displacement [m] (about a film clearance) that sets the difference steps of the film columns: step
@@ -108,7 +108,8 @@ def _bearing_columns(y, jac, yp, scale, omega, omega_dot, args):
     tenth of its cost and without its cancellation in q̈ (which holds the large M⁻¹K q)."""
     n_r = args[2]
     minv, minv_g = args[0][0], args[0][2]
-    jn, geom, polys, ring_m, ring_i, grav = args[3], args[4], args[5], args[6], args[7], args[8]
+    jn, polys, ring_m, ring_i, grav = args[3], args[5], args[6], args[7], args[8]
+    geom = film_data_at_speed(args[4], omega, args[22], args[23])  # quasi-static viscosities (None: args[4] itself)
     unb_node, unb_me, unb_phase, eps_cap, housing = args[9], args[10], args[11], args[16], args[18]
     torque = y.size > 2 * n_r + 11
     jp = args[20] if torque else 1.0

@@ -29,9 +29,11 @@ from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
 from ..core.units import RPM
 from ..linear.equilibrium import bearing_equilibrium
+from ..linear.thermal import at_operating_point, check_oil_supply, thermal_losses
+from ..linear.whirl import film_names
+from ..physics.dynamics import film_data_at_speed, rotor_polar_inertia
 from ..physics.dynamics import monolithic_jac as _jac
 from ..physics.dynamics import monolithic_rhs as _rhs
-from ..physics.dynamics import rotor_polar_inertia
 from ..physics.film import check_model
 from ..physics.losses import bearing_loss_kernel, film_arrays
 from .recorder import Recorder, RunupResult, RunupSchema
@@ -789,7 +791,61 @@ def housing_mass(rotor):
     return np.vstack([rotor.translation_load(1.0, 0.0), rotor.translation_load(0.0, 1.0)])
 
 
-def build_problem(system, profile, film_model, unbalance=(), linear_springs=None):
+#: rotor speeds of the quasi-static viscosity table over a run-up's speed range (docs/theory/thermal.md#run-ups)
+VISCOSITY_TABLE_SPEEDS = 97
+#: lowest speed of the viscosity table [rpm] (below it the table holds its first row: the films are then within
+#: 0.1 K of the supply temperature)
+VISCOSITY_TABLE_MIN_RPM = 1e3
+
+
+def viscosity_table(system, speeds_rpm, oil_supply):
+    """Film viscosities [Pa s] over rotor speed from the thermal operating points (:func:`thermal_losses`) on a
+    uniform grid through ``speeds_rpm``'s range: the quasi-static temperatures of a run-up.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    speeds_rpm : array_like
+        The speeds the run covers [rpm] (its profile).
+    oil_supply : OilSupply
+
+    Returns
+    -------
+    speeds : ndarray (nv,)
+        Uniform grid [rad/s] from max(min speed, 1000 rpm) to the highest speed (:data:`VISCOSITY_TABLE_SPEEDS`
+        points; one point for a constant speed, repeated).
+    table : ndarray (4, nv)
+        Viscosities [Pa s]: turbine inner, outer, compressor inner, outer.
+    """
+    lo = max(float(np.min(speeds_rpm)), VISCOSITY_TABLE_MIN_RPM)
+    hi = max(float(np.max(speeds_rpm)), lo)
+    grid = np.linspace(lo, hi, VISCOSITY_TABLE_SPEEDS) if hi > lo * (1 + 1e-12) else np.array([lo, lo * (1 + 1e-9)])
+    tab = thermal_losses(system, grid, oil_supply.oil, oil_supply.supply_temperature_K, oil_supply.supply_pressure_Pa,
+                         oil_supply.model)
+    nb = len(system.bearings)
+    mu = tab[["inner viscosity [Pa s]", "outer viscosity [Pa s]"]].to_numpy().reshape(grid.size, nb, 2)
+    return grid * RPM, np.ascontiguousarray(mu.reshape(grid.size, 2 * nb).T)
+
+
+def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile")):
+    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, the ``"radau"`` integrator (its packed
+    arguments carry no viscosity table), a torque-driven rotor (no known speed range for the table) or linear
+    springs (no films). ``names`` are the option names for the messages (the CLI's)."""
+    sup = check_oil_supply(oil_supply)
+    if sup is None:
+        return None
+    if integrator == "radau":
+        raise ParameterError(f"{names[0]} = 'radau' cannot take an oil supply (its packed arguments have no viscosity "
+                             "table); use 'rodas' (default) or 'lsoda'")
+    if profile.torque_driven:
+        raise ParameterError(f"{names[1]} torque cannot take an oil supply: a torque-driven rotor has no known speed "
+                             "range for the viscosity table; prescribe the speed")
+    if linear_springs is not None:
+        raise ParameterError("linear_springs cannot take an oil supply: the journals have no films")
+    return sup
+
+
+def build_problem(system, profile, film_model, unbalance=(), linear_springs=None, oil_supply=None):
     """Problem set-up: matrices, film geometry and correction polynomials, rings, unbalance, speed table.
 
     Parameters
@@ -804,6 +860,10 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
         Rotating unbalances.
     linear_springs : float, optional
         Isotropic journal springs [N/m] instead of the films (method A's bearing, for verification).
+    oil_supply : OilSupply, optional
+        The thermal model with quasi-static temperatures: the films' viscosities follow the rotor speed through
+        :func:`viscosity_table` (interpolated in the compiled right-hand side); ``problem.system`` is the system at
+        the start speed's operating point (its initial equilibrium). None: constant viscosities, bit for bit.
 
     Returns
     -------
@@ -812,8 +872,8 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     Raises
     ------
     ParameterError
-        Not two bearings, a negative unbalance or spring stiffness, a non-uniform time grid, or a torque-driven
-        rotor without polar inertia.
+        Not two bearings, a negative unbalance or spring stiffness, a non-uniform time grid, a torque-driven
+        rotor without polar inertia, or an oil supply with a torque-driven rotor or linear springs.
 
     Examples
     --------
@@ -823,6 +883,11 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
         raise ParameterError(f"the run-up needs exactly 2 bearings, the system has {len(system.bearings)}")
     rotor = system.rotor
     springs = 0.0 if linear_springs is None else check_positive("linear_springs", linear_springs, "N/m")
+    sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs)
+    visc = (None, None)
+    if sup is not None:
+        visc = viscosity_table(system, profile.omega / RPM, sup)
+        system = at_operating_point(system, max(float(profile.omega[0]) / RPM, VISCOSITY_TABLE_MIN_RPM), sup)
     arrays = [film_arrays(b, film_model) for b in system.bearings]
     geom = np.array([a[0] for a in arrays])
     polys = np.array([a[1] for a in arrays])
@@ -843,8 +908,9 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     if profile.torque_driven and not jp > 0:
         raise ParameterError(f"rotor polar inertia = {jp!r} kg m^2 is invalid for a torque-driven rotor: valid "
                              "range > 0")
-    # polar inertia and drive torque last (None: a prescribed speed), so the arguments have one layout
-    args = args + (jp, np.asarray(profile.drive_torque, dtype=float) if profile.torque_driven else None)
+    # polar inertia, drive torque (None: a prescribed speed) and the viscosity table (None, None: constant
+    # viscosities) last, so the arguments have one layout
+    args = args + (jp, np.asarray(profile.drive_torque, dtype=float) if profile.torque_driven else None) + visc
     return Problem(system, profile, film_model, args, rotor.n_dof, springs, diag, jp, geom, polys)
 
 
@@ -1180,7 +1246,8 @@ def _losses(problem, y, w):
         j = 4 * b.node
         r = problem.ring_index(i)
         ring = np.append(y[r:r + 4], y[problem.ring_speed_index(i)])
-        t_j, p_i, p_o = bearing_loss_kernel(problem.geom[i], problem.polys[i], y[j], y[j + 1], y[n_r + j],
+        geom = film_data_at_speed(problem.geom, w, problem.args[22], problem.args[23])
+        t_j, p_i, p_o = bearing_loss_kernel(geom[i], problem.polys[i], y[j], y[j + 1], y[n_r + j],
                                             y[n_r + j + 1], ring, w, EPS_CAP)
         torque[i], power[i] = t_j, p_i + p_o
     return torque, power
@@ -1216,12 +1283,13 @@ def film_samples(ts, ys, ws, args, diag, geom, polys, journal_at, ring_at, ring_
         _rhs(ts[k], y, buf, *args)
         for i in range(diag.size):
             eps[k, i] = diag[i]
+        g = film_data_at_speed(geom, ws[k], args[22], args[23])
         for b in range(journal_at.size):
             j, r = journal_at[b], ring_at[b]
             for m in range(4):
                 ring[m] = y[r + m]
             ring[4] = y[ring_speed_at[b]]
-            t_j, p_i, p_o = bearing_loss_kernel(geom[b], polys[b], y[j], y[j + 1], y[n_r + j], y[n_r + j + 1], ring,
+            t_j, p_i, p_o = bearing_loss_kernel(g[b], polys[b], y[j], y[j + 1], y[n_r + j], y[n_r + j + 1], ring,
                                                 ws[k], eps_cap)
             torque[k, b] = t_j
             power[k, b] = p_i + p_o
@@ -1514,7 +1582,7 @@ def _integrate(problem, y0, rec, t_out, solver_opts, contact_eps, progress):
 def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, unbalance=(),
           output_rate_hz=20e3, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL_M, perturbation=0.05, out_dir=None, progress=False,
           contact_eps=0.98, linear_springs=None, initial="equilibrium", max_step=None, nsteps=500_000,
-          integrator="rodas"):
+          integrator="rodas", oil_supply=None):
     """Nonlinear run-up simulation (the monolithic reference).
 
     Parameters
@@ -1561,6 +1629,13 @@ def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, u
         Jacobian from
         Python (the former path, kept as the reference; slowest on film runs, 3.7x on the benchmark run-up, but
         the fastest on undamped ``linear_springs`` runs, where every rotor mode keeps ringing).
+    oil_supply : OilSupply, optional
+        The thermal model with quasi-static film temperatures (docs/theory/thermal.md#run-ups): the films'
+        viscosities follow the rotor speed through a table of the thermal operating points over the profile's speed
+        range (:func:`viscosity_table`, interpolated in the compiled right-hand side and in the recorded losses);
+        the initial equilibrium is at the start speed's temperatures. Prescribed speed profiles and the integrators
+        ``"rodas"`` and ``"lsoda"`` only. The metadata record the supply and the table. None: constant viscosities,
+        bit for bit.
 
     Returns
     -------
@@ -1599,7 +1674,8 @@ def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, u
     if integrator not in INTEGRATORS:
         raise ParameterError(f"integrator = {integrator!r} is unknown; valid: {', '.join(map(repr, INTEGRATORS))}")
     check_drive_torque(system, profile)
-    problem = build_problem(system, profile, model, unbalance, linear_springs)
+    check_runup_oil(oil_supply, profile, integrator, linear_springs)
+    problem = build_problem(system, profile, model, unbalance, linear_springs, oil_supply)
     y0 = initial_state(problem, initial, perturbation)
     atol_v, scale = atol_vector(problem, atol)
     t_out = np.arange(int(math.floor(duration * output_rate_hz + 1e-9)) + 1) / output_rate_hz
@@ -1610,6 +1686,11 @@ def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, u
             "perturbation_of_clearance": perturbation, "contact_eps": contact_eps, "units": "SI; speed in rpm",
             **({"speed_source": "torque", "polar_inertia_kg_m2": problem.polar_inertia} if problem.torque_driven
                else {})}
+    if oil_supply is not None:
+        meta.update(oil_supply=oil_supply.to_dict(), film_temperatures="quasi-static in rotor speed",
+                    viscosity_table={"speed [rpm]": (problem.args[22] / RPM).tolist(),
+                                     "viscosity [Pa s]": problem.args[23].tolist(),
+                                     "films": list(film_names(system))})
     t_wall = time.perf_counter()
     with Recorder(RunupSchema.from_system(system), t_out.size, out_dir, meta) as rec:
         status, message, counts, last = _integrate(

@@ -19,12 +19,14 @@ written there, so a master at 1 ms steps still gets a 20 kHz orbit record.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from numba import njit
 
 from ..core.errors import FilmContactError, IntegrationError, ParameterError, check_finite, check_positive
 from ..core.units import RPM, rad_s_to_rpm
+from ..linear.thermal import OilSupply, at_operating_point, thermal_losses
 from ..physics.film import check_model, film_force_kernel
 from .recorder import Recorder, RunupSchema
 from .runup import (
@@ -32,6 +34,7 @@ from .runup import (
     DEFAULT_ATOL_M,
     DEFAULT_RTOL,
     EPS_CAP,
+    VISCOSITY_TABLE_MIN_RPM,
     SpeedProfile,
     atol_vector,
     build_problem,
@@ -52,6 +55,15 @@ SPEED_SOURCES = ("ramp", "input", "torque")
 CHECK_RATE_HZ = 20e3
 #: default eccentricity ratio at which a step is discarded (wall contact), as frb.runup's contact_eps
 CONTACT_EPS = 0.98
+#: speeds of the component's thermal table (thermal model on): 49 uniformly spaced over its speed range; a change of
+#: the supply inputs recomputes it (49 thermal operating points per bearing, ~0.4 s)
+THERMAL_TABLE_SPEEDS = 49
+#: quantities per bearing of :meth:`TurbochargerComponent.thermal_outputs` (thermal model on): (name, unit, description)
+THERMAL_OUTPUTS = (
+    ("inner_film_temperature", "K", "inner-film temperature of the thermal operating point at the rotor speed"),
+    ("outer_film_temperature", "K", "outer-film temperature of the thermal operating point at the rotor speed"),
+    ("oil_flow", "m3/s", "oil flow through both films (side, feed and supply flows) at the rotor speed"),
+)
 #: quantities per bearing of :meth:`TurbochargerComponent.outputs`: (name, unit, description)
 BEARING_OUTPUTS = (
     ("journal_torque", "N.m", "inner-film torque on the journal about +z (negative: it brakes the rotor)"),
@@ -81,6 +93,38 @@ def _outer_film_forces(y, ring_at, ring_speed_at, geom, polys, eps_cap, out):
         fx, fy, _ = film_force_kernel(g[0], g[1], g[2], g[3], polys[b, 1, 0], polys[b, 1, 1], y[r], y[r + 1],
                                       y[r + 2], y[r + 3], y[ring_speed_at[b]], eps_cap)
         out[b, 0], out[b, 1] = fx, fy
+
+
+def thermal_table(system, speeds, oil_supply):
+    """The thermal operating points (:func:`thermal_losses`) at ``speeds`` [rad/s]: ``speeds``, ``viscosity``
+    (4, n) [Pa s] and ``temperature`` (4, n) [K] per film (turbine inner, outer, compressor inner, outer), ``flow``
+    (n_bearings, n) [m³/s] through both films of each bearing."""
+    tab = thermal_losses(system, speeds / RPM, oil_supply.oil, oil_supply.supply_temperature_K,
+                         oil_supply.supply_pressure_Pa, oil_supply.model)
+    nb, n = len(system.bearings), speeds.size
+
+    def films(a, b):
+        return np.ascontiguousarray(tab[[a, b]].to_numpy().reshape(n, nb, 2).reshape(n, 2 * nb).T)
+
+    flow = (tab["inner flow [m^3/s]"] + tab["outer flow [m^3/s]"]).to_numpy().reshape(n, nb).T
+    return {"speeds": np.asarray(speeds, dtype=float), "viscosity": films("inner viscosity [Pa s]",
+                                                                          "outer viscosity [Pa s]"),
+            "temperature": films("inner film temperature [K]", "outer film temperature [K]"),
+            "flow": np.ascontiguousarray(flow)}
+
+
+def thermal_output_names(system):
+    """Names, units and descriptions of :meth:`TurbochargerComponent.thermal_outputs`: :data:`THERMAL_OUTPUTS` per
+    bearing (``<bearing>_bearing.<quantity>``).
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> [n for n, _, _ in thermal_output_names(frb.turbocharger())][:2]
+    ['turbine_bearing.inner_film_temperature', 'turbine_bearing.outer_film_temperature']
+    """
+    return [(f"{b.name}_bearing.{q}", u, f"{b.name} bearing: {d}") for b in system.bearings for q, u, d in
+            THERMAL_OUTPUTS]
 
 
 def output_names(system):
@@ -148,6 +192,14 @@ class TurbochargerComponent:
         "input": the speed before the first step [rad/s] (the equilibrium is found there); default ``speed_start``.
     check_rate_hz : float
         Rate [Hz] of the in-step grid for the contact check, the smallest film thickness and the record.
+    oil : Oil, optional
+        The thermal model (docs/theory/thermal.md#turbocharger-fmu): the films' viscosities follow the rotor speed
+        through a table of thermal operating points (:data:`THERMAL_TABLE_SPEEDS` speeds over the speed range:
+        ``speed_start`` ... ``speed_end`` for "ramp", 1000 rpm ... the speed scale otherwise; held constant outside)
+        at the supply temperature [K] and pressure [Pa] of each :meth:`step` (recomputed when they change), and
+        :meth:`thermal_outputs` gives the film temperatures and oil flows. None: constant viscosities, bit for bit.
+    supply_temperature_K, supply_pressure_Pa : float
+        The supply state before the first step (thermal model on): the initial equilibrium is at its temperatures.
 
     Examples
     --------
@@ -162,7 +214,7 @@ class TurbochargerComponent:
     def __init__(self, system, speed_source="ramp", speed_start=20e3 * RPM, speed_end=250e3 * RPM, ramp_time=1.0,
                  film_model=None, unbalance=(), rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL_M, speed_scale=None,
                  contact_eps=CONTACT_EPS, perturbation=0.05, initial="equilibrium", initial_speed=None,
-                 check_rate_hz=CHECK_RATE_HZ):
+                 check_rate_hz=CHECK_RATE_HZ, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=3e5):
         if speed_source not in SPEED_SOURCES:
             raise ParameterError(f"speed_source = {speed_source!r} is unknown; valid: {', '.join(SPEED_SOURCES)}")
         self.system, self.speed_source = system, speed_source
@@ -177,8 +229,17 @@ class TurbochargerComponent:
             raise ParameterError(f"contact_eps = {contact_eps!r} is invalid: valid range 0 < contact_eps < 1")
         self.check_rate_hz = check_positive("check_rate_hz", check_rate_hz, "Hz")
         self.rtol, atol = check_tolerances(system, rtol, atol)
+        self._oil, self._supply = oil, None
+        if oil is not None:  # the films at the start speed's temperatures: the initial equilibrium is there
+            speeds = self._thermal_speeds(w0, w1, scale)
+            self._supply = OilSupply(oil, supply_temperature_K, supply_pressure_Pa)
+            self._thermal = thermal_table(system, speeds, self._supply)
+            system = at_operating_point(system, max(w0 / RPM, speeds[0] / RPM), self._supply)
         self.problem = build_problem(system, self._profile(w0, w1), check_model(film_model or system.film_model),
                                      unbalance)
+        if oil is not None:
+            self.problem = replace(self.problem, args=self.problem.args[:22] + (self._thermal["speeds"],
+                                                                                  self._thermal["viscosity"]))
         self.y = initial_state(self.problem, initial, perturbation)
         self.modal, self.atol = modal_error_basis(self.problem, atol_vector(self.problem, atol, scale)[0], scale)
         from .rosenbrock import FD_TYPICAL_M, film_columns
@@ -204,6 +265,25 @@ class TurbochargerComponent:
         self.outputs()
 
     # ------------------------------------------------------------------ set-up
+    def _thermal_speeds(self, w0, w1, scale):
+        """Uniform speed grid [rad/s] of the thermal table."""
+        lo = min(w0, w1) if self.speed_source == "ramp" else VISCOSITY_TABLE_MIN_RPM * RPM
+        hi = max(w0, w1) if self.speed_source == "ramp" else max(scale, lo)
+        lo = max(min(lo, hi), VISCOSITY_TABLE_MIN_RPM * RPM)
+        hi = max(hi, lo * (1.0 + 1e-9))
+        return np.linspace(lo, hi, THERMAL_TABLE_SPEEDS)
+
+    def _set_supply(self, temperature_K, pressure_Pa):
+        """Recompute the thermal table in place (the RHS holds its arrays) when the supply state changes."""
+        if self._oil is None or (temperature_K, pressure_Pa) == (self._supply.supply_temperature_K,
+                                                                  self._supply.supply_pressure_Pa):
+            return
+        sup = OilSupply(self._oil, temperature_K, pressure_Pa)
+        new = thermal_table(self.system, self._thermal["speeds"], sup)
+        for k in ("viscosity", "temperature", "flow"):
+            self._thermal[k][:] = new[k]
+        self._supply = sup
+
     def _profile(self, w0, w1):
         """The speed table of the RHS: the run-up's ramp (the same arrays as SpeedProfile.ramp in rad/s), a
         2-point table rewritten before each step ("input"), or a torque-driven profile ("torque")."""
@@ -252,7 +332,8 @@ class TurbochargerComponent:
         inner = np.arange(k0, k1) / self.check_rate_hz
         return np.concatenate(([t], inner[(inner > t) & (inner < t_end)], [t_end]))
 
-    def step(self, h, speed_in=None, drive_torque=0.0, housing_acc=(0.0, 0.0), t=None):
+    def step(self, h, speed_in=None, drive_torque=0.0, housing_acc=(0.0, 0.0), t=None, supply_temperature_K=None,
+             supply_pressure_Pa=None):
         """Advance by ``h`` [s], exactly to t + h, with the inputs held over the step.
 
         Parameters
@@ -267,6 +348,9 @@ class TurbochargerComponent:
             Housing acceleration (a_x, a_y) [m/s²].
         t : float, optional
             The master's time at the start of the step [s]; must equal :attr:`t` (within 1e-9 of the step).
+        supply_temperature_K, supply_pressure_Pa : float, optional
+            Oil supply temperature [K] and pressure [Pa] over the step (thermal model on; None: unchanged). Refused
+            without the thermal model.
 
         Raises
         ------
@@ -290,6 +374,15 @@ class TurbochargerComponent:
         tq = (check_drive_torque_value("drive_torque", drive_torque, self.problem.polar_inertia)
               if self.speed_source == "torque" else 0.0)
         acc = [check_finite(f"housing acceleration {q}", a, "m/s2") for q, a in zip("xy", housing_acc)]
+        given = [n for n, v in (("supply_temperature_K", supply_temperature_K),
+                                ("supply_pressure_Pa", supply_pressure_Pa)) if v is not None]
+        if given and self._oil is None:
+            raise ParameterError(f"{given[0]} needs the thermal model: the component has no oil (constant "
+                                 "viscosities)")
+        if given:
+            sup = self._supply
+            self._set_supply(sup.supply_temperature_K if supply_temperature_K is None else float(supply_temperature_K),
+                             sup.supply_pressure_Pa if supply_pressure_Pa is None else float(supply_pressure_Pa))
         near = 1e-6 * h  # a ramp end this close to the step's start or end is taken as there (no sliver of a step)
         if self.speed_source == "ramp" and self.t + near < self.ramp_time < t_end - near:  # a knot: stop there
             self._advance(self.ramp_time, w, tq, acc)
@@ -364,6 +457,25 @@ class TurbochargerComponent:
             self._out = np.concatenate([(w, y[2 * self.problem.n_rotor + 10]), per.ravel(), y[self._disc_at]])
         return self._out
 
+    def thermal_outputs(self):
+        """Film temperatures [K] and oil flows [m³/s] of the thermal operating point at the current rotor speed, in
+        the order of :func:`thermal_output_names` (thermal model on; the table interpolated linearly in speed).
+
+        Returns
+        -------
+        ndarray
+        """
+        if self._oil is None:
+            raise ParameterError("thermal outputs need the thermal model: the component has no oil")
+        w, th = self._end[0], self._thermal
+        nb = len(self.system.bearings)
+        out = np.empty((nb, len(THERMAL_OUTPUTS)))
+        for b in range(nb):
+            out[b, 0] = np.interp(w, th["speeds"], th["temperature"][2 * b])
+            out[b, 1] = np.interp(w, th["speeds"], th["temperature"][2 * b + 1])
+            out[b, 2] = np.interp(w, th["speeds"], th["flow"][b])
+        return out.ravel()
+
     # ------------------------------------------------------------------ record and state
     def record(self, out_dir, meta=None):
         """Write the run-up's result files (``runup.csv``, ``runup.json``) into ``out_dir`` from now on, one row
@@ -395,6 +507,8 @@ class TurbochargerComponent:
         p = self.problem
         w, y, eps, torque, power = self._end
         return {"t": self.t, "h": self.h, "y": self.y.tolist(),
+                **({"supply": [self._supply.supply_temperature_K, self._supply.supply_pressure_Pa]}
+                   if self._oil is not None else {}),
                 "profile": [p.profile.t.tolist(), p.profile.omega.tolist(), p.profile.omega_dot.tolist()],
                 "end": [w, y.tolist(), eps.tolist(), torque.tolist(), power.tolist()],
                 "h_min": self._h_min.tolist(), "thickness_end": self._thickness_end.tolist()}
@@ -408,6 +522,8 @@ class TurbochargerComponent:
             A :meth:`state`.
         """
         p = self.problem
+        if "supply" in st:
+            self._set_supply(*(float(v) for v in st["supply"]))
         self.t, self.h, self.y = float(st["t"]), float(st["h"]), np.array(st["y"], dtype=float)
         for arr, v in zip((p.profile.t, p.profile.omega, p.profile.omega_dot), st["profile"]):
             arr[:] = v

@@ -53,6 +53,38 @@ def interp_uniform(t, tg, yg):
 
 
 @njit(cache=True)
+def film_data_at_speed(geom, omega, viscosity_speeds, viscosity_table):
+    """The film data at rotor speed ``omega`` [rad/s]: ``geom`` itself without a viscosity table (constant
+    viscosities: the same array, so the arithmetic is bit for bit that of the constant films), else a copy whose
+    viscosity μ of bearing b's film f is ``viscosity_table[2 b + f]`` interpolated linearly at ``omega`` on the
+    uniform speed grid ``viscosity_speeds`` [rad/s] (held constant outside it): quasi-static film temperatures
+    (docs/theory/thermal.md#run-ups).
+
+    Parameters
+    ----------
+    geom : ndarray (2, 2, 4)
+        (bearing, film, [R, L, c, μ]) [m, m, m, Pa s].
+    omega : float
+        Rotor speed [rad/s].
+    viscosity_speeds : ndarray (nv,) or None
+        Uniform, ascending rotor-speed grid [rad/s].
+    viscosity_table : ndarray (4, nv) or None
+        Film viscosities [Pa s] on that grid (turbine inner, outer, compressor inner, outer).
+
+    Returns
+    -------
+    ndarray (2, 2, 4)
+    """
+    if viscosity_table is None:
+        return geom
+    g = geom.copy()
+    for b in range(2):
+        for f in range(2):
+            g[b, f, 3] = interp_uniform(omega, viscosity_speeds, viscosity_table[2 * b + f])
+    return g
+
+
+@njit(cache=True)
 def add_unbalance_forces(f, phi, w, wd, unb_node, unb_me, unb_phase):
     """Add the rotating unbalance forces m e (Ω² cos θ + Ω̇ sin θ, Ω² sin θ − Ω̇ cos θ), θ = φ + phase, to the
     nodal load vector ``f`` [N] (the one implementation; run-up and rotor FMU both call it).
@@ -233,7 +265,7 @@ def _bearing_loads(y, f, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, spr
 @njit(cache=True)
 def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
                    tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia=0.0,
-                   drive_torque=None):
+                   drive_torque=None, viscosity_speeds=None, viscosity_table=None):
     """dy/dt of the monolithic model for the state [q, q̇, ring_b (x, y, vx, vy) for b = 0, 1, ring speeds,
     rotation angle (, rotor speed)], written into ``out`` and returned.
 
@@ -288,6 +320,9 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
     drive_torque : ndarray (nt,), optional
         Drive torque [N m] on the grid ``tg``; given, the rotor is torque-driven and its speed is the last state,
         with rate :func:`spin_acceleration`.
+    viscosity_speeds, viscosity_table : ndarray, optional
+        Film viscosities over rotor speed (:func:`film_data_at_speed`): the thermal model's quasi-static film
+        temperatures. None: the constant viscosities of ``geom``, bit for bit.
 
     Returns
     -------
@@ -299,12 +334,14 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
     if drive_torque is None:
         tj = np.empty(0)
         w = interp_uniform(t, tg, wg)
-        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj, ax, ay)
+        g = film_data_at_speed(geom, w, viscosity_speeds, viscosity_table)
+        _bearing_loads(y, fb, out, n_r, jn, g, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj, ax, ay)
         wd = interp_uniform(t, tg, wdg)
     else:
         tj = np.empty(2)
         w = y[2 * n_r + 11]
-        _bearing_loads(y, fb, out, n_r, jn, geom, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj, ax, ay)
+        g = film_data_at_speed(geom, w, viscosity_speeds, viscosity_table)
+        _bearing_loads(y, fb, out, n_r, jn, g, polys, ring_m, ring_i, grav, w, springs, eps_cap, diag, tj, ax, ay)
         wd = spin_acceleration(interp_uniform(t, tg, drive_torque), tj, polar_inertia)
         out[2 * n_r + 11] = wd
     f = f_grav.copy()
@@ -324,7 +361,7 @@ def monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i,
 @njit(cache=True)
 def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node,
                    unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia=0.0,
-                   drive_torque=None):
+                   drive_torque=None, viscosity_speeds=None, viscosity_table=None):
     """Forward-difference Jacobian of :func:`monolithic_rhs` into ``jac`` (all in compiled code: one RHS call per
     state; step 1.5e-8 · max(|y_k|, scale_k)).
 
@@ -343,7 +380,7 @@ def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys
     eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav
         As in :func:`monolithic_rhs`.
     unb_node, unb_me, unb_phase, tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia
-        As in :func:`monolithic_rhs`; ``drive_torque`` too.
+        As in :func:`monolithic_rhs`; ``drive_torque``, ``viscosity_speeds`` and ``viscosity_table`` too.
 
     Returns
     -------
@@ -352,14 +389,15 @@ def monolithic_jac(t, y, jac, f0, work, scale, eom, f_grav, n_r, jn, geom, polys
     """
     n = y.size
     monolithic_rhs(t, y, f0, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase,
-                   tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia, drive_torque)
+                   tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia, drive_torque,
+                   viscosity_speeds, viscosity_table)
     yp = y.copy()
     for k in range(n):
         h = 1.5e-8 * max(abs(y[k]), scale[k])
         yp[k] = y[k] + h
         monolithic_rhs(t, yp, work, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me,
                        unb_phase, tg, wg, wdg, springs, eps_cap, diag, housing_acc, housing_mass, polar_inertia,
-                       drive_torque)
+                       drive_torque, viscosity_speeds, viscosity_table)
         for i in range(n):
             jac[i, k] = (work[i] - f0[i]) / h
         yp[k] = y[k]

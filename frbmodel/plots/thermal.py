@@ -1,8 +1,10 @@
-"""Figure of the thermal operating points over speed (the table of :func:`frbmodel.linear.thermal.thermal_losses`):
-ring-speed ratio, film temperatures and power loss per bearing for each supply temperature."""
+"""Figures of the thermal model: the operating points over speed (the table of
+:func:`frbmodel.linear.thermal.thermal_losses`: ring-speed ratio, film temperatures and power loss per bearing for each
+supply temperature) and the whirl onset speeds versus the supply temperature (the tables of
+:func:`frbmodel.studies.thermal.onsets_vs_supply`)."""
 from __future__ import annotations
 
-__all__ = ["plot_thermal_losses"]
+__all__ = ["plot_onsets_vs_supply", "plot_thermal_losses"]
 
 #: the offset between K and °C [K]
 _ZERO_C_K = 273.15
@@ -63,4 +65,51 @@ def plot_thermal_losses(table, title=None):
         title = f"Thermal operating point: {oil}, supply {table['supply pressure [Pa]'].iloc[0] / 1e5:g} bar (gauge)"
     fig.suptitle(title)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
+    return fig
+
+
+def plot_onsets_vs_supply(films, modes=None, title=None):
+    """Whirl onset speed [krpm] versus oil supply temperature [K] (°C on the top axis): each film's exact onset with
+    the thermal model (inner films solid, outer dashed, one colour per bearing), its constant-viscosity onset
+    (dotted) and, if given, the speeds where the Campbell diagram's modes lose stability inside its grid (crosses).
+
+    Parameters
+    ----------
+    films : pandas.DataFrame
+        Columns ``supply temperature [K]``, ``film``, ``onset [rpm]``, ``constant-viscosity onset [rpm]``, ``oil``.
+    modes : pandas.DataFrame, optional
+        Columns ``supply temperature [K]``, ``onset [rpm]``, ``unstable at grid start`` (rows unstable at the grid's
+        first speed are not drawn: their onset lies below the grid).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    names = list(dict.fromkeys(films["film"]))
+    bearings = list(dict.fromkeys(n.rsplit(" ", 1)[0] for n in names))
+    for name in names:
+        grp = films[films["film"] == name].sort_values("supply temperature [K]")
+        color = f"C{bearings.index(name.rsplit(' ', 1)[0])}"
+        ls = "-" if name.endswith("inner") else "--"
+        ax.plot(grp["supply temperature [K]"], grp["onset [rpm]"] / 1e3, ls, marker="o", color=color, lw=1.6,
+                label=f"{name} film (thermal model)")
+        ax.axhline(grp["constant-viscosity onset [rpm]"].iloc[0] / 1e3, color=color, ls=":", lw=1.0)
+    if modes is not None and len(modes):
+        inside = modes[~modes["unstable at grid start"].astype(bool)]
+        ax.plot(inside["supply temperature [K]"], inside["onset [rpm]"] / 1e3, "x", color="k", ms=7,
+                label="a Campbell mode loses stability (grid-interpolated)")
+    ax.plot([], [], ":", color="0.3", label="constant viscosities (system file)")
+    ax.set_xlabel("oil supply temperature [K]")
+    ax.set_ylabel("whirl onset speed [krpm]")
+    ax.secondary_xaxis("top", functions=(lambda k: k - _ZERO_C_K, lambda c: c + _ZERO_C_K)).set_xlabel("[°C]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    if title is None:
+        title = f"Whirl onsets vs supply temperature: {films['oil'].iloc[0]}"
+    ax.set_title(title)
+    fig.tight_layout()
     return fig

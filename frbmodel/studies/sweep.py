@@ -45,7 +45,12 @@ PARAMETERS = {
     "ring_mass": ("kg", "mass of both rings"),
     "unbalance_turbine": ("kg m", "unbalance of the disc named 'turbine_wheel' (or 'turbine')"),
     "unbalance_compressor": ("kg m", "unbalance of the disc named 'compressor_wheel' (or 'compressor')"),
+    "supply_temperature": ("K", "oil supply temperature: each speed at its thermal operating point (the option "
+                                "'oil' or the system's oil; campbell method J and runup)"),
+    "supply_pressure": ("Pa", "oil supply pressure above ambient (thermal model, as supply_temperature)"),
 }
+#: the study parameters of the oil supply (not the system's: :func:`case_oil_supply`)
+SUPPLY_PARAMETERS = ("supply_temperature", "supply_pressure")
 ANALYSES = ("campbell", "runup", "cosim", "hopf", "bifurcation")
 #: seconds to wait for an existing Dask scheduler before giving up
 SCHEDULER_TIMEOUT_S = 5.0
@@ -105,6 +110,8 @@ def check_options(analysis, options):
         START and STOP; run-ups: ``speed_rpm`` (START, END) — a run-down if END < START — and ``duration`` [s];
         ``hopf``: ``speed_rpm``; ``bifurcation``: ``speed_rpm``, ``start`` ("hopf", a speed [rpm] or a list),
         ``max_points`` (>= 2, default 25) and ``segments`` (>= 1, default 1), as :func:`frbmodel.cycles.continuation`.
+        Every analysis: ``oil``, the name of a named oil or an ``[oil]`` table (dict), for the thermal model
+        (:func:`case_oil_supply`).
 
     Raises
     ------
@@ -123,6 +130,8 @@ def check_options(analysis, options):
     from ..nonlinear.runup import check_speed
     from ..system.methods import get_method
 
+    if "oil" in options:
+        _option_oil(options["oil"])
     if analysis == "campbell":
         for m in options.get("methods", ["J"]):
             get_method(m)
@@ -188,14 +197,84 @@ def grid(params: dict, analysis="campbell", **options):
     if analysis not in ANALYSES:
         raise ParameterError(f"analysis = {analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
     check_options(analysis, options)
+    _check_thermal_study(names, analysis, options)
+    oil_base = None  # the system option's oil, if it has one, for the supply values' check
+    if isinstance(options.get("system"), dict) and "oil" in options["system"]:
+        from ..system.parameters import Turbocharger
+
+        oil_base = Turbocharger.from_dict(options["system"])
     for n in names:  # each value on its own, before any case runs (a refused value failed every case, exit 4)
         for v in params[n]:
             try:
-                build_case_system({n: float(v)})
+                tc = build_case_system({n: float(v)})[0]
+                case_oil_supply({n: float(v)}, options, tc if oil_base is None else oil_base)
             except ParameterError as exc:
                 raise ParameterError(f"study parameter {n} = {v:g} [{PARAMETERS[n][0]}]: {exc}") from None
     return [Case(dict(zip(names, map(float, vals))), analysis, options)
             for vals in product(*(params[n] for n in names))]
+
+
+def _option_oil(value):
+    """The :class:`Oil` of a study's ``oil`` option: a named oil or an ``[oil]`` table (dict)."""
+    from ..system.oil import OIL, oil_from_dict
+
+    if isinstance(value, str):
+        return OIL(value)
+    if isinstance(value, dict):
+        return oil_from_dict(value, "sweep option oil")
+    raise ParameterError(f"sweep option oil = {value!r:.60} is invalid: the name of a named oil or an [oil] table")
+
+
+def _check_thermal_study(names, analysis, options):
+    """A thermal study (an ``oil`` option, or supply parameters with the system option's oil) only where the
+    thermal model enters: Campbell diagrams of method J and run-ups, without the constant-viscosity parameters."""
+    supply = [n for n in names if n in SUPPLY_PARAMETERS]
+    base_oil = isinstance(options.get("system"), dict) and "oil" in options["system"]
+    if not (supply or "oil" in options):
+        return
+    if "oil" not in options and not base_oil:
+        raise ParameterError(f"study parameter {supply[0]} needs an oil: give the option oil (frb sweep --oil NAME) "
+                             "or a system with an [oil] table")
+    if analysis not in ("campbell", "runup"):
+        raise ParameterError(f"analysis = {analysis!r} cannot take an oil supply: the thermal model is in the "
+                             "campbell (method J) and runup analyses")
+    if analysis == "campbell" and [m.upper() for m in options.get("methods", ["J"])] != ["J"]:
+        raise ParameterError(f"methods = {options['methods']!r} cannot be combined with an oil supply: the thermal "
+                             "operating point is the method-J equilibrium; use methods ['J']")
+    fixed = [n for n in names if n.startswith("viscosity_")]
+    if fixed:
+        raise ParameterError(f"study parameter {fixed[0]} cannot be combined with an oil supply: the thermal model "
+                             "sets every film's viscosity from its temperature")
+
+
+def case_oil_supply(params, options, system):
+    """The :class:`~frbmodel.linear.thermal.OilSupply` of a case, or None (constant viscosities).
+
+    Parameters
+    ----------
+    params : dict
+        The case's parameters; ``supply_temperature`` [K] and ``supply_pressure`` [Pa] are used here
+        (defaults 363.15 K and 3e5 Pa).
+    options : dict
+        The case's options; ``oil`` (a named oil or an ``[oil]`` table) names the oil.
+    system : Turbocharger
+        The case's system; its ``oil`` is used when the options name none.
+
+    Returns
+    -------
+    OilSupply or None
+        None without an oil and without supply parameters.
+    """
+    from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
+
+    oil = _option_oil(options["oil"]) if "oil" in options else system.oil
+    given = [n for n in SUPPLY_PARAMETERS if n in params]
+    if oil is None:
+        if given:
+            raise ParameterError(f"study parameter {given[0]} needs an oil: give the option oil (frb sweep --oil NAME) "
+                                 "or a system with an [oil] table")
+        return None
+    return OilSupply(oil, params.get("supply_temperature", 363.15), params.get("supply_pressure", SUPPLY_PRESSURE_PA))
 
 
 def _named_bearing(bearings, key):
@@ -232,7 +311,8 @@ def build_case_system(params, base=None):
     Returns
     -------
     system : Turbocharger
-        ``base`` with the parameters applied.
+        ``base`` with the parameters applied (the oil-supply parameters are not the system's: they are left to
+        :func:`case_oil_supply`).
     unbalance : list of Unbalance
         One per non-zero ``unbalance_<disc>`` parameter (phase 0).
 
@@ -253,7 +333,7 @@ def build_case_system(params, base=None):
     from ..system.presets import turbocharger
 
     tc = base or turbocharger()
-    p = dict(params)
+    p = {k: v for k, v in params.items() if k not in SUPPLY_PARAMETERS}
     if "outer_clearance" in p:
         tc = tc.with_outer_clearance(p.pop("outer_clearance"))
     bs = list(tc.bearings)
@@ -317,7 +397,7 @@ def _onset_rows_run(run, label, node=None):
     return rows
 
 
-def _campbell_rows(tc, o):
+def _campbell_rows(tc, o, supply=None):
     from ..linear.campbell import campbell
 
     # ascending grid whatever the order the user gave: the onsets are the lower ends of the unstable ranges
@@ -325,7 +405,7 @@ def _campbell_rows(tc, o):
     speeds = np.linspace(min(a, b), max(a, b), int(n))
     rows = []
     for m in o.get("methods", ["J"]):
-        rows += _onset_rows_campbell(campbell(tc, m, speeds))
+        rows += _onset_rows_campbell(campbell(tc, m, speeds, oil_supply=supply))
     return rows
 
 
@@ -357,7 +437,7 @@ def _bifurcation_rows(tc, o, case_dir):
              "onset at sweep start": False} for b in bd.bifurcations]
 
 
-def _runup_rows(tc, unb, o):
+def _runup_rows(tc, unb, o, supply=None):
     from ..nonlinear.runup import SpeedProfile, runup
 
     start, end = o.get("speed_rpm", (1e3, 250e3))
@@ -365,7 +445,7 @@ def _runup_rows(tc, unb, o):
     prof = SpeedProfile.exponential(start, end, dur) if o.get("profile", "exponential") == "exponential" \
         else SpeedProfile.ramp(start, end, dur)
     run = runup(tc, profile=prof, duration=dur, unbalance=unb, progress=False,
-                output_rate_hz=float(o.get("output_rate_hz", 10e3)))
+                output_rate_hz=float(o.get("output_rate_hz", 10e3)), oil_supply=supply)
     return _onset_rows_run(run, "run-down" if end < start else "run-up")
 
 
@@ -431,10 +511,13 @@ def run_case(case: Case, out_dir) -> dict:
 
             base = Turbocharger.from_dict(o["system"])
         tc, unb = build_case_system(case.params, base)
+        supply = case_oil_supply(case.params, o, tc)
+        if supply is not None and case.analysis not in ("campbell", "runup"):
+            raise ParameterError(f"analysis = {case.analysis!r} cannot take an oil supply")
         if case.analysis == "campbell":
-            rows = _campbell_rows(tc, o)
+            rows = _campbell_rows(tc, o, supply)
         elif case.analysis == "runup":
-            rows = _runup_rows(tc, unb, o)
+            rows = _runup_rows(tc, unb, o, supply)
         elif case.analysis == "cosim":
             rows = _cosim_rows(tc, unb, o)
         elif case.analysis == "hopf":
@@ -1072,7 +1155,7 @@ def example_cases(name):
 
 __all__ = ["Case", "grid", "check_options", "run_case", "run_study", "stability_map", "plot_stability_map",
            "example_cases", "write_index", "PARAMETERS", "ANALYSES",
-           "plot_stability_chart", "SCHEDULER_TIMEOUT_S", "build_case_system",
+           "plot_stability_chart", "SCHEDULER_TIMEOUT_S", "build_case_system", "case_oil_supply", "SUPPLY_PARAMETERS",
            "estimated_cost_s", "longest_first", "COST_RUNUP_S_PER_SIMULATED_S", "COST_COSIM_S_PER_SIMULATED_S",
            "COST_CAMPBELL_S_PER_SPEED", "COST_HOPF_S", "COST_UNBALANCE_FACTOR", "prepare_worker", "worker_state",
            "run_summary"]
