@@ -71,10 +71,10 @@ def campbell_lines(cd, fmax_hz):
         mode where it is unstable) or ``"whirl"`` (a film's whirl frequency past its onset, with its style of
         :func:`frbmodel.plots.figures.whirl_lines`: coincident curves interleaved, both visible).
     """
-    from .figures import _unstable_lines, whirl_lines
+    from .figures import unstable_lines, whirl_lines
 
     out = []
-    for sk, f, j in _unstable_lines(cd, fmax_hz):
+    for sk, f, j in unstable_lines(cd, fmax_hz):
         kind = _mode_label(cd, j, f)
         onset = sk[np.flatnonzero(np.isfinite(f))[0]]
         out.append(("mode", f"unstable {kind or 'mode'} ({cd.method}), from {onset:.0f} krpm", sk * 1e3, f, None))

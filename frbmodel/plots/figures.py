@@ -437,7 +437,7 @@ def equilibrium_cost_figure(stats, title="Equilibrium cost per speed"):
     return fig
 
 
-def _unstable_lines(cd, fmax):
+def unstable_lines(cd, fmax):
     """(speed_krpm, f_hz) arrays per mode, NaN where the mode is stable."""
     out = []
     for j in range(cd.n_modes):
@@ -715,7 +715,7 @@ def composite_figure(sp, campbell=None, whirl=True, rsr=True, fmax_hz=None, comp
     for k in orders:
         ax.plot(s_all / 1e3, k * s_all / 60.0, ":", color="w" if k == 1 else "#bbbbbb", lw=1, label=order_label(k))
     if campbell is not None:
-        for i, (sk, f, _) in enumerate(_unstable_lines(campbell, fmax)):
+        for i, (sk, f, _) in enumerate(unstable_lines(campbell, fmax)):
             label = None if i else f"unstable modes, method {campbell.method}"
             ax.plot(sk, f, "-", color="#00e5ff", lw=1.6, label=label)
         if whirl:
@@ -852,7 +852,7 @@ def composite_plotly(sp, campbell=None, fmax_hz=None, amplitude="db_max", orders
 
 def _campbell_overlay_plotly(go, fig, cd, fmax, num):
     """Unstable modes (one legend entry, the mode in the hover) and whirl curves of ``cd`` on the heatmap."""
-    for i, (sk, f, j) in enumerate(_unstable_lines(cd, fmax)):
+    for i, (sk, f, j) in enumerate(unstable_lines(cd, fmax)):
         fig.add_trace(go.Scatter(x=num(sk * 1e3), y=num(f), mode="lines", name=f"unstable modes, method {cd.method}",
                                  legendgroup="unstable", showlegend=i == 0, line=dict(color="#00e5ff", width=2),
                                  hovertemplate=f"unstable mode {j}<br>" + "speed %{x:.0f} rpm<br>f %{y:.1f} Hz"

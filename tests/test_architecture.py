@@ -1,0 +1,42 @@
+"""The code keeps the shape the style asks for: short functions, no private names used across modules (the layer
+rules themselves are the import-linter contracts of the lint step)."""
+import ast
+import re
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "frbmodel"
+#: longest function body [lines], docstring excluded: the style's "functions stay short (<= ~80 lines)"
+MAX_BODY_LINES = 80
+
+
+def _functions():
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                yield path, node
+
+
+def _body_lines(node):
+    first = node.body[0]
+    doc = isinstance(first, ast.Expr) and isinstance(getattr(first, "value", None), ast.Constant) and \
+        isinstance(first.value.value, str)
+    start = first.end_lineno + 1 if doc and len(node.body) > 1 else first.lineno
+    return node.end_lineno - start + 1
+
+
+def test_no_function_is_longer_than_80_lines():
+    long = [f"{p.relative_to(PACKAGE.parent)}:{n.lineno} {n.name} ({_body_lines(n)} lines)" for p, n in _functions()
+            if _body_lines(n) > MAX_BODY_LINES]
+    assert not long, long
+
+
+def test_no_private_name_is_imported_from_another_module():
+    """A name with a leading underscore is its module's own; importing it elsewhere hides a dependency (five such
+    imports were counted in issue #23). Aliases made private on import (``import x as _x``) are allowed."""
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.level > 0:
+                found += [f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {a.name}" for a in node.names
+                          if re.match(r"_[a-z]", a.name) and a.name != "__version__"]
+    assert not found, found
