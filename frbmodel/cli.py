@@ -9,6 +9,16 @@ import numpy as np
 
 from .core.errors import FRBError, ParameterError, check_finite, check_positive
 from .core.interrupt import Terminated
+from .studies.run_outputs import (
+    check_convergence,
+    orbit_windows,
+    replot_unbalance,
+    run_envelope,
+    write_composites,
+    write_orbits,
+    write_up_down_halves,
+    write_waterfalls,
+)
 
 
 def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
@@ -392,50 +402,6 @@ def _speed_pair(text):
     return a, b
 
 
-def write_composites(run, system, out, xscale="linear", title="run-up", orders=(1.0,)):
-    """Composite figures (PNG + HTML) and component tables of every disc, with the method-J Campbell diagram.
-
-    Writes ``composite_<disc>.png``, ``composite_<disc>.html`` and ``components_<disc>.csv`` into ``out``
-    (:meth:`SpectrogramResult.save`; the HTML loads plotly.js from ``plotly.min.js`` in ``out``) and prints the
-    component tables. Used by ``frb runup``, ``frb cosim`` and ``frb plot``.
-
-    Parameters
-    ----------
-    run : RunupResult
-        The run (at least 64 samples, for the spectrogram).
-    system : Turbocharger
-        The run's system (for the Campbell overlay over the run's speed range).
-    out : Path
-        Output folder (must exist).
-    xscale : {"linear", "log"}
-        Speed axis scale of the PNG figures.
-    title : str
-        Figure title prefix (e.g. ``"run-down"``).
-    orders : sequence of float
-        Order lines k × f_rot (multiples of the rotor frequency) on the spectrograms; 1X by default.
-
-    Returns
-    -------
-    list of Path
-        The files written.
-    """
-    from .linear.campbell import campbell
-    from .plots.style import readable
-    from .signals.spectral import spectrogram
-
-    lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
-    cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
-    paths = []
-    for node in run.displacement:  # the system's discs
-        sp = spectrogram(run, node)
-        paths += sp.save(out, campbell=cd, xscale=xscale, title=f"{title}, {readable(node)}", orders=orders,
-                         nc=False)
-        tab = sp.components_table()
-        print(f"components at the {node}:")
-        print(tab.to_string(index=False, float_format=lambda x: f"{x:.4g}") if len(tab) else "  none")
-    return paths
-
-
 def cmd_runup(args):
     """``frb runup``: monolithic nonlinear run-up or run-down, streamed to a folder, with figures; exit code."""
     from .nonlinear.runup import check_output_rate, runup
@@ -470,11 +436,11 @@ def cmd_runup(args):
         print(f"wall time {run.meta['wall_time_s']:.1f} s ({run.meta.get('integrator', 'lsoda')}: {work}), "
               f"{run.time.size} samples")
     if prof.direction == "up-down" and not args.no_figure:
-        write_up_down_halves(run, tc, out)
+        write_up_down_halves(run, tc, out, make_dir=writable_dir)
     _finish_run(args, run, lambda: tc, out, xscale="log" if args.profile == "exponential" else "linear", title=kind)
     if args.check_convergence and code == 0:
         print("convergence check: the same run with rtol and atol tightened tenfold")
-        check_convergence(run, lambda folder: run_at(0.1, folder), out, "tolerances x0.1")
+        check_convergence(run, lambda folder: run_at(0.1, folder), out, "tolerances x0.1", runner=_cli_runner)
     return code
 
 
@@ -554,7 +520,7 @@ def _save_diagram(runs, tc, bd, out, lo, hi):
     the method-J Campbell diagram's unstable modes and film whirl lines over the speed range."""
     from .linear.campbell import campbell
 
-    envelopes = [_run_envelope(folder, r) for folder, r in runs]
+    envelopes = [run_envelope(folder, r) for folder, r in runs]
     sp = None
     if runs:  # the first run's spectrogram behind the branch frequencies
         from .signals.spectral import spectrogram
@@ -564,79 +530,6 @@ def _save_diagram(runs, tc, bd, out, lo, hi):
         lo, hi = min(lo, sp.speeds_rpm.min()), max(hi, sp.speeds_rpm.max())
     cd = campbell(tc, "J", np.linspace(lo, hi, BIFURCATION_CAMPBELL_SPEEDS))
     bd.save(out, envelopes=envelopes, spectrogram=sp, campbell=cd)
-
-
-def _run_envelope(folder, run, segment_s=0.005):
-    """(label, speeds [rpm], turbine-wheel orbit radius [µm]) per segment of the run-up / run-down ``run`` (read
-    from ``folder``)."""
-    name = run.schema.discs[0]
-    n = max(2, int(round(segment_s / float(run.time[1] - run.time[0]))))
-    speeds, radius = [], []
-    for k in range(0, run.time.size - n + 1, n):
-        xy = run.displacement[name][k:k + n]
-        speeds.append(float(np.mean(run.speed_rpm[k:k + n])))
-        radius.append(float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T))) * 1e6)
-    return (f"{run.meta.get('profile', folder)}", np.array(speeds), np.array(radius))
-
-
-def write_up_down_halves(run, system, out):
-    """Composite figures of each half of a run-up and run-down, in ``out/run-up`` and ``out/run-down``: the
-    spectrogram of the whole run puts the segments of both halves side by side along the speed axis, the halves
-    show each direction on its own (the hysteresis between them). The run-up ends where the top speed is first
-    reached, the run-down starts where it is last held.
-
-    Parameters
-    ----------
-    run : RunupResult
-        A run whose speed rises to its top and then falls.
-    system : Turbocharger
-        The run's system.
-    out : Path
-        Output folder of the run.
-    """
-    from .nonlinear.recorder import RunupResult
-
-    df, top = run.to_dataframe(), np.flatnonzero(run.speed_rpm == run.speed_rpm.max())
-    for name, rows in (("run-up", slice(0, top[0] + 1)), ("run-down", slice(top[-1], None))):
-        half = RunupResult.from_dataframe(df.iloc[rows], run.meta)
-        if half.time.size >= 64:
-            print(f"{name} half:")
-            write_composites(half, system, writable_dir(out / name), title=f"{name} (of a run-up and run-down)")
-
-
-def check_convergence(run, rerun, out, what):
-    """Rerun (``rerun(folder)``) at tightened tolerances into ``out/convergence_check`` and label every component's
-    onset as converged or seeded by round-off: ``convergence_<disc>.csv``, and the columns "converged" and "note"
-    added to ``components_<disc>.csv``.
-
-    Parameters
-    ----------
-    run : RunupResult
-        The run at the normal tolerances.
-    rerun : callable
-        ``rerun(folder) -> RunupResult``: the same run at tightened tolerances (or a smaller macro step),
-        streamed into ``folder``.
-    out : Path
-        Output folder of ``run``.
-    what : str
-        What was tightened, for the printed summary (e.g. ``"tolerances x0.1"``).
-    """
-    import pandas as pd
-
-    from .signals.convergence import convergence_table, unconverged_summary
-    from .signals.spectral import spectrogram
-
-    folder = out / "convergence_check"
-    tight, _ = _stoppable("convergence check", lambda: rerun(folder), folder)
-    for node in run.displacement:
-        tab = convergence_table(spectrogram(run, node).components(), spectrogram(tight, node).components())
-        tab.to_csv(out / f"convergence_{node}.csv", index=False)
-        comp_csv = out / f"components_{node}.csv"
-        if comp_csv.exists() and len(tab):
-            comps = pd.read_csv(comp_csv).drop(columns=["converged", "note"], errors="ignore")
-            comps.merge(tab[["component", "converged", "note"]], on="component", how="left").to_csv(comp_csv,
-                                                                                                   index=False)
-        print(f"{node} ({what}): {unconverged_summary(tab) if len(tab) else 'no sub-synchronous component'}")
 
 
 def _on_sigterm(signum, frame):
@@ -660,6 +553,11 @@ def _stoppable(command, fn, out):
         print(f"\nfrb {command}: interrupted ({'SIGTERM' if code == 143 else 'Ctrl-C'}); what was computed is kept in "
               f"{out.resolve()}", file=sys.stderr)
         return RunupResult.load(out), code
+
+
+def _cli_runner(fn, folder):
+    """The rerun of a convergence check as a long run of the CLI (:func:`_stoppable`): its result."""
+    return _stoppable("convergence check", fn, folder)[0]
 
 
 def _finish_run(args, run, system, out, **figure_kw):
@@ -812,56 +710,6 @@ def replot_bifurcation(args, out):
     return 0
 
 
-def replot_unbalance(out, names=None):
-    """Redraw the figures of a folder written by ``frb unbalance`` from its saved data.
-
-    Every ``unbalance_<M>.json`` (with its ``_dofs.csv`` and ``_critical.csv``) is read back
-    (:meth:`UnbalanceResponse.load`) and drawn again as ``unbalance_<M>.png`` and ``.html``; with several methods
-    also the common Bode figure ``unbalance_bode_<methods>.png`` (methods in the order of an existing Bode figure's
-    name, else alphabetical). The tables are not rewritten.
-
-    Parameters
-    ----------
-    out : Path
-        The folder.
-    names : sequence of str, optional
-        Locations drawn (default: the discs).
-
-    Returns
-    -------
-    list of Path
-        The figures written.
-    """
-    import matplotlib.pyplot as plt
-
-    from .linear.unbalance import UnbalanceResponse, bode_figure
-
-    stems = sorted(p.stem for p in out.glob("unbalance_*.json"))
-    results = [UnbalanceResponse.load(out, s) for s in stems]
-    bad = [n for n in names or [] if n not in results[0].names]
-    if bad:
-        raise ParameterError(f"--locations {bad[0]!r} is unknown; valid: {', '.join(results[0].names)}")
-    paths = []
-    for s, ur in zip(stems, results):
-        stem = out / s
-        fig = ur.plot(names)
-        fig.savefig(stem.with_suffix(".png"), dpi=130, bbox_inches="tight")
-        plt.close(fig)
-        ur.plot_html(stem.with_suffix(".html"), names)
-        paths += [stem.with_suffix(".png"), stem.with_suffix(".html")]
-    if len(results) > 1:
-        letters = sorted(r.method for r in results)
-        for p in out.glob("unbalance_bode_*.png"):  # keep the method order of the first drawing
-            if sorted(p.stem.removeprefix("unbalance_bode_")) == letters:
-                letters = list(p.stem.removeprefix("unbalance_bode_"))
-        results.sort(key=lambda r: letters.index(r.method))
-        fig = bode_figure(results, names)
-        paths.append(out / f"unbalance_bode_{''.join(letters)}.png")
-        fig.savefig(paths[-1], dpi=130, bbox_inches="tight")
-        plt.close(fig)
-    return paths
-
-
 def parse_time_windows(text: str) -> list:
     """Time windows of ``frb plot --orbit-times``: ``"T0:T1"`` or a comma list of them, in seconds.
 
@@ -909,89 +757,6 @@ def _orbit_windows(args, run):
         except ParameterError as exc:
             raise ParameterError(f"{option} {value}: {exc}") from None
     return windows
-
-
-def orbit_windows(run, speeds_rpm=(), revolutions=20.0, time_windows=()):
-    """Orbits of a run at given speeds and over time windows (:func:`frbmodel.signals.orbits.orbits`).
-
-    Parameters
-    ----------
-    run : RunupResult
-        With the system in its metadata (clearances).
-    speeds_rpm : sequence of float
-        Window centres [rpm] (each within the run's speeds).
-    revolutions : float
-        Half-width of each speed window in rotor revolutions.
-    time_windows : sequence of (float, float)
-        Time windows [s] (e.g. the settled end of a constant-speed run), each holding >= 2 samples.
-
-    Returns
-    -------
-    list of Orbits
-    """
-    from .signals.orbits import orbits
-
-    return ([orbits(run, speed_rpm=float(s), revolutions=revolutions) for s in speeds_rpm]
-            + [orbits(run, time_s=w) for w in time_windows])
-
-
-def write_orbits(windows, out, data=False):
-    """Orbit figures (:meth:`Orbits.save`): ``orbits_<rpm>.png`` and ``.html``, or ``orbits_t<t0>-<t1>s.png`` and
-    ``.html``, in ``out``.
-
-    Parameters
-    ----------
-    windows : sequence of Orbits
-        From :func:`orbit_windows`.
-    out : Path
-        Output folder (must exist).
-    data : bool
-        Also write the samples: ``orbits_<...>.csv`` and ``orbits_<...>.nc`` (:meth:`Orbits.to_xarray`).
-
-    Returns
-    -------
-    list of Path
-        The files written.
-    """
-    paths = []
-    for o in windows:
-        written = o.save(out, csv=data, nc=data)
-        paths += written
-        print(f"wrote {out / o.stem}" + "/".join(p.suffix for p in written))
-    return paths
-
-
-def write_waterfalls(run, out, orders=(1.0,)):
-    """3-D waterfall of every disc of a run: ``waterfall_<disc>.png`` and ``.html`` in ``out``.
-
-    Parameters
-    ----------
-    run : RunupResult
-        At least 64 samples.
-    out : Path
-        Output folder (must exist).
-    orders : sequence of float
-        Order lines k × f_rot on the floor of the waterfall.
-
-    Returns
-    -------
-    list of Path
-        The files written.
-    """
-    import matplotlib.pyplot as plt
-
-    from .signals.spectral import spectrogram
-
-    paths = []
-    for node in run.displacement:
-        sp = spectrogram(run, node)
-        fig = sp.waterfall(orders=orders)
-        fig.savefig(out / f"waterfall_{node}.png", dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        sp.waterfall_html(out / f"waterfall_{node}.html", orders=orders)
-        paths += [out / f"waterfall_{node}.png", out / f"waterfall_{node}.html"]
-        print(f"wrote {out / f'waterfall_{node}'}.png/.html")
-    return paths
 
 
 def _oil_from_args(args, system):
@@ -1215,12 +980,13 @@ def cmd_cosim(args):
               f"and the coupling tolerance / 8 ({tol / 8:g})")
         check_convergence(run, lambda folder: cosimulate(
             args.ssp, args.parameter_set, args.stop_time, args.step, folder,
-            **{**kw, "tolerance": tol / 8, "max_step": m["max_step_s"] / 2}), out, "max step / 2, tolerance / 8")
+            **{**kw, "tolerance": tol / 8, "max_step": m["max_step_s"] / 2}), out, "max step / 2, tolerance / 8",
+            runner=_cli_runner)
     elif args.check_convergence and code == 0:
         h = run.meta["step_size_s"] / 2
         print(f"convergence check: the same co-simulation with half the macro step ({h:g} s)")
         check_convergence(run, lambda folder: cosimulate(
-            args.ssp, args.parameter_set, args.stop_time, h, folder, **kw), out, "macro step / 2")
+            args.ssp, args.parameter_set, args.stop_time, h, folder, **kw), out, "macro step / 2", runner=_cli_runner)
     return code
 
 

@@ -141,7 +141,8 @@ def test_order_lines_and_waterfall():
 
 
 def test_cli_writers(tmp_path):
-    from frbmodel.cli import build_parser, orbit_windows, write_orbits, write_waterfalls
+    from frbmodel.cli import build_parser
+    from frbmodel.studies.run_outputs import orbit_windows, write_orbits, write_waterfalls
 
     t = np.arange(0.0, 0.2, 1e-4)
     run = _run(t, 30e3 + 100e3 * t)

@@ -130,7 +130,7 @@ def test_orbit_figure_zooms_onto_small_film_orbits():
 def test_run_figures_and_replot_are_one_path(tmp_path):
     """``frb runup``/``frb cosim`` (write_composites, 1X by default) and ``frb plot --orders 1`` write the same
     files with the same traces: one code path draws both."""
-    from frbmodel.cli import write_composites
+    from frbmodel.studies.run_outputs import write_composites
 
     first, again = tmp_path / "first", tmp_path / "again"
     for out in (first, again):
