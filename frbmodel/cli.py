@@ -13,7 +13,7 @@ from .studies.run_outputs import (
     check_convergence,
     orbit_windows,
     replot_unbalance,
-    run_envelope,
+    save_bifurcation_diagram,
     write_composites,
     write_orbits,
     write_up_down_halves,
@@ -493,7 +493,7 @@ def cmd_bifurcation(args):
               file=sys.stderr)
         bd = BifurcationDiagram(points, [], {"status": "interrupted", "branches": [len(points)]})
     bd.meta.setdefault("status", "finished")
-    _save_diagram(runs, tc, bd, out, lo, hi)
+    save_bifurcation_diagram(bd, tc, out, (lo, hi), runs)
     partial.unlink()
     tab = bd.bifurcation_table()
     print("bifurcation points:" if len(tab) else "no bifurcation points on the branches")
@@ -503,33 +503,12 @@ def cmd_bifurcation(args):
     return code
 
 
-#: speeds of the method-J Campbell diagram drawn in the bifurcation diagram's frequency panel (~1.5 s for 120)
-BIFURCATION_CAMPBELL_SPEEDS = 120
-
-
 def _load_runs(text):
     """``[(folder, run-up result)]`` of ``--runs`` (comma-separated folders), loaded; a ParameterError names a
     folder without one."""
     from .nonlinear.recorder import RunupResult
 
     return [(d, RunupResult.load(d)) for d in (text or "").split(",") if d]
-
-
-def _save_diagram(runs, tc, bd, out, lo, hi):
-    """Write the diagram with the envelopes of the run-up results ``runs`` (--runs), the first run's spectrogram and
-    the method-J Campbell diagram's unstable modes and film whirl lines over the speed range."""
-    from .linear.campbell import campbell
-
-    envelopes = [run_envelope(folder, r) for folder, r in runs]
-    sp = None
-    if runs:  # the first run's spectrogram behind the branch frequencies
-        from .signals.spectral import spectrogram
-
-        run = runs[0][1]
-        sp = spectrogram(run, run.schema.discs[0])
-        lo, hi = min(lo, sp.speeds_rpm.min()), max(hi, sp.speeds_rpm.max())
-    cd = campbell(tc, "J", np.linspace(lo, hi, BIFURCATION_CAMPBELL_SPEEDS))
-    bd.save(out, envelopes=envelopes, spectrogram=sp, campbell=cd)
 
 
 def _on_sigterm(signum, frame):
@@ -705,7 +684,8 @@ def replot_bifurcation(args, out):
     bd = BifurcationDiagram.load(out)
     lo, hi = bd.meta.get("speed_range_rpm", [min(p.speed_rpm for p in bd.points), max(p.speed_rpm for p in bd.points)])
     runs = _load_runs(getattr(args, "runs", None))
-    _save_diagram(runs, system_from_meta(bd.meta, out / "branch.nc", "the Campbell lines"), bd, out, lo, hi)
+    system = system_from_meta(bd.meta, out / "branch.nc", "the Campbell lines")
+    save_bifurcation_diagram(bd, system, out, (lo, hi), runs)
     print(f"results in {out.resolve()} (bifurcation.png/.html)")
     return 0
 

@@ -10,8 +10,8 @@ import numpy as np
 
 from ..core.errors import ParameterError, RunStopped
 
-__all__ = ["check_convergence", "orbit_windows", "replot_unbalance", "run_envelope", "write_composites",
-           "write_orbits", "write_up_down_halves", "write_waterfalls"]
+__all__ = ["check_convergence", "orbit_windows", "replot_unbalance", "run_envelope", "save_bifurcation_diagram",
+           "write_composites", "write_orbits", "write_up_down_halves", "write_waterfalls"]
 
 
 def _mkdir(folder):
@@ -285,3 +285,43 @@ def write_waterfalls(run, out, orders=(1.0,)):
         paths += [out / f"waterfall_{node}.png", out / f"waterfall_{node}.html"]
         print(f"wrote {out / f'waterfall_{node}'}.png/.html")
     return paths
+
+
+#: speeds of the method-J Campbell diagram drawn in the bifurcation diagram's frequency panel (~1.5 s for 120)
+BIFURCATION_CAMPBELL_SPEEDS = 120
+
+
+def save_bifurcation_diagram(bd, system, out, speed_range_rpm, runs=(), campbell_speeds=BIFURCATION_CAMPBELL_SPEEDS):
+    """Write a bifurcation diagram (:meth:`BifurcationDiagram.save`) with the envelopes of the run-up results
+    ``runs`` (``[(folder, RunupResult)]``), the first run's spectrogram behind the branch frequencies and the
+    method-J Campbell diagram's unstable modes and film whirl lines over the speed range.
+
+    Parameters
+    ----------
+    bd : BifurcationDiagram
+    system : Turbocharger
+        For the Campbell diagram.
+    out : Path
+        Output folder.
+    speed_range_rpm : (float, float)
+        Speed range [rpm] of the Campbell lines (widened to the first run's spectrogram).
+    runs : sequence of (str, RunupResult)
+    campbell_speeds : int
+        Speeds of the Campbell diagram.
+
+    Returns
+    -------
+    list of Path
+    """
+    from ..linear.campbell import campbell
+    from ..signals.spectral import spectrogram
+
+    lo, hi = speed_range_rpm
+    envelopes = [run_envelope(folder, r) for folder, r in runs]
+    sp = None
+    if runs:  # the first run's spectrogram behind the branch frequencies
+        run = runs[0][1]
+        sp = spectrogram(run, run.schema.discs[0])
+        lo, hi = min(lo, sp.speeds_rpm.min()), max(hi, sp.speeds_rpm.max())
+    cd = campbell(system, "J", np.linspace(lo, hi, campbell_speeds))
+    return bd.save(out, envelopes=envelopes, spectrogram=sp, campbell=cd)
