@@ -58,7 +58,8 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
         else:
             speeds = np.array([float(x) for x in text.split(",")])
     except ValueError:
-        raise ParameterError(f"{name} is invalid: use START:STOP:COUNT (rpm, COUNT >= 1) or a comma list") from None
+        raise ParameterError(f"{name} is invalid: this command takes a speed grid, START:STOP:COUNT (rpm, COUNT >= 1) "
+                             "or a comma list") from None
     if ":" in text:
         check_speeds_in_range(name, np.array([a, b]))  # (inf or nan named here, not passed to linspace)
         check_speed_count(name, n)  # before the grid is made (1e8 speeds: 800 MB)
@@ -397,8 +398,9 @@ def _speed_pair(text):
             raise ValueError
         a, b = (float(x) for x in fields)
     except ValueError:
-        extra = (" (this command takes a speed range, not a grid: no COUNT)" if len(fields) == 3 else "")
-        raise ParameterError(f"--speeds = {text!r} is invalid: use START:END in rpm{extra}") from None
+        extra = (" (a range, not a grid: no COUNT)" if len(fields) == 3 else "")
+        raise ParameterError(f"--speeds = {text!r} is invalid: this command takes a speed range, START:END in "
+                             f"rpm{extra}") from None
     return a, b
 
 
@@ -1129,7 +1131,8 @@ def _add_campbell(sub):
     c = sub.add_parser("campbell", formatter_class=_Formatter,
                        help="holistic Campbell diagram for one method (CSV + PNG + HTML)")
     c.add_argument("--method", default="J", type=str.upper, choices=list(METHODS), help="bearing model (Table 1)")
-    c.add_argument("--speeds", default="10000:250000:100", help="START:STOP:COUNT [rpm] or comma list")
+    c.add_argument("--speeds", default="10000:250000:100", metavar="GRID",
+                   help="speed grid [rpm]: START:STOP:COUNT or a comma list")
     c.add_argument("--out", default="results/campbell", help="output folder")
     c.add_argument("--fmax", type=float, default=None, help="upper frequency limit of the plots [Hz]")
     c.add_argument("--no-whirl", action="store_true", help="skip the film whirl curves")
@@ -1151,7 +1154,8 @@ def _add_unbalance(sub):
     u.add_argument("--method", default="J", type=str.upper,
                    help="bearing model (Table 1: A B C D E F G I J), or a comma list such as A,J for one Bode figure "
                         "of all")
-    u.add_argument("--speeds", default="1000:250000:200", help="START:STOP:COUNT [rpm] or comma list")
+    u.add_argument("--speeds", default="1000:250000:200", metavar="GRID",
+                   help="speed grid [rpm]: START:STOP:COUNT or a comma list")
     u.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
                    help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable; default turbine_wheel:1e-6:0)")
     u.add_argument("--locations", default=None, metavar="NAMES",
@@ -1166,7 +1170,7 @@ def _add_unbalance(sub):
 def _add_bifurcation(sub):
     b = sub.add_parser("bifurcation", formatter_class=_Formatter,
                        help="Hopf points, limit-cycle branches vs speed (continuation), bifurcation diagram")
-    b.add_argument("--speeds", default="1000:250000", help="START:END speed range [rpm]")
+    b.add_argument("--speeds", default="1000:250000", metavar="RANGE", help="speed range [rpm]: START:END")
     b.add_argument("--start", default="hopf",
                    help="'hopf': a branch from each Hopf point in the range; or a speed [rpm]: the branch through "
                         "the orbit the whirl settles on there (both directions); or a comma-separated list of "
@@ -1209,7 +1213,8 @@ def _add_runup(sub):
 
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
-    r.add_argument("--speeds", default="20000:250000", help="START:END [rpm] (up-down: START:TOP)")
+    r.add_argument("--speeds", default="20000:250000", metavar="RANGE",
+                   help="speed range [rpm]: START:END (up-down: START:TOP)")
     r.add_argument("--duration", type=float, default=None,
                    help="simulated time [s] (default: 1; with a CSV profile its last time)")
     r.add_argument("--profile", type=_profile_arg, default="ramp", metavar="{" + ",".join(PROFILES) + "}|FILE.csv",
@@ -1243,7 +1248,7 @@ def _add_compare(sub):
     m = sub.add_parser("compare", formatter_class=_Formatter,
                        help="run-ups vs method-J stability per outer clearance (Figs. 12-14 + table)")
     m.add_argument("--clearances", default="36e-6,40e-6,42e-6,46e-6", help="outer clearances [m], comma list")
-    m.add_argument("--speeds", default="1000:250000", help="START:END [rpm]")
+    m.add_argument("--speeds", default="1000:250000", metavar="RANGE", help="speed range [rpm]: START:END")
     m.add_argument("--duration", type=float, default=4.0, help="simulated time per run-up [s]")
     m.add_argument("--profile", choices=["ramp", "exponential"], default="exponential")
     m.add_argument("--fmax", type=float, default=1000.0, help="upper frequency of the figures [Hz]")
@@ -1336,7 +1341,7 @@ def _add_sweep(sub):
                          "points (each case's diagram in cases/<id>/, its bifurcation points in the map)")
     sw.add_argument("--max-points", type=int, default=25, help="bifurcation: points per branch and direction")
     sw.add_argument("--methods", default="J", help="Campbell methods, comma list")
-    sw.add_argument("--speeds", default=None,
+    sw.add_argument("--speeds", default=None, metavar="GRID|RANGE",
                     help="campbell: START:STOP:COUNT (default 1000:250000:200); the other analyses: START:END "
                          "(default 1000:250000) [rpm]")
     sw.add_argument("--duration", type=float, default=2.0, help="run-up duration [s]")
@@ -1364,7 +1369,8 @@ def _add_losses(sub):
     lo = sub.add_parser("losses", formatter_class=_Formatter,
                         help="bearing journal torque, power loss and RSR vs speed; with --oil the film temperatures "
                              "(CSV + PNG)")
-    lo.add_argument("--speeds", default="10000:250000:49", help="START:STOP:COUNT [rpm] or comma list")
+    lo.add_argument("--speeds", default="10000:250000:49", metavar="GRID",
+                    help="speed grid [rpm]: START:STOP:COUNT or a comma list")
     lo.add_argument("--method", default="J", type=str.upper, choices=[m for m in METHODS if m in "CDFGIJ"],
                     help="equilibrium method")
     lo.add_argument("--run", default=None, metavar="DIR", help="overlay the recorded losses of this run-up folder")

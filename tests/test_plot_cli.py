@@ -179,7 +179,7 @@ def test_plot_redraws_a_bifurcation_folder(tmp_path):
 
 @pytest.mark.parametrize("argv, words", [
     (["--orbits", "500000"], ["--orbits 500000: speed_rpm = 500000 is invalid: valid range 30000 ... 60000 rpm"]),
-    (["--orbits", "fast"], ["--orbits = 'fast' is invalid: use START:STOP:COUNT"]),
+    (["--orbits", "fast"], ["--orbits = 'fast' is invalid: this command takes a speed grid, START:STOP:COUNT"]),
     (["--orbit-times", "5:6"], ["--orbit-times 5:6: the time window 5 ... 6 s holds 0 samples", "at least 2"]),
     (["--revolutions=-3"], ["--revolutions -3 applies only with --orbits"]),
     (["--orbits", "45000", "--revolutions=-3"], ["--revolutions = -3.0 revolutions is invalid", "> 0"]),

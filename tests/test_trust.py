@@ -190,8 +190,8 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["runup", "--rate", "1", "--duration", "0.001"], ["records no sample after t = 0"]),
     (["runup", "--duration", "1e-9"], ["records no sample after t = 0"]),
     (["runup", "--unbalance", "turbine_wheel:1e-6:0:7", "--duration", "0.01"], ["2 or 3 fields, 4 given"]),
-    (["runup", "--speeds", "20000:30000:7", "--duration", "0.01"], ["use START:END", "no COUNT"]),
-    (["bifurcation", "--speeds", "1000:120000:5", "--hopf-only"], ["use START:END", "no COUNT"]),
+    (["runup", "--speeds", "20000:30000:7", "--duration", "0.01"], ["takes a speed range, START:END", "no COUNT"]),
+    (["bifurcation", "--speeds", "1000:120000:5", "--hopf-only"], ["takes a speed range, START:END", "no COUNT"]),
     (["runup", "--drive-torque", "0.05", "--duration", "0.01"], ["--drive-torque = 0.05 N m applies only with "
                                                                   "--profile torque"]),
     (["runup", "--system", "", "--duration", "0.01"], ["--system = '' is invalid"]),
