@@ -144,15 +144,14 @@ def _system_args(p):
 
 def cmd_campbell(args):
     """``frb campbell``: Campbell diagram of one method (from the library or the FMUs), saved and summarised."""
-    from .core.errors import check_speed
     from .linear.campbell import campbell
 
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
-    fmax = None if args.fmax is None else check_positive("--fmax", args.fmax, "Hz")
+    fmax = args.fmax  # (bounded by NUMERIC_OPTIONS)
     if args.mode_shapes is not None and args.from_fmu:
         raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
-    mode_rpm = None if args.mode_shapes is None else check_speed("--mode-shapes", args.mode_shapes)  # before any work
+    mode_rpm = args.mode_shapes  # (bounded by NUMERIC_OPTIONS, before any work)
     if args.parameter_set is not None and not args.from_fmu:
         raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
                              "set); without it the system is --system / --outer-clearance")
@@ -293,15 +292,13 @@ def cmd_unbalance(args):
 
 def cmd_equilibrium(args):
     """``frb equilibrium``: static equilibrium of both bearings at one speed, printed (and written as CSV)."""
-    from .core.errors import check_speed
     from .linear.equilibrium import equilibrium
     from .linear.thermal import at_operating_point
 
-    check_speed("--speed-rpm", check_positive("--speed-rpm", args.speed_rpm, "rpm"))
-    tc = load_from_args(args)
+    tc = load_from_args(args)  # (--speed-rpm is bounded by NUMERIC_OPTIONS)
     supply = _oil_supply_from_args(args, tc)
     if supply is not None:
-        tc = at_operating_point(tc, check_speed("--speed-rpm", args.speed_rpm), supply)
+        tc = at_operating_point(tc, args.speed_rpm, supply)
     out = writable_dir(args.out) if args.out else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
     if supply is not None:
@@ -383,7 +380,7 @@ def _profile(args):
     if args.profile == "exponential":
         return SpeedProfile.exponential(a, b, duration)
     if args.profile == "up-down":
-        return SpeedProfile.up_down(a, b, check_positive("--duration", duration, "s") / 2)
+        return SpeedProfile.up_down(a, b, duration / 2)
     if args.profile == "torque":
         return SpeedProfile.torque(args.drive_torque, a, duration)
     return SpeedProfile.constant(a, duration)
@@ -460,10 +457,6 @@ def cmd_bifurcation(args):
         raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm, or a comma-separated "
                              "list of them (e.g. 25000,60000)") from None
     start = check_starts(start, (lo, hi), "--start", "--speeds")
-    if args.max_points < 2:
-        raise ParameterError(f"--max-points = {args.max_points} is invalid: valid range >= 2")
-    if args.segments < 1:
-        raise ParameterError(f"--segments = {args.segments} is invalid: valid range >= 1 (1: single shooting)")
     runs = _load_runs(args.runs)  # (before hours of continuation: a wrong folder is refused now)
     out = writable_dir(args.out)
     hps = hopf_points(tc, (lo, hi), restabilizing=True)
@@ -606,12 +599,9 @@ def cmd_compare(args):
     from .studies.compare import compare
 
     tc = load_from_args(args)
-    check_positive("--duration", args.duration, "s")
-    if args.fmax is not None:
-        check_positive("--fmax", args.fmax, "Hz")
-    writable_dir(args.out)
     cl = [check_positive("--clearances", x, "m") for x in args.clearances.split(",")]
     a, b = _speed_pair(args.speeds)
+    writable_dir(args.out)  # (after every check: a refused option leaves no folder)
     table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out, progress=True,
                            fmax_hz=args.fmax, check_convergence=args.check_convergence)
     print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
@@ -727,8 +717,7 @@ def _orbit_windows(args, run):
     if args.revolutions is not None and not args.orbits:
         raise ParameterError(f"--revolutions {args.revolutions:g} applies only with --orbits SPEEDS (the half-width "
                              "of each speed window); --orbit-times windows are given in seconds")
-    revolutions = check_positive("--revolutions", 20.0 if args.revolutions is None else args.revolutions,
-                                 "revolutions")
+    revolutions = 20.0 if args.revolutions is None else args.revolutions  # (bounded by NUMERIC_OPTIONS)
     speeds = parse_speeds(args.orbits, "--orbits") if args.orbits else ()
     times = parse_time_windows(args.orbit_times) if args.orbit_times else ()
     windows = []
@@ -921,7 +910,7 @@ def cmd_cosim(args):
         return _cosim_system(args)
     if args.coupling_tol is not None and not args.adaptive:
         raise ParameterError(f"--coupling-tol {args.coupling_tol:g} applies only with --adaptive")
-    tol = COUPLING_TOL if args.coupling_tol is None else check_positive("--coupling-tol", args.coupling_tol)
+    tol = COUPLING_TOL if args.coupling_tol is None else args.coupling_tol  # (bounded by NUMERIC_OPTIONS)
     profile, overrides = None, {}
     if args.profile is not None:
         given = [f"{o} {v}" for o, v in (("--speed-source", args.speed_source), ("--drive-torque", args.drive_torque))
@@ -1028,12 +1017,10 @@ def _cosim_system(args):
 
 def cmd_linearize(args):
     """``frb linearize``: global state matrix from the FMUs at one operating point; prints its modes."""
-    from .core.errors import check_speed
     from .cosim.linearize import linearize
     from .linear.modal import modes_from_state
 
-    check_speed("--speed-rpm", check_positive("--speed-rpm", args.speed_rpm, "rpm"))
-    _check_ssp(args.ssp, args.parameter_set)
+    _check_ssp(args.ssp, args.parameter_set)  # (--speed-rpm is bounded by NUMERIC_OPTIONS)
     out = writable_dir(args.out) if args.out else None
     A, tc = linearize(args.ssp, args.speed_rpm, args.method, args.parameter_set)
     md = modes_from_state(A, A.shape[0] // 2)
@@ -1542,11 +1529,63 @@ def _finish_claims(code):
             print(f"frb: could not write {c.folder / 'frb_manifest.json'}: {exc.strerror or exc}", file=sys.stderr)
 
 
+#: every numeric option of every command, by its argparse dest: (unit, valid range). A range is (lowest, highest):
+#: floats must be finite and > lowest, integers >= lowest; None: no bound. A string names the check that bounds the
+#: option where its range depends on the system or on other options (it runs inside the command, before any work).
+#: :func:`check_numeric_options` applies the ranges before a command runs; a test requires every float or int option
+#: of the parser to be listed here.
+NUMERIC_OPTIONS = {
+    "atol": ("m", "frbmodel.nonlinear.runup.check_tolerances (<= 1e-3 of the smallest film clearance)"),
+    "rtol": ("-", "frbmodel.nonlinear.runup.check_tolerances (RTOL_RANGE)"),
+    "coupling_tol": ("-", (0.0, None)),
+    "drive_torque": ("N m", "frbmodel.nonlinear.runup.check_drive_torque (|T| <= J_p * 1e6 rpm / 1 ms)"),
+    "duration": ("s", (0.0, None)),
+    "fmax": ("Hz", (0.0, None)),
+    "k": ("N/m", (0.0, None)),
+    "kx": ("N/m", (0.0, None)),
+    "ky": ("N/m", (0.0, None)),
+    "max_points": ("-", (2, None)),
+    "mode_shapes": ("rpm", "speed"),
+    "n_speeds": ("-", (2, None)),
+    "outer_clearance": ("m", "the system's film checks (clearance / radius, roughness)"),
+    "rate": ("Hz", "frbmodel.nonlinear.runup.check_output_rate (samples of the run)"),
+    "revolutions": ("revolutions", (0.0, None)),
+    "segments": ("-", (1, None)),
+    "speed_rpm": ("rpm", "speed"),
+    "step": ("s", (0.0, None)),
+    "stop_time": ("s", (0.0, None)),
+    "supply_pressure": ("Pa", "frbmodel.linear.thermal.check_supply_pressure"),
+    "supply_temperature": ("K", "frbmodel.system.oil.check_temperature (the oil's range)"),
+    "workers": ("-", (1, None)),
+}
+
+
+def check_numeric_options(args):
+    """Refuse a numeric option outside its range of :data:`NUMERIC_OPTIONS` (one line naming the option, its value
+    and the valid range), before the command starts."""
+    from .core.errors import check_speed
+
+    for dest, (unit, rng) in NUMERIC_OPTIONS.items():
+        value = getattr(args, dest, None)
+        if value is None or isinstance(rng, str) and rng != "speed":
+            continue
+        option = "--" + dest.replace("_", "-")
+        if rng == "speed":
+            check_speed(option, check_positive(option, value, unit))
+        elif isinstance(rng[0], int):
+            if value < rng[0] or (rng[1] is not None and value > rng[1]):
+                raise ParameterError(f"{option} = {value} is invalid: valid range >= {rng[0]}"
+                                     + (f" and <= {rng[1]}" if rng[1] is not None else ""))
+        else:
+            check_positive(option, value, "" if unit == "-" else unit)
+
+
 def _dispatch(args):
     """Run the parsed command; its exit code (errors become messages and codes)."""
     try:
         from .plots.figures import html_plotlyjs
 
+        check_numeric_options(args)  # (before the first-run notice and any folder)
         mode = _html_mode(args)
         _first_run_notice(args.command)
         with html_plotlyjs(mode):

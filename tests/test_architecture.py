@@ -40,3 +40,17 @@ def test_no_private_name_is_imported_from_another_module():
                 found += [f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {a.name}" for a in node.names
                           if re.match(r"_[a-z]", a.name) and a.name != "__version__"]
     assert not found, found
+
+
+def test_every_numeric_option_of_the_cli_is_bounded_in_one_table():
+    """Every float or int option of every command is listed in frbmodel.cli.NUMERIC_OPTIONS with its unit and range
+    (or the check that bounds it): an option added without a range fails here. The ranges are applied before the
+    command runs (an out-of-range value is refused with one line and nothing written)."""
+    import argparse
+
+    from frbmodel import cli
+
+    sub = next(a for a in cli.build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    numeric = {a.dest for sp in sub.choices.values() for a in sp._actions if a.type in (float, int)}
+    assert numeric <= set(cli.NUMERIC_OPTIONS), sorted(numeric - set(cli.NUMERIC_OPTIONS))
+    assert set(cli.NUMERIC_OPTIONS) <= numeric, sorted(set(cli.NUMERIC_OPTIONS) - numeric)  # no stale rows

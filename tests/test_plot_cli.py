@@ -181,7 +181,8 @@ def test_plot_redraws_a_bifurcation_folder(tmp_path):
     (["--orbits", "500000"], ["--orbits 500000: speed_rpm = 500000 is invalid: valid range 30000 ... 60000 rpm"]),
     (["--orbits", "fast"], ["--orbits = 'fast' is invalid: this command takes a speed grid, START:STOP:COUNT"]),
     (["--orbit-times", "5:6"], ["--orbit-times 5:6: the time window 5 ... 6 s holds 0 samples", "at least 2"]),
-    (["--revolutions=-3"], ["--revolutions -3 applies only with --orbits"]),
+    (["--revolutions", "5"], ["--revolutions 5 applies only with --orbits"]),
+    (["--revolutions=-3"], ["--revolutions = -3.0 revolutions is invalid: valid range is finite and > 0"]),
     (["--orbits", "45000", "--revolutions=-3"], ["--revolutions = -3.0 revolutions is invalid", "> 0"]),
 ])
 def test_plot_checks_its_orbit_options_before_it_redraws_anything(run_dir, argv, words, capsys, monkeypatch):
