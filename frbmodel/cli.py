@@ -19,6 +19,7 @@ from .studies.run_outputs import (
     write_up_down_halves,
     write_waterfalls,
 )
+from .system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES
 
 
 def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
@@ -71,12 +72,11 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
 def check_method_speeds(option, text, speeds, letters):
     """Refuse, before any folder is made, speeds that the methods ``letters`` cannot take (film methods need speeds
     > 0; :func:`frbmodel.linear.campbell.check_speeds`), naming the option and its value."""
-    from .linear.campbell import check_speeds
     from .system.methods import get_method
 
     for letter in letters:
         try:
-            check_speeds(speeds, get_method(letter).needs_films, get_method(letter).letter)
+            get_method(letter).check_speeds(speeds)
         except ParameterError as exc:
             raise ParameterError(f"{option} = {text!r}: {exc}") from None
 
@@ -112,7 +112,7 @@ def load_from_args(args):
         if args.outer_clearance is not None:
             tc = tc.with_outer_clearance(args.outer_clearance)
     else:
-        tc = turbocharger(outer_clearance=36e-6 if args.outer_clearance is None else args.outer_clearance)
+        tc = turbocharger() if args.outer_clearance is None else turbocharger(outer_clearance=args.outer_clearance)
     if getattr(args, "film_model", None):
         tc = tc.with_(film_model=args.film_model)
     return tc
@@ -136,7 +136,7 @@ def _spring_args(p):
 
 def _system_args(p):
     p.add_argument("--outer-clearance", type=float, default=None, metavar="M",
-                   help="radial clearance of both outer films [m] (default 36e-6)")
+                   help=f"radial clearance of both outer films [m] (default {DEFAULT_OUTER_CLEARANCE_M * 1e6:g}e-6)")
     p.add_argument("--system", metavar="FILE", help="system description (.toml or .json, see `frb system`)")
     p.add_argument("--film-model", choices=["short", "short_corrected"], default=None,
                    help="film model (default: the system's, 'short')")
@@ -1234,7 +1234,8 @@ def _add_runup(sub):
 def _add_compare(sub):
     m = sub.add_parser("compare", formatter_class=_Formatter,
                        help="run-ups vs method-J stability per outer clearance (Figs. 12-14 + table)")
-    m.add_argument("--clearances", default="36e-6,40e-6,42e-6,46e-6", help="outer clearances [m], comma list")
+    m.add_argument("--clearances", default=",".join(f"{c * 1e6:g}e-6" for c in PAPER_OUTER_CLEARANCES),
+                   help="outer clearances [m], comma list")
     m.add_argument("--speeds", default="1000:250000", metavar="RANGE", help="speed range [rpm]: START:END")
     m.add_argument("--duration", type=float, default=4.0, help="simulated time per run-up [s]")
     m.add_argument("--profile", choices=["ramp", "exponential"], default="exponential")

@@ -6,6 +6,8 @@ tqdm bars on stderr; messages go through :func:`note` so they do not break a bar
 """
 from __future__ import annotations
 
+import warnings
+
 
 def simulation_bar(total_s, desc, enabled):
     """A tqdm bar over simulated time [s] (postfix: e.g. the rotor speed); a no-op bar when not ``enabled``.
@@ -87,3 +89,26 @@ def note(message, enabled=True):
         from tqdm.auto import tqdm
 
         tqdm.write(str(message))
+
+
+def progress_enabled(progress) -> bool:
+    """``bool(progress)`` for a ``progress: bool`` argument, with a DeprecationWarning for the old callbacks.
+
+    Parameters
+    ----------
+    progress : bool
+        (A callable is accepted for one release and shows the bar; it is no longer called.)
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> progress_enabled(False), progress_enabled(True)
+    (False, True)
+    """
+    if callable(progress) and not isinstance(progress, bool):
+        warnings.warn("progress callbacks are no longer called: pass progress=True for a progress bar (tqdm)",
+                      DeprecationWarning, stacklevel=3)
+    return bool(progress)

@@ -181,24 +181,20 @@ def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progres
         Its ``meta`` records the SSP, the parameter set, the system read from it (``system.to_dict()``), the
         method and the film model.
     """
-    from ..core.progress import counter_bar
+    from ..core.progress import counter_bar, progress_enabled
     from ..core.units import rpm_to_rad_s
     from ..linear.assembly import mass_matrix
-    from ..linear.campbell import (
-        campbell_from_modes,
-        check_speeds,
-        exact_onsets,
-        film_whirl_rows,
-        progress_enabled,
-        speed_grid_order,
-    )
+    from ..linear.campbell import campbell_from_modes, exact_onsets, film_whirl_rows, speed_grid_order
     from ..linear.equilibrium import bearing_equilibrium
     from ..linear.modal import modes_from_state
     from ..linear.whirl import film_names
     from ..system.methods import get_method
 
     m = get_method(method)
-    given = check_speeds(speeds_rpm, True, m.letter)
+    given = m.check_speeds(speeds_rpm)
+    if np.any(given <= 0):  # (the FMUs linearize their films whatever the method)
+        raise ParameterError(f"speeds_rpm contains {float(given[given <= 0][0])!r} rpm: the FMUs' films need speeds "
+                             "> 0")
     speeds = np.sort(given)
     mode_sets, system, rows = [], None, []
     with counter_bar(speeds.size, f"campbell {m.letter} from FMUs", progress_enabled(progress), unit="speed") as bar:

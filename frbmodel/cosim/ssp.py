@@ -33,6 +33,7 @@ from xml.etree import ElementTree as ET
 
 from ..core.errors import ParameterError
 from ..core.units import rpm_to_rad_s
+from ..system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -127,7 +128,7 @@ UNITS = {"m": dict(m=1), "m/s": dict(m=1, s=-1), "m/s2": dict(m=1, s=-2), "rad/s
          "N.m": dict(kg=1, m=2, s=-2)}
 
 
-def parameter_sets(clearances=(36e-6, 40e-6, 42e-6, 46e-6), start_rpm=20e3, end_rpm=250e3, ramp_time=1.0,
+def parameter_sets(clearances=PAPER_OUTER_CLEARANCES, start_rpm=20e3, end_rpm=250e3, ramp_time=1.0,
                    perturbation=0.05, system=None):
     """Parameter sets of the turbocharger FMUs, one per outer clearance.
 
@@ -331,7 +332,7 @@ ENGINE_PARAMETERS = {"turbine_torque_0": 2.0, "turbine_torque_slope": 2.0 / 3000
                      "compressor_coefficient": 0.8 / 18000.0 ** 2, "pulsation": 0.3, "firing_frequency": 100.0}
 
 
-def engine_parameter_sets(clearances=(36e-6,), start_rpm=20e3, system=None):
+def engine_parameter_sets(clearances=(DEFAULT_OUTER_CLEARANCE_M,), start_rpm=20e3, system=None):
     """Parameter sets of the engine + turbocharger example, one per outer clearance (``co36`` ...): the engine's
     parameters and start speed, the turbocharger torque-driven from ``start_rpm`` with both outer films at the
     clearance.

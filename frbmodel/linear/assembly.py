@@ -220,11 +220,8 @@ def mass_matrix(system, method="J"):
 
 
 def _check_speed(m, speed_rpm):
-    speed_rpm = check_real("speed_rpm", speed_rpm, "rpm")
-    if m.needs_films and not speed_rpm > 0.0:
-        raise ParameterError(f"speed_rpm = {speed_rpm!r} rpm is invalid for method {m.letter}: linearized films "
-                             "need a rotor speed > 0")
-    return speed_rpm
+    """``speed_rpm`` as a float, checked by the method (:meth:`frbmodel.system.methods.Method.check_speeds`)."""
+    return float(m.check_speeds(check_real("speed_rpm", speed_rpm, "rpm"), "speed_rpm")[0])
 
 
 def linear_system(system, method="J", speed_rpm=150e3, equilibria=None, **kw) -> LinearSystem:

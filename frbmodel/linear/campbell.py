@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import math
 import time
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,11 +18,9 @@ from ..core.errors import (
     ConvergenceError,
     FilmContactError,
     ParameterError,
-    check_real_array,
-    check_speeds_in_range,
     check_system,
 )
-from ..core.progress import counter_bar
+from ..core.progress import counter_bar, progress_enabled
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
 from ..system.methods import get_method
@@ -589,37 +586,6 @@ class CampbellResult(Result):
         return paths
 
 
-def check_speeds(speeds_rpm, needs_films, letter):
-    """Speeds of a Campbell sweep as a float array [rpm], or a :class:`ParameterError`.
-
-    Parameters
-    ----------
-    speeds_rpm : array_like
-        Non-empty 1-D list of finite speeds [rpm] in any order.
-    needs_films : bool
-        The method linearizes films: every speed must be > 0.
-    letter : str
-        Method letter (for the message).
-
-    Returns
-    -------
-    ndarray (n,)
-
-    Examples
-    --------
-    >>> check_speeds([2e3, 1e3], True, "J").tolist()
-    [2000.0, 1000.0]
-    """
-    speeds = np.atleast_1d(check_real_array("speeds_rpm", speeds_rpm, "rpm"))
-    if speeds.ndim != 1 or speeds.size == 0:
-        raise ParameterError(f"speeds_rpm = {speeds_rpm!r} is invalid: a non-empty 1-D list of finite speeds [rpm]")
-    if needs_films and np.any(speeds <= 0):
-        raise ParameterError(f"speeds_rpm contains {float(speeds[speeds <= 0][0])!r} rpm, invalid for method "
-                             f"{letter}: linearized films need speeds > 0")
-    check_speeds_in_range("speeds_rpm", speeds)
-    return speeds
-
-
 def speed_grid_order(speeds_rpm) -> str:
     """"ascending", "descending" or "unsorted": the order of a speed grid as the user gave it (for the metadata).
 
@@ -731,29 +697,6 @@ def _speed_row(system, m, s, whirl, kw, loads, systems, rows, i):
     return t_eq
 
 
-def progress_enabled(progress) -> bool:
-    """``bool(progress)`` for a ``progress: bool`` argument, with a DeprecationWarning for the old callbacks.
-
-    Parameters
-    ----------
-    progress : bool
-        (A callable is accepted for one release and shows the bar; it is no longer called.)
-
-    Returns
-    -------
-    bool
-
-    Examples
-    --------
-    >>> progress_enabled(False), progress_enabled(True)
-    (False, True)
-    """
-    if callable(progress) and not isinstance(progress, bool):
-        warnings.warn("progress callbacks are no longer called: pass progress=True for a progress bar (tqdm)",
-                      DeprecationWarning, stacklevel=3)
-    return bool(progress)
-
-
 def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = False, oil_supply=None,
              **kw) -> CampbellResult:
     """Holistic Campbell diagram of ``system`` for bearing-modelling ``method``.
@@ -804,7 +747,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     m = get_method(method)
     supply = check_oil_supply(oil_supply, m.letter)
     given = np.linspace(*PAPER_SPEED_RANGE_RPM, 100) if speeds_rpm is None else speeds_rpm
-    speeds = check_speeds(given, m.needs_films, m.letter)
+    speeds = m.check_speeds(given)
     order = speed_grid_order(speeds)
     speeds = np.sort(speeds)
     m.options(**kw)  # validate early

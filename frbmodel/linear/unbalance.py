@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError, check_real, check_system, read_json
-from ..core.progress import counter_bar
+from ..core.progress import counter_bar, progress_enabled
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
 from ..plots.unbalance import (  # noqa: F401  (the figures, re-exported from where they were)
@@ -42,7 +42,6 @@ from ..plots.unbalance import (  # noqa: F401  (the figures, re-exported from wh
 )
 from ..system.methods import get_method
 from .campbell import campbell as campbell_diagram
-from .campbell import check_speeds, progress_enabled
 from .critical import CRITICAL_COLUMNS, critical_speeds, linear_at, system_of  # noqa: F401  (re-exported)
 
 #: default speed grid [rpm] (1 000 ... 250 000, 200 points)
@@ -709,8 +708,7 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     check_system(system)
     m = get_method(method)
     unb = check_unbalance(system, {"turbine_wheel": (1e-6, 0.0)} if unbalance is None else unbalance)
-    speeds = np.sort(check_speeds(np.linspace(*DEFAULT_SPEEDS_RPM) if speeds_rpm is None else speeds_rpm,
-                                  m.needs_films, m.letter))
+    speeds = np.sort(m.check_speeds(np.linspace(*DEFAULT_SPEEDS_RPM) if speeds_rpm is None else speeds_rpm))
     m.options(**kw)  # validate early
     t0 = time.perf_counter()
     rows, ls = [], None

@@ -18,6 +18,7 @@ from ..linear.campbell import campbell
 from ..nonlinear.runup import RunupStopped, SpeedProfile, runup
 from ..plots.style import readable
 from ..signals.spectral import spectrogram
+from ..system.presets import PAPER_OUTER_CLEARANCES
 
 
 def _unstable_ranges_sorted(cd):
@@ -165,7 +166,7 @@ def comparison_rows(clearance, sp, comps, cd, status):
     return rows
 
 
-def compare(system, clearances=(36e-6, 40e-6, 42e-6, 46e-6), speed_rpm=(1e3, 250e3), duration=4.0,
+def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), duration=4.0,
             profile="exponential", node=None, out_dir="results/compare", n_speeds=300, progress=False,
             runup_kw=None, segment_s=0.1, fmax_hz=1000.0, check_convergence=False):
     """Run the run-up (or run-down) and the method-J Campbell diagram per outer clearance; write per clearance the

@@ -69,6 +69,34 @@ class Method:
         """True if the method linearizes oil films (needs a positive rotor speed)."""
         return self.equilibrium is not None
 
+    def check_speeds(self, speeds_rpm, name="speeds_rpm"):
+        """Rotor speeds [rpm] this method can take, as a float array, or a :class:`ParameterError` naming ``name``:
+        a non-empty 1-D list of finite speeds within the model's range, each > 0 for a film method (the one speed
+        check of the linear analyses: Campbell, unbalance, linear systems, FMU linearization).
+
+        Examples
+        --------
+        >>> METHODS["J"].check_speeds([2e3, 1e3]).tolist()
+        [2000.0, 1000.0]
+        >>> try:
+        ...     METHODS["J"].check_speeds([0.0, 1e3])
+        ... except ParameterError as exc:
+        ...     print(exc)
+        speeds_rpm contains 0.0 rpm, invalid for method J: linearized films need speeds > 0
+        """
+        import numpy as np
+
+        from ..core.errors import check_real_array, check_speeds_in_range
+
+        speeds = np.atleast_1d(check_real_array(name, speeds_rpm, "rpm"))
+        if speeds.ndim != 1 or speeds.size == 0:
+            raise ParameterError(f"{name} = {speeds_rpm!r} is invalid: a non-empty 1-D list of finite speeds [rpm]")
+        if self.needs_films and np.any(speeds <= 0):
+            raise ParameterError(f"{name} contains {float(speeds[speeds <= 0][0])!r} rpm, invalid for method "
+                                 f"{self.letter}: linearized films need speeds > 0")
+        check_speeds_in_range(name, speeds)
+        return speeds
+
     def options(self, **kwargs) -> dict:
         """Merge user keyword parameters with the defaults.
 

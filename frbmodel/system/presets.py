@@ -8,6 +8,8 @@ from .rotor import Disc, Rotor, ShaftElement
 
 #: outer clearances [m] studied in the paper
 PAPER_OUTER_CLEARANCES = (36e-6, 40e-6, 42e-6, 46e-6)
+#: the outer clearance of the main job and of every default [m] (the paper's first case)
+DEFAULT_OUTER_CLEARANCE_M = PAPER_OUTER_CLEARANCES[0]
 #: speed range [rpm] of the paper's Campbell diagrams (Figs. 4-9)
 PAPER_SPEED_RANGE_RPM = (10e3, 250e3)
 #: default run-up: linear ramp from / to these rotor speeds [rpm] (the rotor FMU's ramp defaults)
@@ -37,7 +39,7 @@ def table2_rotor() -> Rotor:
     return Rotor(shaft, discs)
 
 
-def turbocharger(outer_clearance: float = PAPER_OUTER_CLEARANCES[0], film_model: str = "short",
+def turbocharger(outer_clearance: float = DEFAULT_OUTER_CLEARANCE_M, film_model: str = "short",
                  inner_clearance: float = 34e-6, viscosity_turbine: float = 4.9e-3,
                  viscosity_compressor: float = 6.4e-3) -> Turbocharger:
     """The paper's Table 2 turbocharger.
