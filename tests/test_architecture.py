@@ -78,3 +78,18 @@ def test_no_import_circles_with_every_import_counted():
 
     circles = [(m, d) for m in sorted(edges) for d in edges[m] if m in reachable(d)]
     assert not circles, circles[:10]
+
+
+def test_the_public_api_of_the_readme_and_the_guide_stays():
+    """Every ``frb.<name>`` of the README's quick start and of the Python guide exists, and so does every name of
+    ``frbmodel.__all__`` (the restructure into subpackages kept the public API)."""
+    import frbmodel as frb
+
+    root = PACKAGE.parent
+    used = set()
+    for doc in (root / "README.md", root / "docs" / "guides" / "python.md"):
+        for block in re.findall(r"```python\n(.*?)```", doc.read_text(encoding="utf-8"), flags=re.S):
+            used |= set(re.findall(r"\bfrb\.([A-Za-z_]\w*)", block))
+    assert len(used) >= 15  # the blocks were found
+    missing = sorted(n for n in used | set(frb.__all__) if not hasattr(frb, n))
+    assert not missing, missing
