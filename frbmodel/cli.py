@@ -256,6 +256,7 @@ def cmd_unbalance(args):
     check_method_speeds("--speeds", args.speeds, speeds, [letter for letter, _ in methods])
     unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"])
     tc = load_from_args(args)
+    supply = _oil_supply_from_args(args, tc)
     names = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
     bad = [n for n in names or [] if n not in location_names(tc)]
     if bad:
@@ -263,10 +264,14 @@ def cmd_unbalance(args):
     out = writable_dir(args.out)
     results, paths = [], []
     for letter, kw_m in methods:
-        ur = unbalance_response(tc, letter, speeds, unbalance, peak_names=names, progress=True, **kw_m)
+        ur = unbalance_response(tc, letter, speeds, unbalance, peak_names=names, progress=True, oil_supply=supply,
+                                **kw_m)
         paths += ur.save(out, names=names)
         print(f"method {letter}: {ur.meta['method_title']}; {speeds.size} speeds; unbalance "
               + ", ".join(f"{u['disc']} {u['m e [kg m]']:g} kg m at {u['phase [rad]']:g} rad" for u in ur.unbalance))
+        if supply is not None:
+            print(f"thermal operating point at every speed: {supply.oil.name}, supply {supply.supply_temperature_K:g} "
+                  f"K, {supply.supply_pressure_Pa:g} Pa")
         _print_critical(ur.critical_speeds())
         results.append(ur)
     if len(results) > 1:
@@ -1412,6 +1417,7 @@ def _add_unbalance(sub):
                    help="comma list of the locations drawn and searched for peaks (default: the wheels), e.g. "
                         "'turbine_wheel,turbine journal'")
     _spring_args(u)
+    _oil_args(u, "every speed, its 1X crossings and response peaks at their own thermal operating point")
     u.add_argument("--out", default="results/unbalance", help="output folder")
     _system_args(u)
     u.set_defaults(func=cmd_unbalance)

@@ -91,6 +91,13 @@ class OilSupply:
         return {"oil": self.oil.to_dict(), "supply_temperature_K": self.supply_temperature_K,
                 "supply_pressure_Pa": self.supply_pressure_Pa, "model": self.model.to_dict()}
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "OilSupply":
+        """Inverse of :meth:`to_dict` (a result's ``meta["oil_supply"]``): the oil, supply temperature [K] and
+        pressure [Pa], the model's coefficients."""
+        return cls(Oil.from_dict(d["oil"], "oil_supply oil"), d["supply_temperature_K"], d["supply_pressure_Pa"],
+                   ThermalModel(**d["model"]))
+
 
 def check_oil_supply(oil_supply, method="J"):
     """``oil_supply`` if it is None or an :class:`OilSupply` used with method J, else a :class:`ParameterError`
