@@ -1083,6 +1083,7 @@ def cmd_losses(args):
     if args.onsets and oil is None:
         raise ParameterError("--onsets needs an oil: give --oil NAME or an [oil] table in --system (the onsets are "
                              "computed at each supply temperature's thermal operating points)")
+    ramp = _runup_ramp_from_args(args)
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
@@ -1104,24 +1105,54 @@ def cmd_losses(args):
     fig.savefig(p_png, dpi=130)
     plt.close(fig)
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
-    paths = [p_csv, p_png] + (_write_onsets(tc, oil, temps, p_s, speeds, out) if args.onsets else [])
+    paths = [p_csv, p_png] + (_write_onsets(tc, oil, temps, p_s, speeds, out, ramp) if args.onsets else [])
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
 
 
-def _write_onsets(tc, oil, temps, p_s, speeds, out):
+def _runup_ramp_from_args(args):
+    """``(start [rpm], end [rpm], time [s])`` of ``frb losses --runup-onsets`` (None without it); the flag needs
+    ``--onsets``, the ramp options need the flag."""
+    given = [o for o, v in (("--runup-speeds", args.runup_speeds), ("--runup-duration", args.runup_duration))
+             if v is not None]
+    if not args.runup_onsets:
+        if given:
+            raise ParameterError(f"{given[0]} needs --runup-onsets (the run-up beside the linear onsets)")
+        return None
+    if not args.onsets:
+        raise ParameterError("--runup-onsets needs --onsets (the run-up onsets are drawn beside the linear ones)")
+    text = args.runup_speeds or "20000:250000"
+    try:
+        lo, hi = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise ParameterError(f"--runup-speeds = {text!r} is invalid: give START:STOP [rpm], e.g. 20000:250000") \
+            from None
+    if not 0.0 < lo < hi <= 1e6:
+        raise ParameterError(f"--runup-speeds = {text!r} is invalid: valid range 0 < START < STOP <= 1e6 rpm")
+    duration = check_positive("--runup-duration", 1.0 if args.runup_duration is None else args.runup_duration, "s")
+    return lo, hi, duration
+
+
+def _write_onsets(tc, oil, temps, p_s, speeds, out, ramp=None):
     """``frb losses --onsets``: whirl onsets versus supply temperature (:func:`frbmodel.studies.thermal.
-    onsets_vs_supply`, Campbell grid = ``--speeds``) as whirl_onsets.csv, whirl_onsets_modes.csv and the figure."""
+    onsets_vs_supply`, Campbell grid = ``--speeds``) as whirl_onsets.csv, whirl_onsets_modes.csv and the figure;
+    with a ``ramp`` (start [rpm], end [rpm], time [s]) also one run-up per supply temperature
+    (:func:`frbmodel.studies.thermal.runup_onsets_vs_supply`): whirl_onsets_runup.csv and squares in the figure."""
     import matplotlib.pyplot as plt
 
     from .plots.thermal import plot_onsets_vs_supply
-    from .studies.thermal import onsets_vs_supply
+    from .studies.thermal import onsets_vs_supply, runup_onsets_vs_supply
 
     films, modes = onsets_vs_supply(tc, oil, temps, p_s, speeds_rpm=speeds, progress=True)
+    runups = None if ramp is None else runup_onsets_vs_supply(tc, oil, temps, p_s, speed_range_rpm=ramp[:2],
+                                                              duration_s=ramp[2])
     paths = [out / "whirl_onsets.csv", out / "whirl_onsets_modes.csv", out / "whirl_onsets.png"]
     films.to_csv(paths[0], index=False)
     modes.to_csv(paths[1], index=False)
-    fig = plot_onsets_vs_supply(films, modes)
+    if runups is not None:
+        paths.append(out / "whirl_onsets_runup.csv")
+        runups.to_csv(paths[-1], index=False)
+    fig = plot_onsets_vs_supply(films, modes, runups=runups)
     fig.savefig(paths[2], dpi=130)
     plt.close(fig)
     print("film whirl onsets (exact, each at the temperatures of its speed):")
@@ -1639,6 +1670,14 @@ def _add_losses(sub):
     lo.add_argument("--onsets", action="store_true",
                     help="with an oil, also the whirl onset speeds versus the supply temperature(s): each film's exact "
                          "onset and the Campbell modes' (grid = --speeds): whirl_onsets.csv, _modes.csv, .png")
+    lo.add_argument("--runup-onsets", action="store_true",
+                    help="with --onsets, also one run-up per supply temperature (quasi-static film temperatures) "
+                         "and its sub-synchronous components' onsets [rpm] beside the linear ones: "
+                         "whirl_onsets_runup.csv")
+    lo.add_argument("--runup-speeds", default=None, metavar="START:STOP",
+                    help="ramp of --runup-onsets [rpm] (default 20000:250000, the main job's)")
+    lo.add_argument("--runup-duration", type=float, default=None, metavar="S",
+                    help="ramp time of --runup-onsets [s] (default 1)")
     lo.add_argument("--out", default="results/losses", help="output folder")
     _system_args(lo)
     lo.set_defaults(func=cmd_losses)
