@@ -22,8 +22,8 @@ from ..system.rotor import GRAVITY
 from .equilibrium import bearing_equilibrium
 from .losses import bearing_losses, equilibrium_loss, with_ring_speed_ratio
 
-__all__ = ["MAX_SUPPLY_PRESSURE_PA", "OilSupply", "at_operating_point", "thermal_bearing", "thermal_losses",
-           "thermal_system"]
+__all__ = ["MAX_SUPPLY_PRESSURE_PA", "OilSupply", "at_operating_point", "bearing_operating_point", "thermal_bearing",
+           "thermal_losses", "thermal_system"]
 
 #: the highest oil supply pressure accepted [Pa] (gauge): 20 bar; turbocharger oil circuits run at 1 ... 6 bar
 MAX_SUPPLY_PRESSURE_PA = 2e6
@@ -293,6 +293,35 @@ def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", 
                          sup.supply_temperature_K, sup.supply_pressure_Pa, sup.model, film_model,
                          gravity)
     return s["bearing"]
+
+
+def bearing_operating_point(bearing, load_N, speed_rpm, oil_supply, film_model="short", gravity=GRAVITY):
+    """The thermal operating point of one bearing at one speed as one :func:`thermal_losses` row (the same
+    computation: temperatures [K], viscosities [Pa s], flows [m³/s], powers [W], …), for a component that knows
+    only its bearing and its static load (the split bearing FMU).
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    load_N : float
+        Static load of the bearing [N].
+    speed_rpm : float
+        Rotor speed [rpm], > 0.
+    oil_supply : OilSupply
+    film_model : str
+    gravity : float
+        Gravitational acceleration [m/s²].
+
+    Returns
+    -------
+    dict
+        The columns of :func:`thermal_losses` (units in every key).
+    """
+    sup = check_oil_supply(oil_supply)
+    rpm = check_speed("speed_rpm", speed_rpm)
+    s = _operating_point(bearing, float(load_N), rpm * RPM, sup.oil, sup.supply_temperature_K, sup.supply_pressure_Pa,
+                         sup.model, film_model, gravity)
+    return _row(rpm, sup.supply_temperature_K, sup.supply_pressure_Pa, sup.oil, sup.model, s)
 
 
 def at_operating_point(system, speed_rpm, oil_supply):
