@@ -56,3 +56,40 @@ def test_without_an_oil_the_bearing_component_is_unchanged_and_refuses_thermal_c
         bc.set_supply(OilSupply(OIL))
     with pytest.raises(ParameterError, match="thermal table speeds are invalid"):
         bc.use_oil(OilSupply(OIL), TC.bearing_loads[0], [W])
+
+
+def test_bearing_fmu_oil_supply_input_sets_the_power_loss_as_thermal_losses(built, tmp_path):
+    """The split bearing FMU (turbine bearing: its default parameters) with oil = SAE 5W-30, journal and ring at the
+    method-J equilibrium of thermal_system at 100 krpm, 333.15 K (an independent path: the linear equilibrium of the
+    system with the thermal viscosities), rotor speed 100 krpm: power_loss = thermal_losses within 0.1 % (issue #25's
+    acceptance; the FMU interpolates its 49-speed table 10 ... 250 krpm, nodes 5 krpm apart), the film temperatures
+    within 5 mK, the oil flow within 1e-3 (linear interpolation of the table). Changing the supply input to 393.15 K
+    recomputes the table: the film temperatures are then 393.15 K's. Without the oil, a changed supply input
+    discards the step."""
+    pytest.importorskip("fmpy")
+    from _fmu import Slave
+    from fmpy.fmi1 import FMICallException
+
+    from frbmodel.linear.thermal import thermal_system
+
+    fmu = built / "fmus" / "FloatingRingBearing.fmu"
+    names = ["power_loss", "inner_film_temperature", "outer_film_temperature", "oil_flow"]
+    e = frb.equilibrium(thermal_system(TC, 100e3, OIL, 333.15), "J", 100e3).bearings[0]
+    s = Slave(fmu, "oil", tmp_path, {"oil": "SAE 5W-30", "oil_supply_temperature": 333.15, "ring.x0": e.ring[0],
+                                     "ring.y0": e.ring[1], "ring.speed0": e.ring_speed})
+    s.set({"journal.x": e.journal[0], "journal.y": e.journal[1], "rotor_speed": W})
+    for t_s in (333.15, 393.15):
+        s.set({"oil_supply_temperature": t_s})
+        out = s.get(names)
+        ref = thermal_losses(TC, 100e3, OIL, t_s).iloc[0]
+        if t_s == 333.15:  # the journal and ring are at this supply's equilibrium
+            assert out[0] == pytest.approx(ref["power loss [W]"], rel=1e-3)
+        assert out[1] == pytest.approx(ref["inner film temperature [K]"], abs=5e-3)
+        assert out[2] == pytest.approx(ref["outer film temperature [K]"], abs=5e-3)
+        assert out[3] == pytest.approx(ref["inner flow [m^3/s]"] + ref["outer flow [m^3/s]"], rel=1e-3)
+    s.close()
+    plain = Slave(fmu, "plain", tmp_path)
+    plain.set({"oil_supply_temperature": 333.15, "rotor_speed": W})
+    with pytest.raises(FMICallException, match="discard"):
+        plain.s.doStep(0.0, 1e-5)
+    plain.close()

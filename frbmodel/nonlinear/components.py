@@ -494,6 +494,11 @@ class BearingComponent:
         th["flow"] = np.array([r["inner flow [m^3/s]"] + r["outer flow [m^3/s]"] for r in rows])
         th["supply"] = oil_supply
 
+    @property
+    def supply(self):
+        """The :class:`~frbmodel.linear.thermal.OilSupply` of the thermal table (None: constant viscosities)."""
+        return None if self._thermal is None else self._thermal["supply"]
+
     def _at_speed(self, omega_rotor):
         """With the thermal model, the films' viscosities [Pa s] of the table at ``omega_rotor`` into the film data
         (constant viscosities: nothing, the arithmetic is unchanged)."""
