@@ -1525,7 +1525,7 @@ def _add_runup(sub):
     r.add_argument("--no-figure", action="store_true")
     r.add_argument("--out", default="results/runup")
     _oil_args(r, "the films' viscosities follow the rotor speed (quasi-static temperatures of the thermal operating "
-                 "points; torque-driven: a table up to the speed the drive could reach); --integrator rodas or lsoda")
+                 "points; torque-driven: a table up to the speed the drive could reach)")
     _system_args(r)
     r.set_defaults(func=cmd_runup)
 

@@ -840,15 +840,13 @@ def table_speeds_rpm(profile, polar_inertia):
 
 
 def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile")):
-    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, the ``"radau"`` integrator (its packed
-    arguments carry no viscosity table) or linear springs (no films). ``names`` are the option names for the
-    messages (the CLI's). A torque-driven rotor is accepted: its table spans :func:`table_speeds_rpm`."""
+    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, or linear springs (no films). Every
+    integrator takes it (the ``"radau"`` path packs the viscosity table, :func:`frbmodel.nonlinear.compiled.
+    pack_problem`), and so does a torque-driven rotor (its table spans :func:`table_speeds_rpm`); ``profile``,
+    ``integrator`` and ``names`` are kept for the callers (the CLI's option names)."""
     sup = check_oil_supply(oil_supply)
     if sup is None:
         return None
-    if integrator == "radau":
-        raise ParameterError(f"{names[0]} = 'radau' cannot take an oil supply (its packed arguments have no viscosity "
-                             "table); use 'rodas' (default) or 'lsoda'")
     if linear_springs is not None:
         raise ParameterError("linear_springs cannot take an oil supply: the journals have no films")
     return sup
@@ -1643,9 +1641,8 @@ def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, u
         viscosities follow the rotor speed through a table of the thermal operating points over the profile's speed
         range (:func:`viscosity_table`, interpolated in the compiled right-hand side and in the recorded losses);
         the initial equilibrium is at the start speed's temperatures. A torque-driven rotor's table spans
-        :func:`table_speeds_rpm` (1 krpm up to the speed its drive torque could reach without friction). The
-        integrators ``"rodas"`` and ``"lsoda"`` only. The metadata record the supply and the table. None: constant
-        viscosities, bit for bit.
+        :func:`table_speeds_rpm` (1 krpm up to the speed its drive torque could reach without friction). Every
+        integrator. The metadata record the supply and the table. None: constant viscosities, bit for bit.
 
     Returns
     -------
