@@ -10,13 +10,24 @@ from pythonfmu import DefaultExperiment, Fmi2Slave
 
 #: the journal inputs (x, y, vx, vy) and the rotor speed: every output of the communication point depends on them
 JOURNAL_IN = ("journal.x", "journal.y", "journal.vx", "journal.vy")
+#: the oil supply inputs (thermal model, parameter oil): (name, unit, description, start, low)
+SUPPLY_IN = (("oil_supply_temperature", "K", "oil supply temperature (thermal model: parameter oil; a change "
+              "recomputes the thermal table, ~0.2 s)", 363.15, 243.15),
+             ("oil_supply_pressure", "Pa", "oil supply pressure above ambient (thermal model: parameter oil)", 3e5,
+              0.0))
+#: speeds of the thermal table over thermal.speed_min ... thermal.speed_max (as the turbocharger FMU's)
+THERMAL_TABLE_SPEEDS = 49
 
 
 class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
     """FMI 2.0 co-simulation slave of one floating-ring bearing (one instance per bearing).
 
     Parameters (all ``fixed``): films, ring mass and inertia, initial ring state, gravity, substep,
-    ``contact_eps``, ``film_model``, ``ring_speed_model``. Inputs: journal state, rotor speed.
+    ``contact_eps``, ``film_model``, ``ring_speed_model``, and the thermal model's ``oil`` (empty: constant
+    viscosities), ``static_load`` [N], ``thermal.speed_min``/``thermal.speed_max`` [rad/s]. Inputs: journal state,
+    rotor speed, ``oil_supply_temperature`` [K] and ``oil_supply_pressure`` [Pa] (used with an oil; without one
+    they must keep their start values). Thermal outputs: ``inner_film_temperature``, ``outer_film_temperature`` [K],
+    ``oil_flow`` [m3/s] (0 without an oil).
     Outputs: force on the journal and its interface Jacobian, staggered-coupling values, the film torque on the
     journal ``journal_torque`` [N m] and the friction power of both films ``power_loss`` [W] (direct feedthrough,
     evaluated with the force at the same journal and ring state), ring state, eccentricities; the linearization
@@ -46,6 +57,8 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                         ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
             self._input(f"journal.{q}", f"{d} [{u}]", unit=u)
         self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s", low=0.0)
+        for name, unit, desc, start, low in SUPPLY_IN:
+            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low)
         self._journal_idx = np.array([self._input_pos[f"journal.{q}"] for q in ("x", "y", "vx", "vy")])
         self._speed_idx = self._input_pos["rotor_speed"]
         self._outputs()
@@ -83,6 +96,18 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._param("film_model", tc.film_model, "film model: short | short_corrected", "str", choices=FILM_MODELS)
         self._param("ring_speed_model", "free", "ring speed: free (spin DoF) | rsr_eq6 | rsr_eq7", "str",
                     choices=("free", "rsr_eq6", "rsr_eq7"))
+        from frbmodel.core.units import rpm_to_rad_s
+        from frbmodel.system.oil import OILS
+
+        self._param("oil", "", "thermal model: the oil (" + ", ".join(OILS) + "); the films' viscosities follow the "
+                    "rotor speed at the inputs' supply temperature and pressure (docs/theory/thermal.md#bearing-fmu); "
+                    "empty = the films' constant viscosity parameters", "str", choices=("", *OILS))
+        self._param("static_load", float(tc.bearing_loads[0]), "static load of the bearing [N] (downward; the thermal "
+                    "operating points are the method-J equilibria under it; thermal model only)", unit="N", low=0.0)
+        self._param("thermal.speed_min", rpm_to_rad_s(10e3), "lowest rotor speed of the thermal table [rad/s] (held "
+                    "below)", unit="rad/s", **positive)
+        self._param("thermal.speed_max", rpm_to_rad_s(250e3), "highest rotor speed of the thermal table [rad/s] "
+                    "(held above)", unit="rad/s", **positive)
 
     def _outputs(self):
         """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units). Those
@@ -130,14 +155,43 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
               high=1.0)
         point("eps_outer", "outer film eccentricity ratio [-]", "1", depends=(), low=0.0, high=1.0)
         state("ring_speed_ratio", "ring speed / rotor speed [-]", "1", 7, depends=("rotor_speed",))
+        supply = ("rotor_speed", "oil_supply_temperature", "oil_supply_pressure")
+        for k, (name, unit, desc) in enumerate((
+                ("inner_film_temperature", "K", "inner-film temperature of the thermal operating point at the rotor "
+                 "speed"),
+                ("outer_film_temperature", "K", "outer-film temperature of the thermal operating point"),
+                ("oil_flow", "m3/s", "oil flow through both films at the thermal operating point"))):
+            self._output(name, f"{desc}; 0 without an oil [{unit}]", lambda k=k: self._thermal_out()[k], unit=unit,
+                         block=(self._thermal_out, k), depends=supply, init_depends=supply, low=0.0)
 
     # ------------------------------------------------------------------ helpers
     def _journal(self):
         return self._input_values[self._journal_idx]
 
+    def _supply_inputs(self):
+        return tuple(float(self._in(name)) for name, *_ in SUPPLY_IN)
+
+    def _sync_supply(self):
+        """Thermal model: recompute the component's table when the supply inputs differ from its supply."""
+        from frbmodel.linear.thermal import OilSupply
+        from frbmodel.system.oil import OILS
+
+        sup, (t_s, p_s) = self._comp.supply, self._supply_inputs()
+        if (t_s, p_s) != (sup.supply_temperature_K, sup.supply_pressure_Pa):
+            self._comp.set_supply(OilSupply(OILS[self._values["oil"]], t_s, p_s))
+
+    def _thermal_out(self):
+        """Inner, outer film temperature [K] and oil flow [m3/s] at the rotor speed (zeros without an oil)."""
+        if not self._values["oil"]:
+            return np.zeros(3)
+        self._sync_supply()
+        return np.array(self._comp.thermal_outputs(float(self._input_values[self._speed_idx])))
+
     def _out(self):
         """The outputs of the communication point: :meth:`BearingComponent.exchange` at the current inputs and ring
         state (layout EXCHANGE_OUTPUTS), then the journal state they belong to; computed once per change."""
+        if self._values["oil"]:
+            self._sync_supply()
         if self._cache_gen != self._gen:
             j = self._journal()
             self._cache_gen = None
@@ -176,12 +230,27 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         comp = BearingComponent(b, v["film_model"], v["ring_speed_model"], float(v["gravity"]), float(v["substep"]),
                                 float(v["contact_eps"]))
         comp.ring[:] = [v["ring.x0"], v["ring.y0"], 0.0, 0.0, v["ring.speed0"]]
+        if v["oil"]:
+            self._use_oil(comp)
         j, w = self._journal(), self._in("rotor_speed")
         if math.isfinite(j.sum()) and w > 0 and abs(j[0]) + abs(j[1]) > 0:
             comp.force_end[:] = comp.outputs(j, w)[0]
         self._comp = comp
         self._changed()
         self._warm_up(j, w)
+
+    def _use_oil(self, comp):
+        """Switch the component's thermal model on (parameter oil) at the supply inputs' start state."""
+        from frbmodel.linear.thermal import OilSupply
+        from frbmodel.system.oil import OILS
+
+        v = self._values
+        lo, hi = float(v["thermal.speed_min"]), float(v["thermal.speed_max"])
+        if not lo < hi:
+            raise ValueError(f"thermal.speed_min = {lo!r} rad/s is invalid: valid range < thermal.speed_max = {hi!r} "
+                             "rad/s")
+        comp.use_oil(OilSupply(OILS[v["oil"]], *self._supply_inputs()), float(v["static_load"]),
+                     np.linspace(lo, hi, THERMAL_TABLE_SPEEDS))
 
     def _warm_up(self, j, w):
         """Load (or compile) the compiled kernels of the exchange and the ring step now, in initialization, not in
@@ -209,6 +278,12 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                              f"< outer.radius = {v['outer.radius']!r} m")
 
     def _advance(self, current_time, step_size):
+        if not self._values["oil"]:
+            for (name, _, _, start, _), value in zip(SUPPLY_IN, self._supply_inputs()):
+                if value != start:
+                    raise ValueError(f"{name} = {value!r} needs the thermal model: set the parameter oil (the films "
+                                     f"have constant viscosities); leave the input at its start value {start!r} "
+                                     "otherwise")
         out = self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
         self._comp.step(out[-4:].copy(), float(self._input_values[self._speed_idx]), 0.0, step_size, t=current_time)
 
@@ -221,8 +296,11 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
     def _component_state(self):
         """Ring state, journal history, last ε, end-of-step force and path acceleration (copies)."""
         c = self._comp
-        return {"ring": c.ring.copy(), "history": c.history.state(), "eps": tuple(c.eps),
-                "force_end": c.force_end.copy(), "path_accel": c.path_accel.copy()}
+        st = {"ring": c.ring.copy(), "history": c.history.state(), "eps": tuple(c.eps),
+              "force_end": c.force_end.copy(), "path_accel": c.path_accel.copy()}
+        if c.supply is not None:
+            st["supply"] = c.supply.to_dict()
+        return st
 
     def _set_component_state(self, st):
         c = self._comp
@@ -231,3 +309,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         c.eps = tuple(st["eps"])
         c.force_end = np.array(st["force_end"], dtype=float)
         c.path_accel = np.array(st["path_accel"], dtype=float)
+        if "supply" in st and st["supply"] != c.supply.to_dict():
+            from frbmodel.linear.thermal import OilSupply
+
+            c.set_supply(OilSupply.from_dict(st["supply"]))

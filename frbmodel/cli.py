@@ -266,6 +266,7 @@ def cmd_unbalance(args):
     check_method_speeds("--speeds", args.speeds, speeds, [letter for letter, _ in methods])
     unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"])
     tc = load_from_args(args)
+    supply = _oil_supply_from_args(args, tc)
     names = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
     bad = [n for n in names or [] if n not in location_names(tc)]
     if bad:
@@ -273,10 +274,14 @@ def cmd_unbalance(args):
     out = writable_dir(args.out)
     results, paths = [], []
     for letter, kw_m in methods:
-        ur = unbalance_response(tc, letter, speeds, unbalance, peak_names=names, progress=True, **kw_m)
+        ur = unbalance_response(tc, letter, speeds, unbalance, peak_names=names, progress=True, oil_supply=supply,
+                                **kw_m)
         paths += ur.save(out, names=names)
         print(f"method {letter}: {ur.meta['method_title']}; {speeds.size} speeds; unbalance "
               + ", ".join(f"{u['disc']} {u['m e [kg m]']:g} kg m at {u['phase [rad]']:g} rad" for u in ur.unbalance))
+        if supply is not None:
+            print(f"thermal operating point at every speed: {supply.oil.name}, supply {supply.supply_temperature_K:g} "
+                  f"K, {supply.supply_pressure_Pa:g} Pa")
         _print_critical(ur.critical_speeds())
         results.append(ur)
     if len(results) > 1:
@@ -814,6 +819,7 @@ def cmd_losses(args):
     if args.onsets and oil is None:
         raise ParameterError("--onsets needs an oil: give --oil NAME or an [oil] table in --system (the onsets are "
                              "computed at each supply temperature's thermal operating points)")
+    ramp = _runup_ramp_from_args(args)
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
@@ -835,24 +841,54 @@ def cmd_losses(args):
     fig.savefig(p_png, dpi=130)
     plt.close(fig)
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.5g}"))
-    paths = [p_csv, p_png] + (_write_onsets(tc, oil, temps, p_s, speeds, out) if args.onsets else [])
+    paths = [p_csv, p_png] + (_write_onsets(tc, oil, temps, p_s, speeds, out, ramp) if args.onsets else [])
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
 
 
-def _write_onsets(tc, oil, temps, p_s, speeds, out):
+def _runup_ramp_from_args(args):
+    """``(start [rpm], end [rpm], time [s])`` of ``frb losses --runup-onsets`` (None without it); the flag needs
+    ``--onsets``, the ramp options need the flag."""
+    given = [o for o, v in (("--runup-speeds", args.runup_speeds), ("--runup-duration", args.runup_duration))
+             if v is not None]
+    if not args.runup_onsets:
+        if given:
+            raise ParameterError(f"{given[0]} needs --runup-onsets (the run-up beside the linear onsets)")
+        return None
+    if not args.onsets:
+        raise ParameterError("--runup-onsets needs --onsets (the run-up onsets are drawn beside the linear ones)")
+    text = args.runup_speeds or "20000:250000"
+    try:
+        lo, hi = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise ParameterError(f"--runup-speeds = {text!r} is invalid: give START:STOP [rpm], e.g. 20000:250000") \
+            from None
+    if not 0.0 < lo < hi <= 1e6:
+        raise ParameterError(f"--runup-speeds = {text!r} is invalid: valid range 0 < START < STOP <= 1e6 rpm")
+    duration = check_positive("--runup-duration", 1.0 if args.runup_duration is None else args.runup_duration, "s")
+    return lo, hi, duration
+
+
+def _write_onsets(tc, oil, temps, p_s, speeds, out, ramp=None):
     """``frb losses --onsets``: whirl onsets versus supply temperature (:func:`frbmodel.studies.thermal.
-    onsets_vs_supply`, Campbell grid = ``--speeds``) as whirl_onsets.csv, whirl_onsets_modes.csv and the figure."""
+    onsets_vs_supply`, Campbell grid = ``--speeds``) as whirl_onsets.csv, whirl_onsets_modes.csv and the figure;
+    with a ``ramp`` (start [rpm], end [rpm], time [s]) also one run-up per supply temperature
+    (:func:`frbmodel.studies.thermal.runup_onsets_vs_supply`): whirl_onsets_runup.csv and squares in the figure."""
     import matplotlib.pyplot as plt
 
     from .plots.thermal import plot_onsets_vs_supply
-    from .studies.thermal import onsets_vs_supply
+    from .studies.thermal import onsets_vs_supply, runup_onsets_vs_supply
 
     films, modes = onsets_vs_supply(tc, oil, temps, p_s, speeds_rpm=speeds, progress=True)
+    runups = None if ramp is None else runup_onsets_vs_supply(tc, oil, temps, p_s, speed_range_rpm=ramp[:2],
+                                                              duration_s=ramp[2])
     paths = [out / "whirl_onsets.csv", out / "whirl_onsets_modes.csv", out / "whirl_onsets.png"]
     films.to_csv(paths[0], index=False)
     modes.to_csv(paths[1], index=False)
-    fig = plot_onsets_vs_supply(films, modes)
+    if runups is not None:
+        paths.append(out / "whirl_onsets_runup.csv")
+        runups.to_csv(paths[-1], index=False)
+    fig = plot_onsets_vs_supply(films, modes, runups=runups)
     fig.savefig(paths[2], dpi=130)
     plt.close(fig)
     print("film whirl onsets (exact, each at the temperatures of its speed):")
@@ -1149,6 +1185,7 @@ def _add_unbalance(sub):
                    help="comma list of the locations drawn and searched for peaks (default: the wheels), e.g. "
                         "'turbine_wheel,turbine journal'")
     _spring_args(u)
+    _oil_args(u, "every speed, its 1X crossings and response peaks at their own thermal operating point")
     u.add_argument("--out", default="results/unbalance", help="output folder")
     _system_args(u)
     u.set_defaults(func=cmd_unbalance)
@@ -1226,7 +1263,7 @@ def _add_runup(sub):
     r.add_argument("--no-figure", action="store_true")
     r.add_argument("--out", default="results/runup")
     _oil_args(r, "the films' viscosities follow the rotor speed (quasi-static temperatures of the thermal operating "
-                 "points); prescribed speed profiles, --integrator rodas or lsoda")
+                 "points; torque-driven: a table up to the speed the drive could reach)")
     _system_args(r)
     r.set_defaults(func=cmd_runup)
 
@@ -1373,6 +1410,14 @@ def _add_losses(sub):
     lo.add_argument("--onsets", action="store_true",
                     help="with an oil, also the whirl onset speeds versus the supply temperature(s): each film's exact "
                          "onset and the Campbell modes' (grid = --speeds): whirl_onsets.csv, _modes.csv, .png")
+    lo.add_argument("--runup-onsets", action="store_true",
+                    help="with --onsets, also one run-up per supply temperature (quasi-static film temperatures) "
+                         "and its sub-synchronous components' onsets [rpm] beside the linear ones: "
+                         "whirl_onsets_runup.csv")
+    lo.add_argument("--runup-speeds", default=None, metavar="START:STOP",
+                    help="ramp of --runup-onsets [rpm] (default 20000:250000, the main job's)")
+    lo.add_argument("--runup-duration", type=float, default=None, metavar="S",
+                    help="ramp time of --runup-onsets [s] (default 1)")
     lo.add_argument("--out", default="results/losses", help="output folder")
     _system_args(lo)
     lo.set_defaults(func=cmd_losses)

@@ -294,7 +294,7 @@ def test_slave_fast_paths_read_what_the_per_variable_paths_read():
     vr = _start(b, {"ring.x0": eq.ring[0], "ring.y0": eq.ring[1], "ring.speed0": eq.ring_speed},
                 {"journal.x": eq.journal[0], "journal.y": eq.journal[1], "rotor_speed": w})
     outs = _real_outputs(b)
-    assert len(outs) == 26  # every Real output but the linearization
+    assert len(outs) == 29  # every Real output but the linearization (26 + the 3 thermal outputs of #25)
     names = {v: k for k, v in vr.items()}
     for k in range(3):
         j = [eq.journal[0] + 1e-6 * k, eq.journal[1], 1e-3, -2e-3 * k]

@@ -297,7 +297,7 @@ def test_a_jump_between_two_modes_is_not_taken_for_a_critical_speed(monkeypatch)
 
     upper, lower = branch(5.0), branch(-5.0)
 
-    def nearest(system, m, x, guess, kw):
+    def nearest(system, m, x, guess, kw, oil_supply=None):
         cands = [upper(x), lower(x)]
         return min(cands, key=lambda lam: abs(lam - guess))
 
@@ -307,7 +307,7 @@ def test_a_jump_between_two_modes_is_not_taken_for_a_critical_speed(monkeypatch)
     assert unb._refine_crossing(None, None, cd, 0, 0, {}) is None
     # a branch that does cross: f = n/60 + 5 Hz − (n − 60 krpm) / 100 Hz/rpm → crossing at 60.5 krpm exactly
     crossing = lambda n: 1j * 2 * math.pi * (n / 60.0 + 5.0 - (n - 60e3) / 100.0) - 10.0  # noqa: E731
-    monkeypatch.setattr(unb, "_eigenvalue_near", lambda system, m, x, guess, kw: crossing(x))
+    monkeypatch.setattr(unb, "_eigenvalue_near", lambda system, m, x, guess, kw, oil_supply=None: crossing(x))
     cd.eigenvalues = np.array([[crossing(60e3)], [crossing(61e3)]])
     speed, lam = unb._refine_crossing(None, None, cd, 0, 0, {})
     assert speed == pytest.approx(60.5e3, rel=1e-9)  # Brent's xtol, 1e-9 of the speed

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ConvergenceError
+from ..linear.thermal import at_operating_point, check_oil_supply
 
 #: difference step of the speed derivative, relative
 SPEED_FD = 1e-6
@@ -293,9 +294,10 @@ def hopf_dataframe(hopf):
                         columns=["speed [rpm]", "frequency [Hz]", "frequency [X]", "with rising speed"])
 
 
-def equilibrium_jacobian(system, speed_rpm, film_model=None):
+def equilibrium_jacobian(system, speed_rpm, film_model=None, oil_supply=None):
     """Equilibrium state (method-J bearing equilibria: the full model's fixed point) and the full model's Jacobian
-    there, without the rotation angle.
+    there, without the rotation angle; with an :class:`~frbmodel.linear.thermal.OilSupply`, of the system at the
+    thermal operating point of ``speed_rpm``.
 
     Returns
     -------
@@ -308,6 +310,7 @@ def equilibrium_jacobian(system, speed_rpm, film_model=None):
     """
     from ..nonlinear.runup import SpeedProfile, atol_vector, build_problem, initial_state
 
+    system = at_operating_point(system, speed_rpm, oil_supply)
     p = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), film_model or system.film_model)
     y = initial_state(p, "equilibrium", perturbation=0.0)
     n = p.n_states - 1
@@ -324,19 +327,19 @@ def equilibrium_jacobian(system, speed_rpm, film_model=None):
     return y[:-1].copy(), jac
 
 
-def _unstable_pairs(system, speed_rpm, model):
-    lam = np.linalg.eigvals(equilibrium_jacobian(system, speed_rpm, model)[1])
+def _unstable_pairs(system, speed_rpm, model, oil_supply=None):
+    lam = np.linalg.eigvals(equilibrium_jacobian(system, speed_rpm, model, oil_supply)[1])
     return int(np.sum((lam.real > 0) & (lam.imag > 0)))
 
 
-def _crossing_real(system, speed_rpm, model, near_hz):
+def _crossing_real(system, speed_rpm, model, near_hz, oil_supply=None):
     """Real part [1/s] of the eigenvalue whose frequency is closest to ``near_hz``."""
-    lam = np.linalg.eigvals(equilibrium_jacobian(system, speed_rpm, model)[1])
+    lam = np.linalg.eigvals(equilibrium_jacobian(system, speed_rpm, model, oil_supply)[1])
     lam = lam[lam.imag > 0]
     return float(lam[np.argmin(np.abs(lam.imag / (2 * math.pi) - near_hz))].real)
 
 
-def _refine_crossing(system, model, a, b, f_hz, count_a):
+def _refine_crossing(system, model, a, b, f_hz, count_a, oil_supply=None):
     """Speed [rpm] in (a, b) where the pair near ``f_hz`` crosses: Brent's method on its real part when it changes
     sign over the interval and the number of unstable pairs changes across the root found (the eigenvalue nearest
     in frequency can switch to another, heavily damped one within the interval: a jump of the real part that is no
@@ -344,15 +347,15 @@ def _refine_crossing(system, model, a, b, f_hz, count_a):
     of unstable pairs, to the same 1e-6 relative."""
     from scipy.optimize import brentq
 
-    ra, rb = (_crossing_real(system, s, model, f_hz) for s in (a, b))
+    ra, rb = (_crossing_real(system, s, model, f_hz, oil_supply) for s in (a, b))
     if (ra <= 0.0 < rb) or (rb <= 0.0 < ra):
-        s_h = brentq(lambda s: _crossing_real(system, s, model, f_hz), a, b, xtol=1e-6 * a)
+        s_h = brentq(lambda s: _crossing_real(system, s, model, f_hz, oil_supply), a, b, xtol=1e-6 * a)
         lo, hi = max(a, s_h * (1 - 2e-6)), min(b, s_h * (1 + 2e-6))
-        if _unstable_pairs(system, lo, model) == count_a != _unstable_pairs(system, hi, model):
+        if _unstable_pairs(system, lo, model, oil_supply) == count_a != _unstable_pairs(system, hi, model, oil_supply):
             return s_h
     while b - a > 1e-6 * a:
         mid = 0.5 * (a + b)
-        if _unstable_pairs(system, mid, model) == count_a:
+        if _unstable_pairs(system, mid, model, oil_supply) == count_a:
             a = mid
         else:
             b = mid
@@ -368,7 +371,7 @@ def _crossing_pair(lam_a, lam_b, count_a, count_b):
     return min(new, key=lambda x: np.min(np.abs(lam_a[(lam_a.real <= 0) & (lam_a.imag > 0)] - x)))
 
 
-def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, restabilizing=False):
+def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, restabilizing=False, oil_supply=None):
     """Hopf points of the full model's equilibrium in a speed range: where the number of unstable complex pairs of
     its Jacobian rises (and, with ``restabilizing``, falls), refined by Brent's method on the real part of the
     crossing pair.
@@ -387,23 +390,29 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, res
         Also list where a pair regains stability (:attr:`HopfPoint.restabilizing`); by default only the crossings
         to instability (the linear onsets). A grid interval where one pair gains and another loses stability keeps
         the count and shows neither: refine ``n_grid`` to separate them.
+    oil_supply : OilSupply, optional
+        The thermal model: every speed of the grid and of the refinement at its own thermal operating point
+        (:func:`frbmodel.linear.thermal.thermal_system` at that speed), so a Hopf point is a speed whose own
+        temperatures put a pair on the imaginary axis (where the thermal Campbell diagram loses stability); its
+        equilibrium state and eigenvector are those of that operating point. Default None: constant viscosities.
 
     Returns
     -------
     list of HopfPoint
         In increasing speed.
     """
+    supply = check_oil_supply(oil_supply)
     model = film_model or system.film_model
     grid = np.geomspace(*sorted(speeds_rpm), n_grid)
-    counts = [_unstable_pairs(system, s, model) for s in grid]
+    counts = [_unstable_pairs(system, s, model, supply) for s in grid]
     out = []
     for a, b, ca, cb in zip(grid[:-1], grid[1:], counts[:-1], counts[1:]):
         if cb == ca or (cb < ca and not restabilizing):
             continue
-        lam_a, lam_b = (np.linalg.eigvals(equilibrium_jacobian(system, s, model)[1]) for s in (a, b))
+        lam_a, lam_b = (np.linalg.eigvals(equilibrium_jacobian(system, s, model, supply)[1]) for s in (a, b))
         f_hz = _crossing_pair(lam_a, lam_b, ca, cb).imag / (2 * math.pi)
-        s_h = _refine_crossing(system, model, a, b, f_hz, ca)
-        z_eq, jac = equilibrium_jacobian(system, s_h, model)
+        s_h = _refine_crossing(system, model, a, b, f_hz, ca, supply)
+        z_eq, jac = equilibrium_jacobian(system, s_h, model, supply)
         lam, vec = np.linalg.eig(jac)
         k = int(np.argmin(np.where(lam.imag > 0, np.abs(lam.real), np.inf)))  # the pair on the imaginary axis there
         out.append(HopfPoint(float(s_h), float(lam[k].imag / (2 * math.pi)), vec[:, k], z_eq, cb < ca))

@@ -205,7 +205,7 @@ class BifurcationDiagram(Result):
 
 
 def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_max=8.0, max_points=100,
-                 progress=False, on_point=None, segments=1):
+                 progress=False, on_point=None, segments=1, oil_supply=None):
     """Branches of limit cycles in rotor speed (pseudo-arclength), from the Hopf points or from a given orbit.
 
     Parameters
@@ -233,11 +233,19 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
         Shooting segments per orbit: 1 single shooting; m > 1 multiple shooting (m flows of T/m, the defects between
         them as equations; same cost per Newton step), for strongly unstable orbits: a flow over the whole period
         amplifies errors by the largest multiplier |mu|, a segment by about |mu|^(1/m).
+    oil_supply : None
+        Not implemented: an :class:`~frbmodel.linear.thermal.OilSupply` is refused (a branch over speed would need
+        each speed's thermal operating point in its flows and in the speed derivative of its Jacobian); use
+        :func:`hopf_points` or :func:`frbmodel.cycles.limitcycle.limit_cycle` with ``oil_supply`` per speed.
 
     Returns
     -------
     BifurcationDiagram
     """
+    if oil_supply is not None:
+        raise ParameterError("oil_supply cannot be combined with continuation (not implemented: the branch's flows "
+                             "keep constant viscosities); use hopf_points(oil_supply=) or limit_cycle(oil_supply=) "
+                             "per speed")
     from ..physics.film import check_model
     from .limitcycle import LimitCycle, limit_cycle
 

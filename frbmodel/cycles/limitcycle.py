@@ -289,7 +289,7 @@ def _forced_guess(problem, y, t, samples_per_rev, max_multiple):
 
 
 def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), settle_s=0.3, tol=1e-6,
-                samples=400, max_iter=25, segments=1):
+                samples=400, max_iter=25, segments=1, oil_supply=None):
     """Periodic whirl orbit of the full nonlinear model at a constant rotor speed, with its Floquet multipliers.
 
     Parameters
@@ -323,6 +323,12 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
         (:func:`frbmodel.cycles.branch.shoot_segments`),
         for strongly unstable orbits (a flow over the period amplifies errors by the largest multiplier |mu|, a
         segment by ~|mu|^(1/m)); autonomous orbits only.
+    oil_supply : OilSupply, optional
+        The thermal model: the orbit of the system at the thermal operating point of ``speed_rpm``
+        (:func:`frbmodel.linear.thermal.thermal_system`: the films' viscosities at their temperatures there, the
+        quasi-static temperatures of a run-up at that constant speed); ``meta`` records it (``oil_supply``) and the
+        four viscosities [Pa s] (``film_viscosities_Pa_s``). A recorded run-up as ``guess`` is refused with it.
+        Default None: constant viscosities.
 
     Returns
     -------
@@ -340,6 +346,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     from .shooting import shoot, stable_multipliers
 
     speed_rpm = check_speed("speed", speed_rpm)
+    system = _at_supply(system, speed_rpm, guess, oil_supply)
     model = check_model(film_model or system.film_model)
     problem = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), model, unbalance)
     forced = any(u.amount > 0 for u in unbalance)
@@ -358,8 +365,24 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     orbit = orbit_result(problem, RunupSchema.from_system(system), t, y)
     meta = {"film_model": model, "rtol": SHOOT_RTOL, "atol_displacement_m": SHOOT_ATOL_M, "newton_iterations":
             sol.iterations, "residual_scaled": sol.residual, "flow_integrations": flow.evaluations, "guess": info}
+    if oil_supply is not None:
+        meta.update(oil_supply=oil_supply.to_dict(),
+                    film_viscosities_Pa_s=[f.viscosity for b in system.bearings for f in (b.inner, b.outer)])
     stable = stable_multipliers(sol.nontrivial_multipliers, MULTIPLIER_TOL)
     return LimitCycle(speed_rpm, sol.period, orbit, sol.multipliers, stable, sol.z0, not forced, meta, sol.monodromy)
+
+
+def _at_supply(system, speed_rpm, guess, oil_supply):
+    """``system`` at the thermal operating point of ``speed_rpm`` (unchanged without an oil supply); a recorded
+    run-up as the guess is refused with an oil supply (its re-simulation would need the run's viscosity table)."""
+    from ..linear.thermal import at_operating_point, check_oil_supply
+    from ..nonlinear.recorder import RunupResult
+
+    supply = check_oil_supply(oil_supply)
+    if supply is not None and isinstance(guess, RunupResult):
+        raise ParameterError("guess = a RunupResult cannot be combined with oil_supply: the run is re-simulated at "
+                             "constant viscosities; give a LimitCycle, 'hopf', (state, period) or no guess")
+    return at_operating_point(system, speed_rpm, supply)
 
 
 def _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced):

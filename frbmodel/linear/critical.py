@@ -10,16 +10,19 @@ from ..core.units import rpm_to_rad_s
 from ..system.methods import get_method
 from .assembly import linear_system
 from .equilibrium import bearing_equilibrium
+from .thermal import OilSupply, at_operating_point
 
-__all__ = ["CRITICAL_COLUMNS", "critical_speeds", "linear_at", "system_of"]
+__all__ = ["CRITICAL_COLUMNS", "critical_speeds", "linear_at", "oil_supply_of", "system_of"]
 
 #: columns of the critical-speed table
 CRITICAL_COLUMNS = ("source", "speed [rpm]", "frequency [Hz]", "mode", "kind", "precession", "damping [-]",
                     "location", "amplitude [m]", "refined")
 
 
-def linear_at(system, m, speed_rpm, kw):
-    """The method's linear system at one speed (equilibria solved for the film methods)."""
+def linear_at(system, m, speed_rpm, kw, oil_supply=None):
+    """The method's linear system at one speed (equilibria solved for the film methods); with an
+    :class:`~frbmodel.linear.thermal.OilSupply`, of the system at that speed's thermal operating point."""
+    system = at_operating_point(system, speed_rpm, oil_supply)
     eqs = None
     if m.needs_films:
         omega = rpm_to_rad_s(speed_rpm)
@@ -39,17 +42,25 @@ def system_of(cd, system):
     return None
 
 
-def _eigenvalue_near(system, m, speed_rpm, guess, kw):
+def oil_supply_of(result, oil_supply=None):
+    """The oil supply a Campbell or unbalance result was computed with: ``oil_supply``, else rebuilt from
+    ``result.meta["oil_supply"]`` (None for constant viscosities)."""
+    if oil_supply is not None or not isinstance(result.meta.get("oil_supply"), dict):
+        return oil_supply
+    return OilSupply.from_dict(result.meta["oil_supply"])
+
+
+def _eigenvalue_near(system, m, speed_rpm, guess, kw, oil_supply=None):
     """The eigenvalue (Im > 0) of the method's linear system at ``speed_rpm`` nearest to ``guess`` [1/s]."""
     from .modal import state_matrix
 
-    ls = linear_at(system, m, speed_rpm, kw)
+    ls = linear_at(system, m, speed_rpm, kw, oil_supply)
     lam = np.linalg.eigvals(state_matrix(ls.M, ls.C, ls.K))
     lam = lam[lam.imag > 0]
     return lam[np.argmin(np.abs(lam - guess))]
 
 
-def _refine_crossing(system, m, cd, i, j, kw):
+def _refine_crossing(system, m, cd, i, j, kw, oil_supply=None):
     """Root of Im λ_j(Ω)/2π − Ω/2π between grid speeds i and i+1 (Brent), λ_j followed as the eigenvalue
     nearest to the linear interpolation of the tracked one; None if the bracket does not hold, or if the root
     Brent returns is not one: the nearest eigenvalue can switch to another mode inside the interval (where two
@@ -62,7 +73,7 @@ def _refine_crossing(system, m, cd, i, j, kw):
 
     def lam(x):
         t = (x - s[i]) / (s[i + 1] - s[i])
-        return _eigenvalue_near(system, m, x, la + t * (lb - la), kw)
+        return _eigenvalue_near(system, m, x, la + t * (lb - la), kw, oil_supply)
 
     def g(x):
         return lam(x).imag / (2 * math.pi) - x / 60.0
@@ -79,7 +90,7 @@ def _refine_crossing(system, m, cd, i, j, kw):
     return x, lam(x)
 
 
-def critical_speeds(cd, system=None, refine=True, **kw):
+def critical_speeds(cd, system=None, refine=True, oil_supply=None, **kw):
     """Speeds where the 1X line f = n/60 crosses the damped Campbell branches of ``cd``.
 
     Crossings are found between grid speeds (sign change of f_mode − n/60, linear interpolation) and, with
@@ -92,6 +103,9 @@ def critical_speeds(cd, system=None, refine=True, **kw):
         The system ``cd`` was computed for (default: rebuilt from ``cd.meta["system"]``); needed to refine.
     refine : bool
         Root-solve each crossing (else: linear interpolation on the grid).
+    oil_supply : OilSupply, optional
+        The thermal model of ``cd`` (default: rebuilt from ``cd.meta["oil_supply"]``, None without one): the root
+        search evaluates each trial speed at its own thermal operating point.
     **kw
         Spring stiffnesses of A, B, E [N/m] (default: ``cd.meta["method_options"]``).
 
@@ -115,6 +129,7 @@ def critical_speeds(cd, system=None, refine=True, **kw):
     m = get_method(cd.method)
     opts = {**cd.meta.get("method_options", {}), **kw} if m.parameters else {}
     system = system_of(cd, system) if refine else None
+    supply = oil_supply_of(cd, oil_supply)
     s, f = cd.speeds_rpm, cd.frequencies_hz
     g = f - s[:, None] / 60.0
     rows = []
@@ -124,7 +139,7 @@ def critical_speeds(cd, system=None, refine=True, **kw):
         for i in idx:
             t = g[i, j] / (g[i, j] - g[i + 1, j])
             speed, lam = s[i] + t * (s[i + 1] - s[i]), cd.eigenvalues[i, j] + t * np.diff(cd.eigenvalues[i:i + 2, j])[0]
-            root = _refine_crossing(system, m, cd, i, j, opts) if system is not None else None
+            root = _refine_crossing(system, m, cd, i, j, opts, supply) if system is not None else None
             if root is not None:
                 speed, lam = root
             k = i if speed - s[i] <= s[i + 1] - speed else i + 1

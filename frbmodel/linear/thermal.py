@@ -22,8 +22,8 @@ from ..system.rotor import GRAVITY
 from .equilibrium import bearing_equilibrium
 from .losses import bearing_losses, equilibrium_loss, with_ring_speed_ratio
 
-__all__ = ["MAX_SUPPLY_PRESSURE_PA", "OilSupply", "at_operating_point", "thermal_bearing", "thermal_losses",
-           "thermal_system"]
+__all__ = ["MAX_SUPPLY_PRESSURE_PA", "OilSupply", "at_operating_point", "bearing_operating_point", "thermal_bearing",
+           "thermal_losses", "thermal_system"]
 
 #: the highest oil supply pressure accepted [Pa] (gauge): 20 bar; turbocharger oil circuits run at 1 ... 6 bar
 MAX_SUPPLY_PRESSURE_PA = 2e6
@@ -90,6 +90,13 @@ class OilSupply:
         """Plain data for a result's metadata: the oil, the supply temperature [K] and pressure [Pa], the model."""
         return {"oil": self.oil.to_dict(), "supply_temperature_K": self.supply_temperature_K,
                 "supply_pressure_Pa": self.supply_pressure_Pa, "model": self.model.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "OilSupply":
+        """Inverse of :meth:`to_dict` (a result's ``meta["oil_supply"]``): the oil, supply temperature [K] and
+        pressure [Pa], the model's coefficients."""
+        return cls(Oil.from_dict(d["oil"], "oil_supply oil"), d["supply_temperature_K"], d["supply_pressure_Pa"],
+                   ThermalModel(**d["model"]))
 
 
 def check_oil_supply(oil_supply, method="J"):
@@ -286,6 +293,35 @@ def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", 
                          sup.supply_temperature_K, sup.supply_pressure_Pa, sup.model, film_model,
                          gravity)
     return s["bearing"]
+
+
+def bearing_operating_point(bearing, load_N, speed_rpm, oil_supply, film_model="short", gravity=GRAVITY):
+    """The thermal operating point of one bearing at one speed as one :func:`thermal_losses` row (the same
+    computation: temperatures [K], viscosities [Pa s], flows [m³/s], powers [W], …), for a component that knows
+    only its bearing and its static load (the split bearing FMU).
+
+    Parameters
+    ----------
+    bearing : FloatingRingBearing
+    load_N : float
+        Static load of the bearing [N].
+    speed_rpm : float
+        Rotor speed [rpm], > 0.
+    oil_supply : OilSupply
+    film_model : str
+    gravity : float
+        Gravitational acceleration [m/s²].
+
+    Returns
+    -------
+    dict
+        The columns of :func:`thermal_losses` (units in every key).
+    """
+    sup = check_oil_supply(oil_supply)
+    rpm = check_speed("speed_rpm", speed_rpm)
+    s = _operating_point(bearing, float(load_N), rpm * RPM, sup.oil, sup.supply_temperature_K, sup.supply_pressure_Pa,
+                         sup.model, film_model, gravity)
+    return _row(rpm, sup.supply_temperature_K, sup.supply_pressure_Pa, sup.oil, sup.model, s)
 
 
 def at_operating_point(system, speed_rpm, oil_supply):

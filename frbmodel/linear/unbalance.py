@@ -42,7 +42,8 @@ from ..plots.unbalance import (  # noqa: F401  (the figures, re-exported from wh
 )
 from ..system.methods import get_method
 from .campbell import campbell as campbell_diagram
-from .critical import CRITICAL_COLUMNS, critical_speeds, linear_at, system_of  # noqa: F401  (re-exported)
+from .critical import CRITICAL_COLUMNS, critical_speeds, linear_at, oil_supply_of, system_of  # noqa: F401
+from .thermal import at_operating_point, check_oil_supply
 
 #: default speed grid [rpm] (1 000 ... 250 000, 200 points)
 DEFAULT_SPEEDS_RPM = (1e3, 250e3, 200)
@@ -665,7 +666,7 @@ class UnbalanceResponse(Result):
 
 
 def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, critical=True, peak_names=None,
-                       progress: bool = False, **kw) -> UnbalanceResponse:
+                       progress: bool = False, oil_supply=None, **kw) -> UnbalanceResponse:
     """Steady-state 1X response of ``system`` to rotating unbalances, per speed, for bearing model ``method``.
 
     Parameters
@@ -685,6 +686,12 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
         Locations whose response peaks enter the table (default: the discs).
     progress : bool
         Show a progress bar over the speeds.
+    oil_supply : OilSupply, optional
+        The thermal model (method J only): each speed's linear system is that of its own thermal operating point
+        (:func:`frbmodel.linear.thermal.thermal_system` at that speed), and so are the Campbell diagram, the root
+        search of each 1X crossing and of each response peak (every trial speed at its own operating point).
+        ``meta`` records it (``oil_supply``) and the films' viscosities per speed (``film_viscosities_Pa_s``).
+        None (default): the constant viscosities, bit for bit.
     **kw
         Spring stiffnesses of A, B, E: ``k``, ``kx``, ``ky`` [N/m].
 
@@ -695,7 +702,8 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     Raises
     ------
     ParameterError
-        Not a system, an unknown method, option or disc, invalid speeds or unbalance.
+        Not a system, an unknown method, option or disc, invalid speeds or unbalance, an oil supply with a method
+        other than J.
 
     Examples
     --------
@@ -707,37 +715,43 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     """
     check_system(system)
     m = get_method(method)
+    supply = check_oil_supply(oil_supply, m.letter)
     unb = check_unbalance(system, {"turbine_wheel": (1e-6, 0.0)} if unbalance is None else unbalance)
     speeds = np.sort(m.check_speeds(np.linspace(*DEFAULT_SPEEDS_RPM) if speeds_rpm is None else speeds_rpm))
     m.options(**kw)  # validate early
     t0 = time.perf_counter()
-    rows, ls = [], None
+    rows, ls, mu = [], None, []
     with counter_bar(speeds.size, f"unbalance {m.letter}", progress_enabled(progress), unit="speed") as bar:
         for s in speeds:
-            ls = linear_at(system, m, s, kw)
+            sys_s = at_operating_point(system, s, supply)
+            mu.append([f.viscosity for b in sys_s.bearings for f in (b.inner, b.outer)])
+            ls = linear_at(sys_s, m, s, kw)
             omega = rpm_to_rad_s(s)
             rows.append(forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega))
             bar.update(1)
     meta = {"system_name": system.name, "system": system.to_dict(), "film_model": system.film_model,
             "method_title": m.title, "method_options": m.options(**kw), "layout": _layout(system, ls.ring_dofs),
             "source": "frbmodel.unbalance_response"}
+    if supply is not None:
+        meta.update(oil_supply=supply.to_dict(), film_viscosities_Pa_s=mu)
     ur = UnbalanceResponse(m.letter, speeds, np.array(rows), ls.dof_labels,
                            [{"disc": n, "node": node, "m e [kg m]": me, "phase [rad]": p} for n, node, me, p in unb],
                            meta)
     if critical:
-        cd = campbell_diagram(system, m.letter, speeds, whirl=False, **kw)
-        rows = critical_speeds(cd, system, **kw).to_dict("records")
-        rows += response_peaks(ur, cd, system, peak_names, **kw).to_dict("records")
+        cd = campbell_diagram(system, m.letter, speeds, whirl=False, oil_supply=supply, **kw)
+        rows = critical_speeds(cd, system, oil_supply=supply, **kw).to_dict("records")
+        rows += response_peaks(ur, cd, system, peak_names, oil_supply=supply, **kw).to_dict("records")
         ur.critical = sorted(rows, key=lambda r: r["speed [rpm]"])
     ur.meta["cpu_time_s"] = time.perf_counter() - t0
     return ur
 
 
 # ---------------------------------------------------------------------- critical speeds
-def _amplitude_at(ur, system, m, name, unb, kw):
-    """Semi-major axis [m] of ``name`` at one speed, as a function of the speed [rpm]."""
+def _amplitude_at(ur, system, m, name, unb, kw, oil_supply=None):
+    """Semi-major axis [m] of ``name`` at one speed, as a function of the speed [rpm] (with an oil supply, at that
+    speed's thermal operating point)."""
     def amp(speed_rpm):
-        ls = linear_at(system, m, speed_rpm, kw)
+        ls = linear_at(system, m, speed_rpm, kw, oil_supply)
         omega = rpm_to_rad_s(speed_rpm)
         Q = forced_response(ls, unbalance_force(ls.M.shape[0], unb, omega), omega)
         one = UnbalanceResponse(ur.method, [speed_rpm], Q[None, :], ur.dof_labels, ur.unbalance, ur.meta)
@@ -767,7 +781,7 @@ def _nearest_mode(cd, speed_rpm):
     return j, cd.mode_kind[k, j], cd.precession[k, j], float(cd.damping[k, j])
 
 
-def response_peaks(ur, cd=None, system=None, names=None, refine=True, **kw):
+def response_peaks(ur, cd=None, system=None, names=None, refine=True, oil_supply=None, **kw):
     """Local maxima over speed of the orbit semi-major axes of an unbalance response.
 
     Parameters
@@ -781,6 +795,9 @@ def response_peaks(ur, cd=None, system=None, names=None, refine=True, **kw):
         Locations (default: the discs).
     refine : bool
         Refine each grid maximum by a bounded scalar search between its neighbouring grid speeds.
+    oil_supply : OilSupply, optional
+        The thermal model of ``ur`` (default: rebuilt from ``ur.meta["oil_supply"]``, None without one): each trial
+        speed of the search at its own thermal operating point.
     **kw
         Spring stiffnesses of A, B, E [N/m] (default: ``ur.meta["method_options"]``).
 
@@ -802,6 +819,7 @@ def response_peaks(ur, cd=None, system=None, names=None, refine=True, **kw):
     m = get_method(ur.method)
     opts = {**ur.meta.get("method_options", {}), **kw} if m.parameters else {}
     system = system_of(ur, system) if refine else None
+    supply = oil_supply_of(ur, oil_supply)
     unb = tuple((u["disc"], u["node"], u["m e [kg m]"], u["phase [rad]"]) for u in ur.unbalance)
     s, rows = ur.speeds_rpm, []
     for name in names or [d["name"] for d in ur.layout["discs"]]:
@@ -811,7 +829,7 @@ def response_peaks(ur, cd=None, system=None, names=None, refine=True, **kw):
         for k in idx:
             speed, amp_k, refined = s[k], a[k], False
             if system is not None:
-                x, amp_x = _refine_peak(_amplitude_at(ur, system, m, name, unb, opts), s[k - 1], s[k + 1])
+                x, amp_x = _refine_peak(_amplitude_at(ur, system, m, name, unb, opts, supply), s[k - 1], s[k + 1])
                 if amp_x >= amp_k:
                     speed, amp_k, refined = x, amp_x, True
             j, kind, prec, damp = _nearest_mode(cd, speed)

@@ -31,8 +31,9 @@ from ..physics.dynamics import monolithic_rhs
 from .rosenbrock import OMEGA_MAX
 
 #: header of the packed array: n_r, number of unbalances, profile points, torque-driven flag (0/1), spring
-#: stiffness [N/m], ε cap [-], gravity [m/s²], polar inertia [kg m²]
-HEADER = 8
+#: stiffness [N/m], ε cap [-], gravity [m/s²], polar inertia [kg m²], viscosity-table speeds (0: constant
+#: viscosities; the thermal model's quasi-static table otherwise)
+HEADER = 9
 #: integration methods of the compiled path (CyRK's name)
 METHOD = "RADAU"
 
@@ -58,18 +59,22 @@ def pack_problem(problem):
     (eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, grav, unb_node, unb_me, unb_phase, tg, wg, wdg, springs,
      eps_cap) = problem.args[:17]
     torque = problem.torque_driven
-    head = [n_r, unb_node.size, tg.size, 1.0 if torque else 0.0, springs, eps_cap, grav, problem.polar_inertia]
+    v_speeds, v_table = problem.args[22], problem.args[23]
+    nv = 0 if v_table is None else v_speeds.size
+    head = [n_r, unb_node.size, tg.size, 1.0 if torque else 0.0, springs, eps_cap, grav, problem.polar_inertia, nv]
     parts = [np.array(head, dtype=float), *(m.ravel() for m in eom), f_grav, jn, geom.ravel(), polys.ravel(), ring_m,
              ring_i, unb_node, unb_me, unb_phase, tg, wg, wdg]
     if torque:
         parts.append(problem.args[21])
+    if nv:
+        parts += [v_speeds, v_table.ravel()]
     return np.ascontiguousarray(np.concatenate([np.asarray(a, dtype=float).ravel() for a in parts]))
 
 
 @njit(cache=True)
 def _packed_size(head):
     n_r, nu, nt = int(head[0]), int(head[1]), int(head[2])
-    return HEADER + 3 * n_r * n_r + n_r + 2 + 16 + 40 + 4 + 3 * nu + (4 if head[3] > 0 else 3) * nt
+    return HEADER + 3 * n_r * n_r + n_r + 2 + 16 + 40 + 4 + 3 * nu + (4 if head[3] > 0 else 3) * nt + 5 * int(head[8])
 
 
 @njit(cache=True)
@@ -108,13 +113,23 @@ def rhs_packed(t, y, out, p):
     tg, wg, wdg = p[k:k + nt], p[k + nt:k + 2 * nt], p[k + 2 * nt:k + 3 * nt]
     diag = np.empty(4)
     at_rest, no_mass = np.zeros(2), np.zeros((2, n_r))  # a fixed housing (the Radau path has no housing motion)
+    nv = int(p[8])
+    kv = k + (4 if p[3] > 0 else 3) * nt  # the viscosity table (thermal model) after the profile grids
     if p[3] > 0:
         if not 0.0 < y[y.size - 1] <= OMEGA_MAX:  # torque-driven speed out of range: NaN ends the solver's step
             out[:] = np.nan
             return out
+        if nv:
+            return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, p[6], unb_node,
+                                  unb_me, unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass, p[7],
+                                  p[k + 3 * nt:k + 4 * nt], p[kv:kv + nv], p[kv + nv:kv + 5 * nv].reshape((4, nv)))
         return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, p[6], unb_node, unb_me,
                               unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass, p[7],
                               p[k + 3 * nt:k + 4 * nt])
+    if nv:
+        return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, p[6], unb_node, unb_me,
+                              unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass, p[7], None, p[kv:kv + nv],
+                              p[kv + nv:kv + 5 * nv].reshape((4, nv)))
     return monolithic_rhs(t, y, out, eom, f_grav, n_r, jn, geom, polys, ring_m, ring_i, p[6], unb_node, unb_me,
                           unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass)
 

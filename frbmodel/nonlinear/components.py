@@ -452,6 +452,70 @@ class BearingComponent:
         self.history = JournalHistory()
         self.path_accel = np.zeros(2)
         self.newton_max_iter = NEWTON_MAX_ITER
+        self._thermal = None  # the thermal model's table (use_oil), None: constant viscosities
+
+    def use_oil(self, oil_supply, load_N, speeds_rad_s):
+        """Switch the thermal model on: the films' viscosities follow the rotor speed through the thermal operating
+        points of this bearing (:func:`frbmodel.linear.thermal.bearing_operating_point`, quasi-static temperatures,
+        docs/theory/thermal.md#bearing-fmu) at ``speeds_rad_s``, interpolated linearly (held outside the grid).
+
+        Parameters
+        ----------
+        oil_supply : OilSupply
+            Oil, supply temperature [K] and pressure [Pa], coefficients.
+        load_N : float
+            The bearing's static load [N] (the operating point is the method-J equilibrium under it).
+        speeds_rad_s : array_like
+            Ascending rotor speeds [rad/s] of the table (> 0).
+        """
+        from ..linear.thermal import check_oil_supply
+
+        sup = check_oil_supply(oil_supply)
+        speeds = np.asarray(speeds_rad_s, dtype=float)
+        if speeds.ndim != 1 or speeds.size < 2 or not np.all(np.diff(speeds) > 0) or not speeds[0] > 0:
+            raise ParameterError(f"{self.bearing.name} bearing thermal table speeds are invalid: at least 2 ascending "
+                                 "speeds > 0 rad/s")
+        self._thermal = {"speeds": speeds, "load": float(load_N)}
+        self.set_supply(sup)
+
+    def set_supply(self, oil_supply):
+        """Recompute the thermal table for a new supply state (:meth:`use_oil` first)."""
+        from ..linear.thermal import bearing_operating_point
+
+        if self._thermal is None:
+            raise ParameterError(f"{self.bearing.name} bearing: an oil supply needs the thermal model (use_oil): "
+                                 "the component has constant viscosities")
+        th = self._thermal
+        rows = [bearing_operating_point(self.bearing, th["load"], rad_s_to_rpm(w), oil_supply, self.film_model,
+                                        self.gravity) for w in th["speeds"]]
+        for key, cols in (("viscosity", ("inner viscosity [Pa s]", "outer viscosity [Pa s]")),
+                          ("temperature", ("inner film temperature [K]", "outer film temperature [K]"))):
+            th[key] = np.array([[r[c] for r in rows] for c in cols])
+        th["flow"] = np.array([r["inner flow [m^3/s]"] + r["outer flow [m^3/s]"] for r in rows])
+        th["supply"] = oil_supply
+
+    @property
+    def supply(self):
+        """The :class:`~frbmodel.linear.thermal.OilSupply` of the thermal table (None: constant viscosities)."""
+        return None if self._thermal is None else self._thermal["supply"]
+
+    def _at_speed(self, omega_rotor):
+        """With the thermal model, the films' viscosities [Pa s] of the table at ``omega_rotor`` into the film data
+        (constant viscosities: nothing, the arithmetic is unchanged)."""
+        th = self._thermal
+        if th is not None:
+            for f in range(2):
+                self.geom[f, 3] = np.interp(float(omega_rotor), th["speeds"], th["viscosity"][f])
+
+    def thermal_outputs(self, omega_rotor):
+        """Inner and outer film temperatures [K] and the oil flow through both films [m³/s] of the thermal operating
+        point at ``omega_rotor`` [rad/s] (the table interpolated linearly; thermal model on)."""
+        th = self._thermal
+        if th is None:
+            raise ParameterError(f"{self.bearing.name} bearing: thermal outputs need the thermal model (use_oil)")
+        w = float(omega_rotor)
+        return (float(np.interp(w, th["speeds"], th["temperature"][0])),
+                float(np.interp(w, th["speeds"], th["temperature"][1])), float(np.interp(w, th["speeds"], th["flow"])))
 
     def initialize_equilibrium(self, load, omega_rotor):
         """Put the ring at the method-J equilibrium for a vertical journal load at a rotor speed.
@@ -468,9 +532,16 @@ class BearingComponent:
         ndarray (2,)
             The journal position x, y [m] of that equilibrium.
         """
+        from dataclasses import replace
+
         from ..linear.equilibrium import bearing_equilibrium
 
-        eq = bearing_equilibrium(self.bearing, load, omega_rotor, "J", self.film_model, self.gravity)
+        self._at_speed(omega_rotor)
+        b = self.bearing
+        if self._thermal is not None:  # the films at the table's viscosities of this speed
+            b = replace(b, inner=replace(b.inner, viscosity=float(self.geom[0, 3])),
+                        outer=replace(b.outer, viscosity=float(self.geom[1, 3])))
+        eq = bearing_equilibrium(b, load, omega_rotor, "J", self.film_model, self.gravity)
         self.ring[:] = [eq.ring[0], eq.ring[1], 0.0, 0.0, eq.ring_speed]
         return eq.journal
 
@@ -557,6 +628,7 @@ class BearingComponent:
         j = self._vector(journal, omega_rotor)
         out = np.empty(len(EXCHANGE_OUTPUTS)) if out is None else out
         w = float(omega_rotor)
+        self._at_speed(w)
         status, ei, eo = _bearing_exchange(*self._args(), j, self._ring_for_force(w), w, out)
         if status == EXCHANGE_BAD_INPUT:
             raise self._bad_inputs(journal, omega_rotor)
@@ -620,6 +692,7 @@ class BearingComponent:
             When an ε reaches 1.
         """
         j = self._check(journal, omega_rotor)
+        self._at_speed(omega_rotor)
         ring = self._ring_for_force(omega_rotor)
         t_j, p_i, p_o = bearing_loss_kernel(self.geom, self.polys, j[0], j[1], j[2], j[3], ring, float(omega_rotor),
                                             math.inf)
@@ -674,6 +747,7 @@ class BearingComponent:
             ax, ay = self.history.acceleration_xy(t, j[2], j[3], H) if t is not None else (0.0, 0.0)
         n_sub = max(1, int(math.ceil(H / self.substep - 1e-9)))
         rsr = self.rsr6 if self.ring_speed_model != "rsr_eq7" else self._speed_ratio()
+        self._at_speed(omega_rotor)  # thermal model: the viscosities of the step's start speed (quasi-static)
         status, eps_max, fx, fy, at, dpos, dspeed = _ring_step(
             *self._args(), j, ax, ay, self.ring, float(omega_rotor), float(omega_rotor_dot), float(H), n_sub, 0.999,
             self.ring_speed_model == "free", rsr, int(self.newton_max_iter), self.contact_eps)
@@ -737,6 +811,7 @@ class BearingComponent:
             ∂F/∂u [N/m, N s/m].
         """
         j = self._check(journal, omega_rotor)
+        self._at_speed(omega_rotor)
         ring = self._ring_for_force(omega_rotor)
         A = np.zeros((4, 4))
         B = np.zeros((4, 4))

@@ -827,19 +827,26 @@ def viscosity_table(system, speeds_rpm, oil_supply):
     return grid * RPM, np.ascontiguousarray(mu.reshape(grid.size, 2 * nb).T)
 
 
+def table_speeds_rpm(profile, polar_inertia):
+    """The rotor speeds [rpm] the viscosity table must span: a prescribed profile's speeds; torque-driven, from
+    :data:`VISCOSITY_TABLE_MIN_RPM` to the bound Ω₀ + ∫ max(T_drive, 0) dt / J_p (the films' torques only brake the
+    journal, so the speed cannot exceed it; the trapezoidal rule on the clipped nodes is an upper bound of the
+    integral of the clipped piecewise-linear torque, max(·, 0) being convex)."""
+    if not profile.torque_driven:
+        return profile.omega / RPM
+    impulse = float(np.trapezoid(np.maximum(profile.drive_torque, 0.0), profile.t))
+    top = (float(profile.omega[0]) + impulse / polar_inertia) / RPM
+    return np.array([VISCOSITY_TABLE_MIN_RPM, max(top, VISCOSITY_TABLE_MIN_RPM)])
+
+
 def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile")):
-    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, the ``"radau"`` integrator (its packed
-    arguments carry no viscosity table), a torque-driven rotor (no known speed range for the table) or linear
-    springs (no films). ``names`` are the option names for the messages (the CLI's)."""
+    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, or linear springs (no films). Every
+    integrator takes it (the ``"radau"`` path packs the viscosity table, :func:`frbmodel.nonlinear.compiled.
+    pack_problem`), and so does a torque-driven rotor (its table spans :func:`table_speeds_rpm`); ``profile``,
+    ``integrator`` and ``names`` are kept for the callers (the CLI's option names)."""
     sup = check_oil_supply(oil_supply)
     if sup is None:
         return None
-    if integrator == "radau":
-        raise ParameterError(f"{names[0]} = 'radau' cannot take an oil supply (its packed arguments have no viscosity "
-                             "table); use 'rodas' (default) or 'lsoda'")
-    if profile.torque_driven:
-        raise ParameterError(f"{names[1]} torque cannot take an oil supply: a torque-driven rotor has no known speed "
-                             "range for the viscosity table; prescribe the speed")
     if linear_springs is not None:
         raise ParameterError("linear_springs cannot take an oil supply: the journals have no films")
     return sup
@@ -873,7 +880,7 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     ------
     ParameterError
         Not two bearings, a negative unbalance or spring stiffness, a non-uniform time grid, a torque-driven
-        rotor without polar inertia, or an oil supply with a torque-driven rotor or linear springs.
+        rotor without polar inertia, or an oil supply with linear springs.
 
     Examples
     --------
@@ -886,7 +893,7 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs)
     visc = (None, None)
     if sup is not None:
-        visc = viscosity_table(system, profile.omega / RPM, sup)
+        visc = viscosity_table(system, table_speeds_rpm(profile, rotor_polar_inertia(rotor)), sup)
         system = at_operating_point(system, max(float(profile.omega[0]) / RPM, VISCOSITY_TABLE_MIN_RPM), sup)
     arrays = [film_arrays(b, film_model) for b in system.bearings]
     geom = np.array([a[0] for a in arrays])
@@ -1633,9 +1640,9 @@ def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, u
         The thermal model with quasi-static film temperatures (docs/theory/thermal.md#run-ups): the films'
         viscosities follow the rotor speed through a table of the thermal operating points over the profile's speed
         range (:func:`viscosity_table`, interpolated in the compiled right-hand side and in the recorded losses);
-        the initial equilibrium is at the start speed's temperatures. Prescribed speed profiles and the integrators
-        ``"rodas"`` and ``"lsoda"`` only. The metadata record the supply and the table. None: constant viscosities,
-        bit for bit.
+        the initial equilibrium is at the start speed's temperatures. A torque-driven rotor's table spans
+        :func:`table_speeds_rpm` (1 krpm up to the speed its drive torque could reach without friction). Every
+        integrator. The metadata record the supply and the table. None: constant viscosities, bit for bit.
 
     Returns
     -------

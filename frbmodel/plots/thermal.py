@@ -68,7 +68,7 @@ def plot_thermal_losses(table, title=None):
     return fig
 
 
-def plot_onsets_vs_supply(films, modes=None, title=None):
+def plot_onsets_vs_supply(films, modes=None, title=None, runups=None):
     """Whirl onset speed [krpm] versus oil supply temperature [K] (°C on the top axis): each film's exact onset with
     the thermal model (inner films solid, outer dashed, one colour per bearing), its constant-viscosity onset
     (dotted) and, if given, the speeds where the Campbell diagram's modes lose stability inside its grid (crosses).
@@ -81,6 +81,10 @@ def plot_onsets_vs_supply(films, modes=None, title=None):
         Columns ``supply temperature [K]``, ``onset [rpm]``, ``unstable at grid start`` (rows unstable at the grid's
         first speed are not drawn: their onset lies below the grid).
     title : str, optional
+    runups : pandas.DataFrame, optional
+        Run-up onsets (:func:`frbmodel.studies.thermal.runup_onsets_vs_supply`): columns ``supply temperature [K]``,
+        ``onset [rpm]``, ``ramp start [rpm]``, ``ramp end [rpm]``, ``ramp time [s]``; components without an onset
+        inside the run (present from its start) are not drawn.
 
     Returns
     -------
@@ -102,6 +106,12 @@ def plot_onsets_vs_supply(films, modes=None, title=None):
         inside = modes[~modes["unstable at grid start"].astype(bool)]
         ax.plot(inside["supply temperature [K]"], inside["onset [rpm]"] / 1e3, "x", color="k", ms=7,
                 label="a Campbell mode loses stability (grid-interpolated)")
+    if runups is not None and len(runups):
+        r = runups[runups["onset [rpm]"].notna()]
+        ramp = runups.iloc[0]
+        ax.plot(r["supply temperature [K]"], r["onset [rpm]"] / 1e3, "s", mfc="none", color="C3", ms=7,
+                label=f"run-up sub-synchronous onset ({ramp['ramp start [rpm]'] / 1e3:g} -> "
+                      f"{ramp['ramp end [rpm]'] / 1e3:g} krpm in {ramp['ramp time [s]']:g} s)")
     ax.plot([], [], ":", color="0.3", label="constant viscosities (system file)")
     ax.set_xlabel("oil supply temperature [K]")
     ax.set_ylabel("whirl onset speed [krpm]")

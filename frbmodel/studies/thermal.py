@@ -13,7 +13,10 @@ from ..linear.campbell import campbell
 from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, thermal_losses
 from ..linear.whirl import film_names, film_onset_speeds
 
-__all__ = ["SUPPLY_TEMPERATURES_K", "onsets_vs_supply"]
+__all__ = ["RUNUP_RAMP_RPM", "SUPPLY_TEMPERATURES_K", "onsets_vs_supply", "runup_onsets_vs_supply"]
+
+#: default run-up of :func:`runup_onsets_vs_supply`: the main job's ramp, 20 -> 250 krpm [rpm] in 1 s
+RUNUP_RAMP_RPM = (20e3, 250e3)
 
 #: default supply temperatures [K]: 40 ... 120 °C in 20 K steps (a cold start to hot oil)
 SUPPLY_TEMPERATURES_K = (313.15, 333.15, 353.15, 373.15, 393.15)
@@ -116,3 +119,59 @@ def onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURES_K, s
     cols = ["supply temperature [K]", "mode", "kind", "precession", "onset [rpm]", "frequency at onset [Hz]",
             "unstable at grid start"]
     return pd.DataFrame(films), pd.DataFrame(modes, columns=cols)
+
+
+def runup_onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURES_K,
+                           supply_pressure_Pa=SUPPLY_PRESSURE_PA, model=None, speed_range_rpm=RUNUP_RAMP_RPM,
+                           duration_s=1.0, location="turbine_wheel"):
+    """Sub-synchronous whirl components of one run-up per oil supply temperature (quasi-static film temperatures,
+    :func:`frbmodel.nonlinear.runup.runup` with an :class:`~frbmodel.linear.thermal.OilSupply`): the run-up onsets
+    beside the linear ones of :func:`onsets_vs_supply` (docs/theory/thermal.md#run-ups).
+
+    Parameters
+    ----------
+    system : Turbocharger
+    oil : Oil
+    supply_temperatures_K : sequence of float
+        Supply temperatures [K] (each in the oil's range; all checked before the first run).
+    supply_pressure_Pa : float
+        Supply pressure above ambient [Pa].
+    model : ThermalModel, optional
+    speed_range_rpm : (float, float)
+        Linear ramp [rpm] (default the main job's 20 -> 250 krpm).
+    duration_s : float
+        Ramp time [s] (default 1).
+    location : str
+        The disc or journal whose orbit's spectrogram is tracked (default the turbine wheel).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per supply temperature and sub-synchronous component (frequency ratio at first detection < 1) of
+        :meth:`frbmodel.signals.spectral.SpectrogramResult.components_table`: its columns (``onset [rpm]``,
+        ``f at onset [Hz]``, ``first detection [rpm]``, ``vanishes at [rpm]``, …) after ``supply temperature [K]``,
+        ``supply pressure [Pa]``, ``oil``, ``ramp start [rpm]``, ``ramp end [rpm]``, ``ramp time [s]``.
+    """
+    import pandas as pd
+
+    from ..nonlinear.runup import runup
+    from ..signals.spectral import spectrogram
+
+    check_system(system)
+    temps = np.atleast_1d(np.asarray(supply_temperatures_K, dtype=float))
+    if temps.ndim != 1 or temps.size == 0:
+        raise ParameterError(f"supply_temperatures_K = {supply_temperatures_K!r} is invalid: a non-empty list of "
+                             "temperatures [K]")
+    supplies = [OilSupply(oil, t, supply_pressure_Pa, model) for t in temps]  # every value checked before any run
+    lo, hi = (float(v) for v in speed_range_rpm)
+    frames = []
+    for sup in supplies:
+        run = runup(system, speed_rpm=(lo, hi), duration=duration_s, oil_supply=sup)
+        tab = spectrogram(run, location).components_table()
+        tab = tab[tab["f/f_rot at first detection [-]"] < 1.0].copy()
+        head = {"supply temperature [K]": sup.supply_temperature_K, "supply pressure [Pa]": sup.supply_pressure_Pa,
+                "oil": sup.oil.name, "ramp start [rpm]": lo, "ramp end [rpm]": hi, "ramp time [s]": float(duration_s)}
+        for i, (k, v) in enumerate(head.items()):
+            tab.insert(i, k, v)
+        frames.append(tab)
+    return pd.concat(frames, ignore_index=True)
