@@ -865,7 +865,7 @@ def _runup_ramp_from_args(args):
             from None
     if not 0.0 < lo < hi <= 1e6:
         raise ParameterError(f"--runup-speeds = {text!r} is invalid: valid range 0 < START < STOP <= 1e6 rpm")
-    duration = check_positive("--runup-duration", 1.0 if args.runup_duration is None else args.runup_duration, "s")
+    duration = 1.0 if args.runup_duration is None else args.runup_duration  # (bounded by NUMERIC_OPTIONS)
     return lo, hi, duration
 
 
@@ -1596,6 +1596,7 @@ NUMERIC_OPTIONS = {
     "outer_clearance": ("m", "the system's film checks (clearance / radius, roughness)"),
     "rate": ("Hz", "frbmodel.nonlinear.runup.check_output_rate (samples of the run)"),
     "revolutions": ("revolutions", (0.0, None)),
+    "runup_duration": ("s", (0.0, None)),
     "segments": ("-", (1, None)),
     "speed_rpm": ("rpm", "speed"),
     "step": ("s", (0.0, None)),
