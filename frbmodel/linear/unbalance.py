@@ -657,8 +657,8 @@ class UnbalanceResponse(Result):
         critical = None
         if crit.exists():  # empty cells: NaN numbers, empty labels
             critical = pd.read_csv(crit)
-            critical[["source", "kind", "precession", "location"]] = \
-                critical[["source", "kind", "precession", "location"]].fillna("").astype(str)
+            text = ["source", "kind", "precession", "location"]
+            critical[text] = critical[text].astype(object).where(critical[text].notna(), "").astype(str)
         for k in ("speeds_rpm", "force_rule", "frbmodel_version", "units"):
             meta.pop(k, None)
         return cls(meta.pop("method"), df["speed [rpm]"].to_numpy(), resp, labels, meta.pop("unbalance"), meta,
