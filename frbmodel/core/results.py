@@ -21,6 +21,8 @@ import json
 from numbers import Integral, Real
 from pathlib import Path
 
+from .errors import ParameterError
+
 #: xarray backend used for every netCDF file the package writes (netCDF-4/HDF5 through h5py; no C netCDF library)
 NETCDF_ENGINE = "h5netcdf"
 
@@ -128,7 +130,6 @@ def netcdf_file(path, pattern="*.nc", what="result"):
     ParameterError
         Neither (the message names the folder, the pattern and what it holds).
     """
-    from .errors import ParameterError
 
     path = Path(path)
     if path.is_dir():

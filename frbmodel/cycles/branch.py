@@ -15,7 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ConvergenceError
+from ..core.interrupt import deferred_signals
 from ..linear.thermal import at_operating_point, check_oil_supply
+from ..nonlinear.recorder import RunupSchema
+from ..nonlinear.runup import SpeedProfile, atol_vector, build_problem, initial_state
+from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
+from .shooting import ShootingSolution, monodromy, stable_multipliers
 
 #: difference step of the speed derivative, relative
 SPEED_FD = 1e-6
@@ -49,8 +54,6 @@ class ContinuationProblem:
     """Flows and residuals of the continuation problem at any speed (problems built per speed and cached)."""
 
     def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm, segments=1):
-        from ..nonlinear.runup import atol_vector
-        from .flow import ConstantSpeedFlow
 
         self.system, self.model = system, model
         self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
@@ -90,7 +93,6 @@ class ContinuationProblem:
 
     def flow(self, speed_rpm, like=None):
         """The flow at a speed [rpm]; ``like``: a flow whose integrator it must use (differences between them)."""
-        from ..nonlinear.runup import SpeedProfile, build_problem
 
         key = float(speed_rpm)
         if key not in self._flows:
@@ -111,8 +113,6 @@ class ContinuationProblem:
 def _jacobian(br, z, T, speed, scale, t_ref, w_ref, f_ref, speed_column=True):
     """Residual (N+1) and its Jacobian (N+1, N+2) in the scaled unknowns (u_0 … u_{m−1}, τ, p) at (z, T, speed),
     N = m n, and the monodromy M = M_{m−1} ⋯ M_0 (each segment's by differences of its flow)."""
-    from .flow import FD_STEP
-    from .shooting import monodromy
 
     m, n = br.segments, br.n
     N = m * n
@@ -215,8 +215,6 @@ def _checked_monodromy(br, x, n, t_ref, w_ref, m, fl):
     1.077 / 0.876 instead of 1.000 / 0.940, M f − f 1.9e-2 of f; central 2.9e-5, the pair 0.9997 / 0.9405 as with
     1e-11 tolerances). ``fl``: the flow (and so the integrator) ``m`` was computed with. If a central-difference
     flow fails, ``m`` is kept (the branch table's trivial-multiplier error shows its accuracy)."""
-    from .flow import FD_STEP, MULTIPLIER_TOL
-    from .shooting import monodromy
 
     if trivial_error(np.linalg.eigvals(m)) <= MULTIPLIER_TOL:
         return m
@@ -239,9 +237,6 @@ def trivial_error(mult):
 
 def _point(br, x, n, t_ref, w_ref, m, fl):
     """A BranchPoint (orbit measures sampled from the flow ``fl``) for the solution x with monodromy m."""
-    from ..nonlinear.recorder import RunupSchema
-    from .flow import MULTIPLIER_TOL, orbit_result
-    from .shooting import stable_multipliers
 
     m = _checked_monodromy(br, x, n, t_ref, w_ref, m, fl)
     z, T, speed = x[:br.n] * br.start_scale, x[n] * t_ref, x[n + 1] * w_ref  # the orbit from segment 0's start
@@ -308,7 +303,6 @@ def equilibrium_jacobian(system, speed_rpm, film_model=None, oil_supply=None):
         ~1e-12, round-off ~1e-10 relative, far below the forward differences' ~1e-8 that blurred Hopf speeds by
         ~0.3 % at 2 krpm where the critical damping changes slowly with speed).
     """
-    from ..nonlinear.runup import SpeedProfile, atol_vector, build_problem, initial_state
 
     system = at_operating_point(system, speed_rpm, oil_supply)
     p = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), film_model or system.film_model)
@@ -421,7 +415,6 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, res
 
 def hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point, segments):
     """The branch born at the Hopf point ``hp``, started along its eigenvector."""
-    from .flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
 
     br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments)
     n = br.segments * br.n
@@ -488,7 +481,6 @@ def follow_branch(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_poin
     """Branch points from x0 along ``tangent`` (x0 itself not included; ``f_first``: the phase normal at x0 if the
     flow vanishes there, at a Hopf point; ``jac0``: the Jacobian at x0, if known and regular). Ctrl-C / SIGTERM are
     raised between points."""
-    from ..core.interrupt import deferred_signals
 
     with deferred_signals() as signals:
         return _follow_loop(br, x0, n, t_ref, w_ref, tangent, lo, hi, ds, ds_max, max_points, progress, f_first,
@@ -580,8 +572,6 @@ def shoot_segments(system, model, speed_rpm, z0, period, segments, tol=1e-6, max
     ConvergenceError
         Newton did not converge within ``max_iter`` iterations.
     """
-    from .flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
-    from .shooting import ShootingSolution
 
     br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, speed_rpm, segments)
     n_all, t_ref = br.segments * br.n, 0.01 * period

@@ -20,7 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import ParameterError
-from ..core.results import Result
+from ..core.results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
+from ..linear.campbell import campbell
+from ..linear.whirl import film_names
+from ..nonlinear.runup import SpeedProfile, build_problem, check_speed
+from ..physics.film import check_model
+from ..plots.bifurcation import diagram_figure, diagram_html
 from .branch import (
     COLLAPSE,
     FOLD_MIN_REL,
@@ -36,6 +41,8 @@ from .branch import (
     start_tangent,
     trivial_error,
 )
+from .flow import MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
+from .limitcycle import LimitCycle, limit_cycle
 
 
 def _nontrivial(p):
@@ -45,7 +52,6 @@ def _nontrivial(p):
 
 def _outside(p):
     """Non-trivial multipliers of a branch point outside the unit circle (by more than their accuracy)."""
-    from .flow import MULTIPLIER_TOL
 
     mu = _nontrivial(p)
     return mu[np.abs(mu) > 1.0 + MULTIPLIER_TOL]
@@ -123,7 +129,6 @@ class BifurcationDiagram(Result):
         """Branch points as an :class:`xarray.Dataset` along ``point`` (units in the attributes)."""
         import xarray as xr
 
-        from ..core.results import netcdf_attrs, variable
 
         df = self.to_dataframe()
         ds = xr.Dataset({
@@ -155,7 +160,6 @@ class BifurcationDiagram(Result):
         -------
         BifurcationDiagram
         """
-        from ..core.results import decode_attr
 
         mult = ds["multiplier_real"].values + 1j * ds["multiplier_imag"].values
         pts = [BranchPoint(float(s), 1.0 / float(f), m, bool(st), float(r), e) for s, f, m, st, r, e in
@@ -172,7 +176,6 @@ class BifurcationDiagram(Result):
 
         import matplotlib.pyplot as plt
 
-        from ..core.results import NETCDF_ENGINE
 
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -192,14 +195,12 @@ class BifurcationDiagram(Result):
         stable solid, unstable dashed, bifurcation points marked; behind them run envelopes (label, speeds [rpm],
         radius [µm]), a run's spectrogram and a Campbell diagram's unstable modes and film whirl lines
         (:func:`frbmodel.plots.bifurcation.diagram_figure`)."""
-        from ..plots.bifurcation import diagram_figure
 
         return diagram_figure(self, title, envelopes, spectrogram, campbell)
 
     def plot_html(self, path=None, title=None, envelopes=(), campbell=None, include_plotlyjs=None):
         """The diagram as an interactive figure, written to ``path`` (HTML) if given
         (:func:`frbmodel.plots.bifurcation.diagram_html`); returns the plotly figure."""
-        from ..plots.bifurcation import diagram_html
 
         return diagram_html(self, path, title, envelopes, campbell, include_plotlyjs)
 
@@ -246,8 +247,6 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
         raise ParameterError("oil_supply cannot be combined with continuation (not implemented: the branch's flows "
                              "keep constant viscosities); use hopf_points(oil_supply=) or limit_cycle(oil_supply=) "
                              "per speed")
-    from ..physics.film import check_model
-    from .limitcycle import LimitCycle, limit_cycle
 
     lo, hi = sorted(float(s) for s in speeds_rpm)
     model = check_model(film_model or system.film_model)
@@ -284,8 +283,6 @@ def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
     ...     print(exc)
     start = 60000 rpm is outside the speed range 1000:40000 rpm
     """
-    from ..nonlinear.runup import check_speed
-    from .limitcycle import LimitCycle
 
     lo, hi = sorted(float(s) for s in speeds_rpm)
     starts = [start] if isinstance(start, (str, LimitCycle)) or np.ndim(start) == 0 else list(start)
@@ -306,7 +303,6 @@ def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
 
 def _branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress, on_point, segments):
     """The branch through the orbit ``lc``, followed in both directions (lower speeds first in the result)."""
-    from .flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS
 
     br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments)
     n = br.segments * br.n
@@ -357,9 +353,6 @@ def hopf_record(system, hp, branch=(), film_model=None):
     -------
     dict
     """
-    from ..linear.campbell import campbell
-    from ..linear.whirl import film_names
-    from ..nonlinear.runup import SpeedProfile, build_problem
 
     cd = campbell(system, "J", [hp.speed_rpm], whirl=False)
     j = int(np.nanargmin(np.abs(cd.frequencies_hz[0] - hp.frequency_hz)))
@@ -427,8 +420,6 @@ END_HOPF_REL = 0.03
 def _diagram(system, model, branches, origins, lo, hi):
     """The BifurcationDiagram of computed branches (``origins``: per branch the Hopf point it starts at, or None):
     Hopf points, folds and multiplier crossings."""
-    from ..linear.whirl import film_names
-    from .flow import SHOOT_RTOL
 
     films = film_names(system)
     points, bifs = [], []

@@ -11,6 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ConvergenceError
+from ..nonlinear.compiled import pack_problem, solve_chunk
+from ..nonlinear.recorder import RunupResult
+from ..nonlinear.rosenbrock import FD_TYPICAL_M, NO_MODAL, STATUS, film_columns, rodas_chunk
+from ..nonlinear.runup import atol_vector, sample_rows, typical_sizes
 
 #: shooting tolerances: Radau IIA relative tolerance and absolute tolerance on displacements [m] of the flow; the
 #: monodromy's difference step (scaled units: 1e-4 of a micrometre, 1e-10 m, on displacements) is ~3e3 times the
@@ -66,9 +70,6 @@ class ConstantSpeedFlow:
     def __init__(self, problem, rtol, atol_m, method=None, hint=None):
         import threading
 
-        from ..nonlinear.compiled import pack_problem
-        from ..nonlinear.rosenbrock import FD_TYPICAL_M, film_columns
-        from ..nonlinear.runup import atol_vector, typical_sizes
 
         self.problem, self.rtol, self.method = problem, rtol, method or FLOW_METHOD
         self.atol = atol_vector(problem, atol_m)[0]
@@ -86,13 +87,11 @@ class ConstantSpeedFlow:
         self._hint_steps, self._hint_age = (hint.rodas_steps, hint.hint_age) if ok else (None, 0)
 
     def _radau(self, y0, t, max_steps=10**8):
-        from ..nonlinear.compiled import solve_chunk
 
         y, _, message = solve_chunk(self.packed, y0, t, self.rtol, self.atol, max_steps=max_steps)
         return y, message
 
     def _rodas(self, y0, t):
-        from ..nonlinear.rosenbrock import NO_MODAL, STATUS, rodas_chunk
 
         y, good, _, steps, _, status = rodas_chunk(y0, np.asarray(t, dtype=float), 1e-7, self.rtol, self.atol,
                                                    self.fd_scale, self.cols, 10**7, float(t[-1]), self.problem.args,
@@ -143,8 +142,6 @@ class ConstantSpeedFlow:
 
 def orbit_result(problem, schema, t, y):
     """The sampled orbit as a RunupResult (recorded quantities of each state)."""
-    from ..nonlinear.recorder import RunupResult
-    from ..nonlinear.runup import sample_rows
 
     rows = sample_rows(problem, schema, t, y)
     return RunupResult.from_rows(schema, rows, {"system": problem.system.to_dict(), "film_model": problem.film_model,

@@ -21,10 +21,27 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ConvergenceError, ParameterError
+from ..core.errors import ConvergenceError, ParameterError, check_positive
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import RPM
+from ..linear.thermal import at_operating_point, check_oil_supply
+from ..nonlinear.compiled import pack_problem, solve_chunk
+from ..nonlinear.recorder import RunupResult
+from ..nonlinear.runup import (
+    RunupSchema,
+    SpeedProfile,
+    Unbalance,
+    atol_vector,
+    build_problem,
+    check_speed,
+    initial_state,
+    runup,
+)
+from ..physics.film import check_model
+from ..signals.orbits import orbits
+from .branch import shoot_segments
 from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
+from .shooting import shoot, stable_multipliers
 
 #: a state returns to itself (period found) when it comes back within this fraction of the orbit's size
 RETURN_TOL = 0.02
@@ -159,7 +176,6 @@ class LimitCycle(Result):
         LimitCycle
             Without the monodromy matrix (not stored).
         """
-        from ..nonlinear.recorder import RunupResult
 
         lc = decode_attr(ds.attrs["limit_cycle"])
         orbit = RunupResult.from_xarray(ds.drop_vars(["multiplier_real", "multiplier_imag", "state"]))
@@ -185,13 +201,11 @@ class LimitCycle(Result):
     def plot(self, title=None):
         """Orbits over one period (journal in ring, ring in housing, wheels;
         :class:`frbmodel.signals.orbits.Orbits`)."""
-        from ..signals.orbits import orbits
 
         return orbits(self.orbit, time_s=(0.0, self.period)).plot(title=title or self.summary())
 
     def plot_html(self, path=None, title=None):
         """Interactive orbits over one period (written to ``path`` if given)."""
-        from ..signals.orbits import orbits
 
         return orbits(self.orbit, time_s=(0.0, self.period)).plot_html(path, title=title or self.summary())
 
@@ -225,8 +239,6 @@ def settle_guess(problem, settle_s, samples_per_rev=40, max_multiple=4, y0=None)
     ConvergenceError
         The response settles on no periodic orbit (no crossings, or no return: quasi-periodic).
     """
-    from ..nonlinear.compiled import pack_problem, solve_chunk
-    from ..nonlinear.runup import atol_vector, initial_state
 
     w = float(problem.profile.omega[0])
     dt = 2 * math.pi / w / samples_per_rev
@@ -341,9 +353,6 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     ParameterError
         Invalid speed or settling time.
     """
-    from ..nonlinear.runup import RunupSchema, SpeedProfile, atol_vector, build_problem, check_speed
-    from ..physics.film import check_model
-    from .shooting import shoot, stable_multipliers
 
     speed_rpm = check_speed("speed", speed_rpm)
     system = _at_supply(system, speed_rpm, guess, oil_supply)
@@ -375,8 +384,6 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
 def _at_supply(system, speed_rpm, guess, oil_supply):
     """``system`` at the thermal operating point of ``speed_rpm`` (unchanged without an oil supply); a recorded
     run-up as the guess is refused with an oil supply (its re-simulation would need the run's viscosity table)."""
-    from ..linear.thermal import at_operating_point, check_oil_supply
-    from ..nonlinear.recorder import RunupResult
 
     supply = check_oil_supply(oil_supply)
     if supply is not None and isinstance(guess, RunupResult):
@@ -387,7 +394,6 @@ def _at_supply(system, speed_rpm, guess, oil_supply):
 
 def _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced):
     """(state, period, info, monodromy or None) of each kind of ``guess`` of :func:`limit_cycle`."""
-    from ..nonlinear.recorder import RunupResult
 
     if guess is None:
         return (*_guess(problem, settle_s, forced), None)
@@ -436,7 +442,6 @@ def _check_segments(segments, forced):
 
 def _multiple(system, model, speed_rpm, z0, period, segments, forced, tol, max_iter):
     """Multiple shooting of an autonomous orbit."""
-    from .branch import shoot_segments
 
     return shoot_segments(system, model, speed_rpm, z0, period, int(segments), tol, max_iter)
 
@@ -445,7 +450,6 @@ def _minimal_period(flow, sol, scale, forced, tol, max_iter):
     """The orbit with its minimal period: if the state already returns after T / d (d = 4, 3, 2; for a forced orbit
     only divisors that leave whole revolutions), shoot again from there (a guess spanning two periods converges to
     the doubled orbit, which is a solution too)."""
-    from .shooting import shoot
 
     revs = round(sol.period * float(flow.problem.profile.omega[0]) / (2 * math.pi)) if forced else 0
     for d in (4, 3, 2):
@@ -467,7 +471,6 @@ RERUN_TOL = 0.05
 def _rerun_inputs(run, system):
     """Unbalance and run-up options of a recorded monolithic run-up, or a ParameterError saying why it cannot be
     re-simulated for ``system``."""
-    from ..nonlinear.runup import Unbalance
 
     meta = run.meta
     why = ("it is a co-simulation (its states live in the FMUs)" if "ssp" in meta else
@@ -518,7 +521,6 @@ def runup_state(run, system, speed_rpm):
     ConvergenceError
         The re-simulation departs from the recorded run by more than :data:`RERUN_TOL`.
     """
-    from ..nonlinear.runup import SpeedProfile, runup
 
     unb, opts = _rerun_inputs(run, system)
     d = np.asarray(run.speed_rpm, dtype=float) - speed_rpm
@@ -546,13 +548,10 @@ def runup_state(run, system, speed_rpm):
 def _guess(problem, settle_s, forced, samples_per_rev=40, max_multiple=4, y0=None):
     """(z0, period, info) from a settling simulation (from the equilibrium or ``y0``): forced by whole
     revolutions, autonomous by crossings."""
-    from ..core.errors import check_positive
 
     settle_s = check_positive("settle_s", settle_s, "s")
     if not forced:
         return settle_guess(problem, settle_s, samples_per_rev, max_multiple, y0)
-    from ..nonlinear.compiled import pack_problem, solve_chunk
-    from ..nonlinear.runup import atol_vector, initial_state
 
     rev = 2 * math.pi / float(problem.profile.omega[0])
     n_rev = max(int(settle_s / rev), 2 * max_multiple + 1)

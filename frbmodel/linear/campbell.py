@@ -23,9 +23,12 @@ from ..core.errors import (
 from ..core.progress import counter_bar, progress_enabled
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
+from ..core.version import __version__
+from ..plots.figures import campbell_figure, campbell_plotly, full_fmax, write_html
 from ..system.methods import get_method
 from ..system.presets import PAPER_SPEED_RANGE_RPM
 from .assembly import linear_system
+from .critical import critical_speeds
 from .equilibrium import bearing_equilibrium
 from .modal import (
     batch_modes,
@@ -37,6 +40,7 @@ from .modal import (
     stability_labels,
     track,
 )
+from .modeshape import mode_shape, shape_hover_text
 from .thermal import at_operating_point, check_oil_supply
 from .whirl import FILM_NAMES, ONSET_SEARCH_RPM, bearing_whirl, film_names, film_onset_speeds
 
@@ -347,7 +351,6 @@ class CampbellResult(Result):
         -------
         frbmodel.linear.modeshape.ModeShape
         """
-        from .modeshape import mode_shape
         return mode_shape(self, speed_rpm, mode)
 
     # ------------------------------------------------------------------ output
@@ -367,8 +370,6 @@ class CampbellResult(Result):
         -------
         matplotlib.figure.Figure
         """
-        from ..plots.figures import campbell_figure
-        from .critical import critical_speeds
 
         critical = critical_speeds(self, refine=False) if one_x and self.speeds_rpm.size >= 2 else None
         return campbell_figure(self, fmax_hz=fmax_hz, whirl=whirl, one_x=one_x, ax=ax, title=title,
@@ -398,9 +399,6 @@ class CampbellResult(Result):
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import campbell_plotly, full_fmax, write_html
-        from .critical import critical_speeds
-        from .modeshape import shape_hover_text
 
         shown = np.isfinite(self.frequencies_hz) & (self.frequencies_hz <= (fmax_hz or full_fmax(self)))
         hover = shape_hover_text(self, shown) if shapes else None
@@ -420,7 +418,6 @@ class CampbellResult(Result):
             the speed grid [rpm], the whirl onsets [rpm] and their source, the film names, the stability rule and
             the units.
         """
-        from ..core.version import __version__
 
         meta = dict(self.meta)
         meta.update({

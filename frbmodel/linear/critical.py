@@ -10,6 +10,7 @@ from ..core.units import rpm_to_rad_s
 from ..system.methods import get_method
 from .assembly import linear_system
 from .equilibrium import bearing_equilibrium
+from .modal import state_matrix
 from .thermal import OilSupply, at_operating_point
 
 __all__ = ["CRITICAL_COLUMNS", "critical_speeds", "linear_at", "oil_supply_of", "system_of"]
@@ -52,7 +53,6 @@ def oil_supply_of(result, oil_supply=None):
 
 def _eigenvalue_near(system, m, speed_rpm, guess, kw, oil_supply=None):
     """The eigenvalue (Im > 0) of the method's linear system at ``speed_rpm`` nearest to ``guess`` [1/s]."""
-    from .modal import state_matrix
 
     ls = linear_at(system, m, speed_rpm, kw, oil_supply)
     lam = np.linalg.eigvals(state_matrix(ls.M, ls.C, ls.K))

@@ -19,6 +19,8 @@ from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
 from ..physics.bearing import ring_speed_ratio, static_ring_torque
 from ..physics.film import check_model, film_coefficients, film_force, static_position_kernel
+from ..plots.equilibrium import equilibrium_figure, equilibrium_figure_html
+from ..plots.figures import write_html
 from ..system.methods import get_method
 from ..system.rotor import GRAVITY
 
@@ -196,14 +198,11 @@ class EquilibriumResult(Result):
     def plot(self, title=None):
         """Journal in ring and ring in housing of every bearing, in their clearance circles (matplotlib;
         :func:`frbmodel.plots.equilibrium.equilibrium_figure`)."""
-        from ..plots.equilibrium import equilibrium_figure
 
         return equilibrium_figure(self._figure_rows(), title or self._title())
 
     def plot_html(self, path=None, title=None, include_plotlyjs=None):
         """The panels of :meth:`plot` as an interactive page, written to ``path`` (HTML) if given."""
-        from ..plots.equilibrium import equilibrium_figure_html
-        from ..plots.figures import write_html
 
         fig = equilibrium_figure_html(self._figure_rows(), title or self._title())
         if path is not None:

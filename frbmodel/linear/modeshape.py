@@ -21,6 +21,7 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
+from ..plots.figures import write_html
 from ..plots.modeshape import plot_mode_shape, plot_mode_shape_html, plot_mode_shapes
 from ..system.parameters import system_from_meta
 from .assembly import linear_system
@@ -465,7 +466,6 @@ def save_mode_shapes(cd, speed_rpm, out_dir, fmax_hz=None):
     fig.savefig(stem.with_suffix(".png"), dpi=110)
     import matplotlib.pyplot as plt
 
-    from ..plots.figures import write_html
 
     plt.close(fig)
     write_html([plot_mode_shape_html(ms) for ms in shapes], stem.with_suffix(".html"))
@@ -549,8 +549,6 @@ def shape_hover_text(cd, shown=None):
     """
     if "system" not in (cd.meta or {}):
         return None
-    from .assembly import linear_system
-    from .modal import modes
 
     system = system_from_meta(cd.meta)
     opts = cd.meta.get("method_options", {})

@@ -30,6 +30,8 @@ from ..core.errors import ParameterError, check_real, check_system, read_json
 from ..core.progress import counter_bar, progress_enabled
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
+from ..core.version import __version__
+from ..plots.figures import write_html
 from ..plots.unbalance import (  # noqa: F401  (the figures, re-exported from where they were)
     PHASE_BREAK_DEG,
     POLAR_CLIP,
@@ -517,7 +519,6 @@ class UnbalanceResponse(Result):
 
     def metadata(self) -> dict:
         """What the result was computed with, JSON-ready (the content of :meth:`save`'s JSON)."""
-        from ..core.version import __version__
 
         meta = dict(self.meta)
         meta.update({"method": self.method, "speeds_rpm": [float(s) for s in self.speeds_rpm],
@@ -561,7 +562,6 @@ class UnbalanceResponse(Result):
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import write_html
 
         fig = response_plotly(self, names, films)
         if path is not None:

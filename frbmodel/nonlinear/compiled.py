@@ -24,6 +24,8 @@ True
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import carray, cfunc, njit, types
 
@@ -134,13 +136,20 @@ def rhs_packed(t, y, out, p):
                           unb_phase, tg, wg, wdg, p[4], p[5], diag, at_rest, no_mass)
 
 
-@cfunc(_SIG, cache=True)
 def _rhs_callback(dy, t, y, args):
-    """C callback (dy, t, y, args) of the compiled solver around :func:`rhs_packed`."""
+    """C callback (dy, t, y, args) of the compiled solver around :func:`rhs_packed` (compiled by
+    :func:`rhs_callback_address`)."""
     head = carray(args, (HEADER,))
     n = 2 * int(head[0]) + 11 + (1 if head[3] > 0 else 0)
     p = carray(args, (_packed_size(head),))
     rhs_packed(t, carray(y, (n,)), carray(dy, (n,)), p)
+
+
+@functools.cache
+def rhs_callback_address():
+    """Address of :func:`_rhs_callback` compiled as a C callback, made (or loaded from numba's cache, ~0.1 s) on first
+    use rather than when the module is imported."""
+    return cfunc(_SIG, cache=True)(_rhs_callback).address
 
 
 def solve_chunk(packed, y0, t_eval, rtol, atol, max_steps=10**8, max_step=0.0):
@@ -182,7 +191,7 @@ def solve_chunk(packed, y0, t_eval, rtol, atol, max_steps=10**8, max_step=0.0):
     y0, t_eval = np.ascontiguousarray(y0, dtype=float), np.ascontiguousarray(t_eval, dtype=float)
     atol, rtols = np.ascontiguousarray(atol, dtype=float), np.array([float(rtol)])
     ptr = cy.c_numba_cysolve_ivp(
-        _rhs_callback.address, float(t_eval[0]), float(t_eval[-1]), y0.ctypes.data, y0.size,
+        rhs_callback_address(), float(t_eval[0]), float(t_eval[-1]), y0.ctypes.data, y0.size,
         find_ode_method_int(METHOD), 0, 0, packed.ctypes.data, packed.nbytes, int(max_steps), 2000, False,
         t_eval.ctypes.data, t_eval.size, None, None, 0, rtols.ctypes.data, 1, atol.ctypes.data, atol.size,
         float(max_step) if max_step else float(MAX_SIZE), 0.0, True)

@@ -30,7 +30,9 @@ from ..core.errors import (
 )
 from ..core.linalg import lu_factor, lu_solve
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
-from ..physics.bearing import ring_rhs_kernel
+from ..linear.equilibrium import bearing_equilibrium
+from ..linear.thermal import bearing_operating_point, check_oil_supply
+from ..physics.bearing import ring_rhs_kernel, ring_speed_ratio
 from ..physics.dynamics import (
     add_unbalance_forces,
     rotor_acceleration,
@@ -433,7 +435,6 @@ class BearingComponent:
 
     def __init__(self, bearing, film_model="short", ring_speed_model="free", gravity=GRAVITY, substep=BEARING_SUBSTEP,
                  contact_eps=CONTACT_EPS):
-        from ..physics.bearing import ring_speed_ratio
 
         self.bearing = bearing
         self.film_model = check_model(film_model)
@@ -468,7 +469,6 @@ class BearingComponent:
         speeds_rad_s : array_like
             Ascending rotor speeds [rad/s] of the table (> 0).
         """
-        from ..linear.thermal import check_oil_supply
 
         sup = check_oil_supply(oil_supply)
         speeds = np.asarray(speeds_rad_s, dtype=float)
@@ -480,7 +480,6 @@ class BearingComponent:
 
     def set_supply(self, oil_supply):
         """Recompute the thermal table for a new supply state (:meth:`use_oil` first)."""
-        from ..linear.thermal import bearing_operating_point
 
         if self._thermal is None:
             raise ParameterError(f"{self.bearing.name} bearing: an oil supply needs the thermal model (use_oil): "
@@ -534,7 +533,6 @@ class BearingComponent:
         """
         from dataclasses import replace
 
-        from ..linear.equilibrium import bearing_equilibrium
 
         self._at_speed(omega_rotor)
         b = self.bearing
@@ -578,7 +576,6 @@ class BearingComponent:
         """ω_FR / ω_R of the "rsr_eq6" / "rsr_eq7" ring speed models (eq. (7) at the last ε's)."""
         if self.ring_speed_model == "rsr_eq6":
             return self.rsr6
-        from ..physics.bearing import ring_speed_ratio
 
         return ring_speed_ratio(self.bearing, min(self.eps[0], 0.99), min(self.eps[1], 0.99))
 

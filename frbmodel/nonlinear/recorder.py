@@ -30,6 +30,8 @@ import numpy as np
 from ..core.errors import ParameterError, read_json
 from ..core.results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
 from ..core.units import RPM
+from ..plots.figures import write_html
+from ..plots.runup import runup_overview, runup_overview_html
 
 FILMS = ("inner", "outer")
 
@@ -656,7 +658,6 @@ class RunupResult(Result):
         -------
         matplotlib.figure.Figure
         """
-        from ..plots.runup import runup_overview
 
         return runup_overview(*self._overview_args(), title=title or f"run ({self.status})")
 
@@ -668,8 +669,6 @@ class RunupResult(Result):
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import write_html
-        from ..plots.runup import runup_overview_html
 
         fig = runup_overview_html(*self._overview_args(), title=title or f"run ({self.status})")
         if path is not None:

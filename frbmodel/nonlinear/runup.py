@@ -31,12 +31,15 @@ from ..core.units import RPM
 from ..linear.equilibrium import bearing_equilibrium
 from ..linear.thermal import at_operating_point, check_oil_supply, thermal_losses
 from ..linear.whirl import film_names
+from ..physics.bearing import ring_speed_ratio
 from ..physics.dynamics import film_data_at_speed, rotor_polar_inertia
 from ..physics.dynamics import monolithic_jac as _jac
 from ..physics.dynamics import monolithic_rhs as _rhs
 from ..physics.film import check_model
 from ..physics.losses import bearing_loss_kernel, film_arrays
+from .compiled import pack_problem, solve_chunk
 from .recorder import Recorder, RunupResult, RunupSchema
+from .rosenbrock import FD_TYPICAL_M, STATUS, film_columns, rodas_chunk
 
 #: numerical guard: film forces of trial states beyond this ε are evaluated at this ε
 # (docs/theory/films.md#limits-and-validity)
@@ -956,7 +959,6 @@ def initial_state(problem, initial="equilibrium", perturbation=0.05):
     >>> bool(np.isclose(y0[4 * b.node], 0.05 * (b.inner.clearance + b.outer.clearance), rtol=1e-12, atol=0))
     True
     """
-    from ..physics.bearing import ring_speed_ratio
 
     system, rotor, n_r = problem.system, problem.system.rotor, problem.n_rotor
     w0 = float(problem.profile.omega[0])
@@ -1479,7 +1481,6 @@ def _failure(problem, ts, ys, y, good, message, hint=""):
 def _radau_samples(problem, y0, t_out, opts, counts):
     """The compiled Radau IIA solver (:mod:`frbmodel.nonlinear.compiled`; a speed out of range makes its right-hand
     side NaN), driven by :func:`_bounded_calls`. Yields as :func:`_lsoda_samples`."""
-    from .compiled import pack_problem, solve_chunk
 
     packed = pack_problem(problem)
 
@@ -1504,7 +1505,6 @@ def _radau_samples(problem, y0, t_out, opts, counts):
 def _rodas_samples(problem, y0, t_out, opts, counts):
     """The compiled Rosenbrock solver (:mod:`frbmodel.nonlinear.rosenbrock`; the speed bound checked at every step),
     the step size carried from call to call, driven by :func:`_bounded_calls`. Yields as :func:`_lsoda_samples`."""
-    from .rosenbrock import FD_TYPICAL_M, STATUS, film_columns, rodas_chunk
 
     atol = opts["atol"][0]
     scale = typical_sizes(problem, FD_TYPICAL_M)

@@ -29,6 +29,7 @@ from ..core.units import RPM, rad_s_to_rpm
 from ..linear.thermal import OilSupply, at_operating_point, thermal_losses
 from ..physics.film import check_model, film_force_kernel
 from .recorder import Recorder, RunupSchema
+from .rosenbrock import FD_TYPICAL_M, STATUS, film_columns, rodas_chunk
 from .runup import (
     CHUNK_SAMPLES,
     DEFAULT_ATOL_M,
@@ -242,7 +243,6 @@ class TurbochargerComponent:
                                                                                   self._thermal["viscosity"]))
         self.y = initial_state(self.problem, initial, perturbation)
         self.modal, self.atol = modal_error_basis(self.problem, atol_vector(self.problem, atol, scale)[0], scale)
-        from .rosenbrock import FD_TYPICAL_M, film_columns
 
         self.fd_scale = typical_sizes(self.problem, FD_TYPICAL_M, scale)
         self.cols = film_columns(self.problem.n_rotor, self.problem.args[3], self.problem.torque_driven,
@@ -257,7 +257,6 @@ class TurbochargerComponent:
     def warm_up(self):
         """Load (or compile) the integrator's and the outputs' compiled kernels now, not in the first step: one
         integration of a copy of the state over 1 ns (nothing is kept)."""
-        from .rosenbrock import rodas_chunk
 
         ts = np.array([self.t, self.t + 1e-9])
         rodas_chunk(self.y.copy(), ts, 1e-9, self.rtol, self.atol, self.fd_scale, self.cols, 100, 1e-9,
@@ -389,7 +388,6 @@ class TurbochargerComponent:
         self._advance(t_end, w, tq, acc, ramp_done=self.t >= self.ramp_time - near)
 
     def _advance(self, t_end, w, tq, acc, ramp_done=False):
-        from .rosenbrock import STATUS, rodas_chunk
 
         self._set_inputs(self.t, t_end - self.t, w, tq, acc, ramp_done)
         ts = self._grid(self.t, t_end)

@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .figures import unstable_lines, whirl_lines, write_html
+from .style import html_layout, log_axis
+
 #: marker of each bifurcation type (matplotlib / plotly symbol)
 MARKS = {"Hopf": ("*", "star"), "Hopf (restabilizing)": ("h", "hexagon"), "fold": ("o", "circle"),
          "period doubling": ("s", "square"), "Neimark-Sacker": ("D", "diamond")}
@@ -71,7 +74,6 @@ def campbell_lines(cd, fmax_hz):
         mode where it is unstable) or ``"whirl"`` (a film's whirl frequency past its onset, with its style of
         :func:`frbmodel.plots.figures.whirl_lines`: coincident curves interleaved, both visible).
     """
-    from .figures import unstable_lines, whirl_lines
 
     out = []
     for sk, f, j in unstable_lines(cd, fmax_hz):
@@ -203,8 +205,6 @@ def diagram_html(bd, path=None, title=None, envelopes=(), campbell=None, include
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
 
-    from .figures import write_html
-    from .style import html_layout, log_axis
 
     fig = make_subplots(rows=2, cols=1, shared_xaxes=True, vertical_spacing=0.06)
     for label, s, r in envelopes:

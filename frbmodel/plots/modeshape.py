@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from .figures import write_html
+
 __all__ = ["RING_DRAW_FRACTION", "plot_mode_shape", "plot_mode_shape_html", "plot_mode_shapes"]
 
 #: a ring's orbit is drawn when its semi-major axis exceeds this share of the largest rotor node orbit (the rings
@@ -61,7 +63,6 @@ def plot_mode_shape_html(ms, path=None, n_frames=24, include_plotlyjs=None):
     ``path`` by :func:`frbmodel.plots.figures.write_html` if given."""
     import plotly.graph_objects as go
 
-    from .figures import write_html
 
     z = np.linspace(0.0, ms.node_z[-1], 120) * 1e3
     xc, yc = ms.complex_deflection(z / 1e3)

@@ -15,7 +15,8 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
-from ..plots.orbits import orbits_figure
+from ..plots.figures import write_html
+from ..plots.orbits import orbit_panels_figure, orbit_panels_html, orbits_figure
 from ..plots.style import readable
 
 
@@ -339,7 +340,6 @@ class Orbits(Result):
         -------
         matplotlib.figure.Figure
         """
-        from ..plots.orbits import orbit_panels_figure
 
         return orbit_panels_figure(self.panels(), title or f"Orbits, {self.label} (dashed: clearance circle; dot: "
                                    "last sample)", zoom)
@@ -362,8 +362,6 @@ class Orbits(Result):
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import write_html
-        from ..plots.orbits import orbit_panels_html
 
         fig = orbit_panels_html(self.panels(), title or f"Orbits, {self.label}")
         if path is not None:

@@ -16,6 +16,9 @@ import numpy as np
 
 from ..core.errors import ParameterError, check_real
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
+from ..linear.equilibrium import linear_rsr
+from ..plots.figures import composite_figure, composite_plotly, waterfall_figure, waterfall_plotly, write_html
+from ..system.parameters import Turbocharger
 from .tracking import RESONANCE_TOL, SYNC_TOL, Component, components_table, find_components, internal_resonances
 
 
@@ -213,7 +216,6 @@ class SpectrogramResult(Result):
         -------
         matplotlib.figure.Figure
         """
-        from ..plots.figures import composite_figure
 
         return composite_figure(self, campbell=campbell, whirl=whirl, rsr=rsr, fmax_hz=fmax_hz,
                                 components=components, title=title, xscale=xscale, amplitude=amplitude,
@@ -226,8 +228,6 @@ class SpectrogramResult(Result):
         sys_d = (getattr(self.run, "meta", None) or {}).get("system") if self.run is not None else None
         if not sys_d:
             return None
-        from ..linear.equilibrium import linear_rsr
-        from ..system.parameters import Turbocharger
 
         speed = self.run.speed_rpm
         return linear_rsr(Turbocharger.from_dict(sys_d), np.linspace(max(speed.min(), 1e3), speed.max(), 25))
@@ -260,7 +260,6 @@ class SpectrogramResult(Result):
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import composite_plotly, write_html
 
         if rsr and linear_rsr is None:
             linear_rsr = self._linear_rsr()
@@ -325,7 +324,6 @@ class SpectrogramResult(Result):
         -------
         matplotlib.figure.Figure
         """
-        from ..plots.figures import waterfall_figure
 
         return waterfall_figure(self, fmax_hz, amplitude, orders, n_lines, title)
 
@@ -339,7 +337,6 @@ class SpectrogramResult(Result):
         -------
         plotly.graph_objects.Figure
         """
-        from ..plots.figures import waterfall_plotly, write_html
 
         fig = waterfall_plotly(self, fmax_hz, amplitude, orders, n_lines)
         if path is not None:

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.errors import ParameterError, check_real
+from ..core.errors import ParameterError, check_real, check_real_array, check_speeds_in_range
 
 
 @dataclass(frozen=True)
@@ -86,7 +86,6 @@ class Method:
         """
         import numpy as np
 
-        from ..core.errors import check_real_array, check_speeds_in_range
 
         speeds = np.atleast_1d(check_real_array(name, speeds_rpm, "rpm"))
         if speeds.ndim != 1 or speeds.size == 0:
