@@ -7,8 +7,50 @@ from pathlib import Path
 
 import numpy as np
 
-from .core.errors import FRBError, ParameterError, check_finite, check_positive
+from .core.errors import (
+    FRBError,
+    ParameterError,
+    RunStopped,
+    check_finite,
+    check_positive,
+    check_speed,
+    check_speed_count,
+    check_speeds_in_range,
+)
 from .core.interrupt import Terminated
+from .core.manifest import extend
+from .core.version import __version__
+from .cosim.build import build_fmus
+from .cosim.linearize import linearize
+from .cosim.master import COUPLING_TOL, cosimulate
+from .cosim.sources import find_source
+from .cosim.ssp import read_ssp
+from .cosim.system_master import SystemMaster, is_system_ssp
+from .cycles.branch import hopf_dataframe
+from .cycles.continuation import BifurcationDiagram, check_starts, continuation, hopf_points
+from .linear.campbell import campbell
+from .linear.equilibrium import equilibrium
+from .linear.losses import bearing_losses, with_ring_speed_ratio
+from .linear.modal import modes_from_state
+from .linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, at_operating_point, check_supply_pressure, thermal_losses
+from .linear.unbalance import bode_figure, critical_speeds, location_names, unbalance_response
+from .nonlinear.recorder import RunupResult
+from .nonlinear.runup import (
+    DEFAULT_ATOL_M,
+    DEFAULT_RTOL,
+    INTEGRATORS,
+    SpeedProfile,
+    Unbalance,
+    check_drive_torque,
+    check_output_rate,
+    check_runup_oil,
+    check_tolerances,
+    runup,
+)
+from .plots.losses import plot_bearing_losses
+from .plots.thermal import plot_onsets_vs_supply, plot_thermal_losses
+from .studies.compare import compare
+from .studies.paper import paper_figures
 from .studies.run_outputs import (
     check_convergence,
     orbit_windows,
@@ -19,7 +61,13 @@ from .studies.run_outputs import (
     write_up_down_halves,
     write_waterfalls,
 )
-from .system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES
+from .studies.sweep import check_scheduler, example_cases, grid, plot_stability_map, run_study, stability_map
+from .studies.thermal import onsets_vs_supply, runup_onsets_vs_supply
+from .studies.warmup import kernels_ready, warmup, warmup_marker
+from .system.methods import METHODS, get_method
+from .system.oil import OIL, T_MIN_K, check_temperature
+from .system.parameters import load_system, system_from_meta
+from .system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES, turbocharger
 
 
 def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
@@ -47,7 +95,6 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
     >>> parse_speeds("10000:30000:3").tolist(), parse_speeds("5e4,1e5").tolist()
     ([10000.0, 20000.0, 30000.0], [50000.0, 100000.0])
     """
-    from .core.errors import check_speed_count, check_speeds_in_range
 
     name = f"{option} = {text!r}"
     try:
@@ -72,7 +119,6 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
 def check_method_speeds(option, text, speeds, letters):
     """Refuse, before any folder is made, speeds that the methods ``letters`` cannot take (film methods need speeds
     > 0; :func:`frbmodel.linear.campbell.check_speeds`), naming the option and its value."""
-    from .system.methods import get_method
 
     for letter in letters:
         try:
@@ -101,8 +147,6 @@ def load_from_args(args):
     >>> [b.outer.clearance for b in load_from_args(args).bearings]
     [4e-05, 4e-05]
     """
-    from .system.parameters import load_system
-    from .system.presets import turbocharger
 
     if getattr(args, "system", None) is not None and not str(args.system).strip():
         raise ParameterError("--system = '' is invalid: give the path of a system file (frb system --out FILE "
@@ -144,7 +188,6 @@ def _system_args(p):
 
 def cmd_campbell(args):
     """``frb campbell``: Campbell diagram of one method (from the library or the FMUs), saved and summarised."""
-    from .linear.campbell import campbell
 
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
@@ -220,7 +263,6 @@ def _save_interrupted_campbell(exc, out, fmax):
 def _critical_table(cd, system, path, kw):
     """Print the 1X crossings of a Campbell diagram (:func:`frbmodel.linear.unbalance.critical_speeds`) and write
     them."""
-    from .linear.unbalance import critical_speeds
 
     cs = critical_speeds(cd, system, **kw)
     _print_critical(cs)
@@ -243,7 +285,6 @@ def _print_critical(cs):
 
 def _unbalance_methods(text, kw):
     """Method letters of ``--method`` (one or a comma list) and the spring options each takes."""
-    from .system.methods import METHODS, get_method
 
     methods = [get_method(x) for x in text.split(",") if x.strip()] or [get_method(text)]
     unused = [k for k in kw if not any(k in m.parameters for m in methods)]
@@ -258,7 +299,6 @@ def _unbalance_methods(text, kw):
 
 def cmd_unbalance(args):
     """``frb unbalance``: unbalance response (Bode, polar, film orbits) and critical speeds of one or more methods."""
-    from .linear.unbalance import bode_figure, location_names, unbalance_response
 
     speeds = parse_speeds(args.speeds)
     kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
@@ -297,8 +337,6 @@ def cmd_unbalance(args):
 
 def cmd_equilibrium(args):
     """``frb equilibrium``: static equilibrium of both bearings at one speed, printed (and written as CSV)."""
-    from .linear.equilibrium import equilibrium
-    from .linear.thermal import at_operating_point
 
     tc = load_from_args(args)  # (--speed-rpm is bounded by NUMERIC_OPTIONS)
     supply = _oil_supply_from_args(args, tc)
@@ -326,7 +364,6 @@ def cmd_system(args):
 
 def cmd_paper_figures(args):
     """``frb paper-figures``: regenerate the paper's linear figures 4-11."""
-    from .studies.paper import paper_figures
 
     tc = load_from_args(args)
     writable_dir(args.out)
@@ -336,7 +373,6 @@ def cmd_paper_figures(args):
 
 
 def _parse_unbalance(items):
-    from .nonlinear.runup import Unbalance
 
     out = []
     for it in items or []:
@@ -367,7 +403,6 @@ def _profile_arg(text):
 
 
 def _profile(args):
-    from .nonlinear.runup import SpeedProfile
 
     if args.profile.lower().endswith(".csv"):
         prof = SpeedProfile.from_csv(args.profile)
@@ -408,13 +443,11 @@ def _speed_pair(text):
 
 def cmd_runup(args):
     """``frb runup``: monolithic nonlinear run-up or run-down, streamed to a folder, with figures; exit code."""
-    from .nonlinear.runup import check_output_rate, runup
 
     tc = load_from_args(args)
     prof = _profile(args)
     duration = float(prof.t[-1]) if args.duration is None else args.duration
     check_output_rate(args.rate, duration)
-    from .nonlinear.runup import check_drive_torque, check_runup_oil, check_tolerances
 
     rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
     check_drive_torque(tc, prof, "--drive-torque")
@@ -450,9 +483,6 @@ def cmd_runup(args):
 
 def cmd_bifurcation(args):
     """``frb bifurcation``: Hopf points and limit-cycle branches vs speed (continuation), tables and diagram."""
-    from .cycles.branch import hopf_dataframe
-    from .cycles.continuation import BifurcationDiagram, check_starts, continuation, hopf_points
-    from .nonlinear.runup import check_speed
 
     tc = load_from_args(args)
     lo, hi = sorted(check_speed(f"--speeds {name}", v) for name, v in zip(("START", "END"), _speed_pair(args.speeds)))
@@ -506,7 +536,6 @@ def cmd_bifurcation(args):
 def _load_runs(text):
     """``[(folder, run-up result)]`` of ``--runs`` (comma-separated folders), loaded; a ParameterError names a
     folder without one."""
-    from .nonlinear.recorder import RunupResult
 
     return [(d, RunupResult.load(d)) for d in (text or "").split(",") if d]
 
@@ -519,8 +548,6 @@ def _stoppable(command, fn, out):
     """(result, exit code) of a long run that streams into ``out``: a :class:`RunStopped` (the run ended early,
     its samples kept) gives exit code 3, Ctrl-C 130 and SIGTERM 143 — the partial result is read back from
     ``out``, where the recorder marked it ``interrupted``."""
-    from .core.errors import RunStopped
-    from .nonlinear.recorder import RunupResult
 
     try:
         return fn(), 0
@@ -601,7 +628,6 @@ def writable_dir(path, option="--out", claim=True):
 
 def cmd_compare(args):
     """``frb compare``: run-ups vs method-J stability per outer clearance (figures and onset table)."""
-    from .studies.compare import compare
 
     tc = load_from_args(args)
     cl = [check_positive("--clearances", x, "m") for x in args.clearances.split(",")]
@@ -639,9 +665,6 @@ def parse_orders(text: str) -> tuple:
 def cmd_plot(args):
     """Re-render the figures of a results folder written by frb runup / frb cosim (finished, stopped or
     interrupted) or by frb unbalance."""
-    from .core.manifest import extend
-    from .nonlinear.recorder import RunupResult
-    from .system.parameters import system_from_meta
 
     out = Path(args.dir)
     _CLAIMS.append(extend(out, " ".join(_COMMAND)))  # the figures it draws belong to the run whose folder it is
@@ -660,7 +683,6 @@ def cmd_plot(args):
     if run.time.size < 64:
         raise ParameterError(f"{out}: {run.time.size} samples recorded; the figures need at least 64")
     system = system_from_meta(run.meta, out / "runup.json", "the Campbell overlay")
-    from .nonlinear.runup import SpeedProfile
 
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
@@ -675,8 +697,6 @@ def cmd_plot(args):
 def replot_bifurcation(args, out):
     """``frb plot DIR`` of a folder written by ``frb bifurcation``: the diagram drawn again from ``branch.nc`` (with
     the Campbell lines of the system it holds and the runs of ``--runs``)."""
-    from .cycles.continuation import BifurcationDiagram
-    from .system.parameters import system_from_meta
 
     bd = BifurcationDiagram.load(out)
     lo, hi = bd.meta.get("speed_range_rpm", [min(p.speed_rpm for p in bd.points), max(p.speed_rpm for p in bd.points)])
@@ -739,7 +759,6 @@ def _oil_from_args(args, system):
     """The oil of ``frb losses``: ``--oil NAME``, else the system file's ``[oil]`` (None: constant viscosities);
     ``--supply-temperature`` / ``--supply-pressure`` without an oil, or an oil with a method other than J or with
     ``--run``, are refused."""
-    from .system.oil import OIL
 
     oil = OIL(args.oil) if args.oil is not None else system.oil
     if oil is None:
@@ -773,8 +792,6 @@ def _oil_supply_from_args(args, system):
     """The :class:`OilSupply` of ``--oil`` (else the system file's ``[oil]``) at ``--supply-temperature`` [K] and
     ``--supply-pressure`` [Pa]; None without an oil (the supply options are then refused, as is a method other
     than J with an oil)."""
-    from .linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, check_supply_pressure
-    from .system.oil import T_MIN_K, check_temperature
 
     oil = _oil_from_args(args, system)
     if oil is None:
@@ -787,8 +804,6 @@ def _oil_supply_from_args(args, system):
 
 def _supply_from_args(args, oil):
     """Supply temperatures [K] (each checked against the oil's range) and pressure [Pa] of ``frb losses``."""
-    from .linear.thermal import SUPPLY_PRESSURE_PA, check_supply_pressure
-    from .system.oil import T_MIN_K, check_temperature
 
     text = args.supply_temperature or "333.15,363.15,393.15"
     try:
@@ -808,11 +823,6 @@ def cmd_losses(args):
     (:func:`frbmodel.linear.thermal.thermal_losses`)."""
     import matplotlib.pyplot as plt
 
-    from .linear.losses import bearing_losses, with_ring_speed_ratio
-    from .linear.thermal import thermal_losses
-    from .nonlinear.recorder import RunupResult
-    from .plots.losses import plot_bearing_losses
-    from .plots.thermal import plot_thermal_losses
 
     tc = load_from_args(args)
     oil = _oil_from_args(args, tc)
@@ -876,8 +886,6 @@ def _write_onsets(tc, oil, temps, p_s, speeds, out, ramp=None):
     (:func:`frbmodel.studies.thermal.runup_onsets_vs_supply`): whirl_onsets_runup.csv and squares in the figure."""
     import matplotlib.pyplot as plt
 
-    from .plots.thermal import plot_onsets_vs_supply
-    from .studies.thermal import onsets_vs_supply, runup_onsets_vs_supply
 
     films, modes = onsets_vs_supply(tc, oil, temps, p_s, speeds_rpm=speeds, progress=True)
     runups = None if ramp is None else runup_onsets_vs_supply(tc, oil, temps, p_s, speed_range_rpm=ramp[:2],
@@ -900,7 +908,6 @@ def _write_onsets(tc, oil, temps, p_s, speeds, out, ramp=None):
 
 def cmd_warmup(args):
     """Compile (or load) the numba kernels once, with a progress bar (CI and images call it on purpose)."""
-    from .studies.warmup import warmup, warmup_marker
 
     wall = warmup(progress=True)
     print(f"numba kernels ready in {wall:.1f} s (cached next to the package: {warmup_marker().parent})")
@@ -913,7 +920,6 @@ KERNEL_COMMANDS = ("campbell", "equilibrium", "losses", "runup", "compare", "cos
 
 def _first_run_notice(command):
     """On the first run after an install or an update, compile the kernels with a visible message and a bar."""
-    from .studies.warmup import kernels_ready, warmup
 
     if command in KERNEL_COMMANDS and not kernels_ready():
         print("frb: compiling the numba kernels (first run only, ~40 s on 2 cores; `frb warmup` does it on purpose)",
@@ -923,8 +929,6 @@ def _first_run_notice(command):
 
 def cmd_build_fmus(args):
     """``frb build-fmus``: build the FMUs and the SSP into a folder."""
-    from .cosim.build import build_fmus
-    from .cosim.sources import find_source
 
     find_source(args.src)  # a missing source tree is named before any --out folder is created
     if Path(args.out).exists() and not Path(args.out).is_dir():
@@ -937,10 +941,6 @@ def cmd_build_fmus(args):
 def cmd_cosim(args):
     """``frb cosim``: co-simulated run-up of an SSP system (rotor speed from the parameter set's ramp, a drive torque
     or a CSV speed profile), streamed to a folder, with figures; exit code."""
-    from .cosim.master import COUPLING_TOL, cosimulate
-    from .cosim.system_master import is_system_ssp
-    from .nonlinear.runup import SpeedProfile
-    from .system.parameters import system_from_meta
 
     if Path(args.ssp).exists() and is_system_ssp(args.ssp):
         return _cosim_system(args)
@@ -1006,7 +1006,6 @@ _SPLIT_ONLY = (("rollback", "--rollback"), ("speed_source", "--speed-source"), (
 def _check_ssp(path, parameter_set):
     """Read the SSP ``path`` (archive, SSD, FMUs, the parameter set) before any folder is made: a missing or
     broken SSP or an unknown set is a one-line error, with nothing written."""
-    from .cosim.ssp import read_ssp
 
     with read_ssp(path) as ssp:
         ssp.parameters(parameter_set)
@@ -1015,8 +1014,6 @@ def _check_ssp(path, parameter_set):
 def _cosim_system(args):
     """``frb cosim`` of an SSP with the turbocharger FMU (e.g. build/engine_turbocharger.ssp): the fixed-step
     Jacobi master, the FMU's own record at 20 kHz, the composite figures."""
-    from .cosim.system_master import SystemMaster
-    from .system.parameters import system_from_meta
 
     given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None)]
     if given:
@@ -1053,8 +1050,6 @@ def _cosim_system(args):
 
 def cmd_linearize(args):
     """``frb linearize``: global state matrix from the FMUs at one operating point; prints its modes."""
-    from .cosim.linearize import linearize
-    from .linear.modal import modes_from_state
 
     _check_ssp(args.ssp, args.parameter_set)  # (--speed-rpm is bounded by NUMERIC_OPTIONS)
     out = writable_dir(args.out) if args.out else None
@@ -1074,7 +1069,6 @@ def cmd_linearize(args):
 
 def cmd_sweep(args):
     """``frb sweep``: parameter study (on Dask or serial) and its stability map; exit code 4 if a case failed."""
-    from .studies.sweep import check_scheduler, example_cases, grid, plot_stability_map, run_study, stability_map
 
     if args.example:
         cases = example_cases(args.example)
@@ -1149,7 +1143,6 @@ class _Formatter(argparse.HelpFormatter):
 
 
 def _add_campbell(sub):
-    from .system.methods import METHODS
 
     c = sub.add_parser("campbell", formatter_class=_Formatter,
                        help="holistic Campbell diagram for one method (CSV + PNG + HTML)")
@@ -1212,7 +1205,6 @@ def _add_bifurcation(sub):
 
 
 def _add_equilibrium(sub):
-    from .system.methods import METHODS
 
     e = sub.add_parser("equilibrium", formatter_class=_Formatter,
                        help="static equilibrium of both bearings (methods C, D, F, G, I, J)")
@@ -1233,7 +1225,6 @@ def _add_system(sub):
 
 
 def _add_runup(sub):
-    from .nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, INTEGRATORS
 
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
@@ -1389,7 +1380,6 @@ def _add_paper_figures(sub):
 
 
 def _add_losses(sub):
-    from .system.methods import METHODS
 
     lo = sub.add_parser("losses", formatter_class=_Formatter,
                         help="bearing journal torque, power loss and RSR vs speed; with --oil the film temperatures "
@@ -1471,7 +1461,6 @@ def build_parser():
     >>> args.command, args.speeds, args.duration, args.func.__name__
     ('runup', '250000:20000', 2.0, 'cmd_runup')
     """
-    from .core.version import __version__
 
     p = argparse.ArgumentParser(prog="frb", description="Rotordynamics of turbochargers on floating-ring bearings "
                                 "(SI units inside; speeds on the command line in rpm).")
@@ -1610,7 +1599,6 @@ NUMERIC_OPTIONS = {
 def check_numeric_options(args):
     """Refuse a numeric option outside its range of :data:`NUMERIC_OPTIONS` (one line naming the option, its value
     and the valid range), before the command starts."""
-    from .core.errors import check_speed
 
     for dest, (unit, rng) in NUMERIC_OPTIONS.items():
         value = getattr(args, dest, None)

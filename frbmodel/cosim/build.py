@@ -15,7 +15,10 @@ from pathlib import Path
 
 import frbmodel
 
+from .fmu_system import as_system, write_rotor_system
+from .loader import install_loader
 from .sources import PACKAGE, PACKAGE_DATA, find_source  # noqa: F401  (re-exported)
+from .ssp import write_engine_ssp, write_ssp
 
 #: build options inside each FMU's resources, read by the slaves (fmu_src/_fmu_common.py BUILD_OPTIONS)
 BUILD_OPTIONS = "frb_build.json"
@@ -82,8 +85,6 @@ def build_fmus(out_dir="build", src=None, progress=print, rotor_file=None, linea
     non-Python hosts too (skipped with a warning where no C compiler or shared libpython is found).
     """
     src = find_source(src)  # before importing pythonfmu: a missing source is named even without the fmi extra
-    from .fmu_system import as_system, write_rotor_system
-    from .ssp import write_engine_ssp, write_ssp
 
     out = Path(out_dir)
     (out / "fmus").mkdir(parents=True, exist_ok=True)
@@ -121,7 +122,6 @@ def _build_one(src, name, dest, project_files, progress):
     with (pythonfmu ships a win64 DLL too, which the Linux-only loader configuration cannot start)."""
     from pythonfmu import FmuBuilder
 
-    from .loader import install_loader
 
     saved = list(sys.path)  # pythonfmu's builder puts the script's folder on sys.path and leaves it there
     try:

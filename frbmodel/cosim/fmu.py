@@ -29,6 +29,7 @@ import time
 from pathlib import Path
 
 from ..core.errors import CosimStopped, ParameterError
+from .loader import STATUS_MARKER, model_identifier
 
 #: fmi2Status names by value
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
@@ -163,7 +164,6 @@ class FmuInstance:
         self.name = name
         self.trace = trace
         self.calls = {}
-        from .loader import model_identifier
 
         model_identifier(path)  # a broken archive is named here (fmpy would raise a zipfile.BadZipFile)
         self.md = read_model_description(str(path))
@@ -182,7 +182,6 @@ class FmuInstance:
                       "getFMUstate": self._get_state}
         # FMUs with the frbmodel loader reuse a state handle given back to fmi2GetFMUstate (FMI 2.0; pythonfmu alone
         # would leak the old state): save_state then keeps one handle, and no freeFMUstate per saved state
-        from .loader import STATUS_MARKER
 
         self.reuses_state = self.can_state and (Path(self.dir) / STATUS_MARKER).is_file()
         self._state = None

@@ -18,6 +18,8 @@ import zipfile
 from pathlib import Path
 
 from ..core.errors import ParameterError
+from ..system.parameters import Turbocharger, load_system
+from ..system.presets import turbocharger
 
 #: file name of the built-in system inside the rotor FMU's resources folder
 RESOURCE = "rotor_system.json"
@@ -26,7 +28,6 @@ _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 def as_system(system):
     """A Turbocharger from a Turbocharger or a system file path."""
-    from ..system.parameters import Turbocharger, load_system
 
     return system if isinstance(system, Turbocharger) else load_system(system)
 
@@ -93,8 +94,6 @@ def rotor_system(resources=None):
         The system of ``<resources>/rotor_system.json``; the paper's Table 2 system
         (:func:`frbmodel.system.presets.turbocharger`) when there is no such file.
     """
-    from ..system.parameters import load_system
-    from ..system.presets import turbocharger
 
     path = Path(resources) / RESOURCE if resources else None
     return load_system(path) if path is not None and path.is_file() else turbocharger()
@@ -112,7 +111,6 @@ def rotor_system_of_fmu(fmu):
     Turbocharger
         As :func:`rotor_system`.
     """
-    from ..system.parameters import Turbocharger
 
     fmu = Path(fmu)
     if fmu.is_dir():

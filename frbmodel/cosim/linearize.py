@@ -12,7 +12,19 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError, check_speed
+from ..core.progress import counter_bar, progress_enabled
+from ..core.units import rpm_to_rad_s
+from ..linear.assembly import mass_matrix
+from ..linear.campbell import campbell_from_modes, exact_onsets, film_whirl_rows, speed_grid_order
+from ..linear.equilibrium import bearing_equilibrium
+from ..linear.modal import modes_from_state
+from ..linear.whirl import film_names
+from ..system.methods import get_method
+from .build import build_fmus
+from .fmu_system import rotor_system_of_fmu
+from .loader import model_identifier
 from .master import CosimStopped, Master, operating_point_overrides, system_from_parameters
+from .ssp import read_ssp
 
 
 def _matrix(fmu, name, nr, nc):
@@ -54,10 +66,6 @@ def linearization_ssp(ssp, progress=None):
     import shutil
     import tempfile
 
-    from .build import build_fmus
-    from .fmu_system import rotor_system_of_fmu
-    from .loader import model_identifier
-    from .ssp import read_ssp
 
     key = (str(Path(ssp).resolve()), Path(ssp).stat().st_mtime if Path(ssp).exists() else None)
     if key in _VARIANTS and _VARIANTS[key].is_dir():
@@ -113,7 +121,6 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
     CosimStopped
         If an FMU fails (an :class:`~frbmodel.cosim.fmu.FmiCallFailed`).
     """
-    from ..system.methods import get_method
 
     m = get_method(method)
     if m.letter not in "FGIJ":
@@ -181,14 +188,6 @@ def campbell_from_fmu(ssp, speeds_rpm, method="J", parameter_set="co36", progres
         Its ``meta`` records the SSP, the parameter set, the system read from it (``system.to_dict()``), the
         method and the film model.
     """
-    from ..core.progress import counter_bar, progress_enabled
-    from ..core.units import rpm_to_rad_s
-    from ..linear.assembly import mass_matrix
-    from ..linear.campbell import campbell_from_modes, exact_onsets, film_whirl_rows, speed_grid_order
-    from ..linear.equilibrium import bearing_equilibrium
-    from ..linear.modal import modes_from_state
-    from ..linear.whirl import film_names
-    from ..system.methods import get_method
 
     m = get_method(method)
     given = m.check_speeds(speeds_rpm)

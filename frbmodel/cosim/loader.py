@@ -41,6 +41,9 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
+from ..core.errors import ParameterError
+from .sources import find_source
+
 #: the Python description inside the FMU, read by the loader
 CONFIG_NAME = "resources/frb_python.cfg"
 #: environment variable naming another Python description file (overrides the one in the FMU)
@@ -66,7 +69,6 @@ def loader_source(src=None) -> Path:
     -------
     Path
     """
-    from .sources import find_source
 
     return find_source(src) / "fmu_src" / "loader" / "frb_fmu_loader.c"
 
@@ -170,7 +172,6 @@ def compile_loader(src=None, cc=None) -> bytes:
 def model_identifier(fmu_path) -> str:
     """The co-simulation ``modelIdentifier`` in the FMU's modelDescription.xml (a ParameterError naming the file if it
     is no FMU: not a zip archive, e.g. a truncated copy, or without a modelDescription.xml)."""
-    from ..core.errors import ParameterError
 
     try:
         with zipfile.ZipFile(fmu_path) as z:

@@ -24,12 +24,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import CosimStopped, ParameterError
+from ..core.errors import CosimStopped, ParameterError, check_positive
 from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
+from ..linear.equilibrium import equilibrium
 from ..nonlinear.recorder import Recorder, RunupResult, RunupSchema
+from ..physics.film import Film
+from ..system.parameters import load_system
+from ..system.presets import turbocharger
 from .fmu import FmiCallFailed, FmuHost
+from .fmu_system import rotor_system_of_fmu
 from .ssp import read_ssp
 
 BEARING_FMU, ROTOR_FMU = "FloatingRingBearing", "TurbochargerRotor"
@@ -90,9 +95,6 @@ def system_from_parameters(params, default=None):
     the bearing component of the same name."""
     from dataclasses import replace
 
-    from ..physics.film import Film
-    from ..system.parameters import load_system
-    from ..system.presets import turbocharger
 
     sys_file = params.get("rotor", {}).get("rotor_file", ("String", ""))[1]
     tc = load_system(sys_file) if sys_file else (default if default is not None else turbocharger())
@@ -216,7 +218,6 @@ class Master(FmuHost):
 
     def _configure_adaptive(self, tolerance, min_step, max_step, unvalidated_step):
         """Check the adaptive step's tolerance and bounds (the first step is ``step_size``, clipped to them)."""
-        from ..core.errors import check_positive
 
         if self.coupling != "jacobian":
             raise ParameterError("the adaptive macro step estimates the coupling error of the staggered Jacobian "
@@ -247,7 +248,6 @@ class Master(FmuHost):
         """The system the SSP's rotor FMU was built for (None if the SSP has no rotor FMU file to read)."""
         import zipfile
 
-        from .fmu_system import rotor_system_of_fmu
 
         for path in self.ssp.components.values():
             if ROTOR_FMU in Path(path).name and zipfile.is_zipfile(path):  # (FMU errors are reported at setup)
@@ -737,7 +737,6 @@ def operating_point_overrides(system, speed_rpm, end_rpm=None, ramp_time=1.0, me
     """Parameter overrides that start the SSP system at the ``method`` equilibrium at ``speed_rpm`` (plus the
     same initial offset as :func:`frbmodel.nonlinear.runup.runup`'s ``perturbation``): rotor speed profile and initial
     journal positions, ring positions and speeds."""
-    from ..linear.equilibrium import equilibrium
 
     eq = equilibrium(system, method, speed_rpm)
     w0 = rpm_to_rad_s(speed_rpm)

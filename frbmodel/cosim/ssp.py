@@ -33,7 +33,7 @@ from xml.etree import ElementTree as ET
 
 from ..core.errors import ParameterError
 from ..core.units import rpm_to_rad_s
-from ..system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES
+from ..system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES, turbocharger
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -61,7 +61,6 @@ def _table2(system):
     """``system``, or the paper's Table 2 turbocharger when it is None."""
     if system is not None:
         return system
-    from ..system.presets import turbocharger
 
     return turbocharger()
 

@@ -26,7 +26,9 @@ import numpy as np
 from ..core.errors import CosimStopped, ParameterError
 from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
+from ..nonlinear.recorder import RunupResult
 from .fmu import FmuHost
+from .loader import model_identifier
 from .ssp import read_ssp
 
 TURBOCHARGER_FMU = "FloatingRingTurbocharger"
@@ -44,7 +46,6 @@ def is_system_ssp(ssp) -> bool:
     -------
     bool
     """
-    from .loader import model_identifier
 
     with read_ssp(ssp, require_fmus=False) as s:
         return any(Path(f).is_file() and model_identifier(f) == TURBOCHARGER_FMU for f in s.components.values())
@@ -197,7 +198,6 @@ class SystemMaster(FmuHost):
         (``runup.csv``, ``runup.json``) and ``signals.csv`` (time and connected values at every communication
         point). Returns the turbocharger's record as a :class:`~frbmodel.nonlinear.recorder.RunupResult` (None without
         ``out_dir``); raises :class:`CosimStopped` (``.result``: the record so far) when an FMU fails."""
-        from ..nonlinear.recorder import RunupResult
 
         H, T = self.step_size, self.stop_time
         n = int(round(T / H))

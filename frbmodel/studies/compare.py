@@ -14,9 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.progress import counter_bar, note
 from ..linear.campbell import campbell
-from ..nonlinear.runup import RunupStopped, SpeedProfile, runup
+from ..nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, RunupStopped, SpeedProfile, runup
 from ..plots.style import readable
+from ..signals.convergence import convergence_table
 from ..signals.spectral import spectrogram
 from ..system.presets import PAPER_OUTER_CLEARANCES
 
@@ -211,7 +213,6 @@ def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), d
     """
     import pandas as pd
 
-    from ..core.progress import counter_bar
 
     node = node or system.rotor.discs[0].name
     out = Path(out_dir)
@@ -239,7 +240,6 @@ def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), d
 def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_speeds, progress, runup_kw, segment_s,
                        fmax_hz, check_convergence):
     """One clearance of :func:`compare`: Campbell diagram, run, spectrogram, figures; (table rows, paths)."""
-    from ..core.progress import note
 
     start, end = speed_rpm
     lo, hi = sorted((start, end))
@@ -273,8 +273,6 @@ def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_spe
 
 def _label_convergence(rows, sp, system, profile, duration, folder, node, segment_s, runup_kw, progress):
     """Rerun with rtol and atol tightened tenfold and add "converged" / "note" to the component rows."""
-    from ..nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL
-    from ..signals.convergence import convergence_table
 
     kw = {"rtol": DEFAULT_RTOL, "atol": DEFAULT_ATOL_M, **(runup_kw or {})}
     kw.update(rtol=kw["rtol"] / 10, atol=kw["atol"] / 10, progress=bool(progress))

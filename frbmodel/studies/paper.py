@@ -11,6 +11,7 @@ from ..core.errors import ParameterError, check_system
 from ..core.progress import counter_bar, note
 from ..linear.campbell import campbell
 from ..linear.equilibrium import equilibrium
+from ..plots.figures import equilibrium_cost_figure, rsr_figure
 from ..system.presets import PAPER_SPEED_RANGE_RPM
 
 #: figure number -> (method, extra options)
@@ -129,7 +130,6 @@ def _equilibrium_figures(system, out, n_speeds):
     import matplotlib.pyplot as plt
     import pandas as pd
 
-    from ..plots.figures import equilibrium_cost_figure, rsr_figure
 
     paths = []
     names = [b.name for b in system.bearings]

@@ -11,7 +11,9 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
+from ..plots.figures import write_html
 from ..plots.studies import stability_map_figures
+from .sweep import PARAMETERS, stability_map
 
 __all__ = ["StudyResult", "study_result"]
 
@@ -88,7 +90,6 @@ class StudyResult(Result):
 
     def plot_html(self, path=None, include_plotlyjs=None):
         """The stability map as an interactive figure, written to ``path`` (HTML) if given."""
-        from ..plots.figures import write_html
 
         fig = stability_map_figures(self.table, self.parameter)[1]
         if path is not None:
@@ -116,7 +117,6 @@ def study_result(out_dir, parameter=None):
     ParameterError
         No finished case with onsets in the folder.
     """
-    from .sweep import PARAMETERS, stability_map
 
     table = stability_map(out_dir)
     if table.empty:

@@ -9,6 +9,13 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError, RunStopped
+from ..linear.campbell import campbell
+from ..linear.unbalance import UnbalanceResponse, bode_figure
+from ..nonlinear.recorder import RunupResult
+from ..plots.style import readable
+from ..signals.convergence import convergence_table, unconverged_summary
+from ..signals.orbits import orbits
+from ..signals.spectral import spectrogram
 
 __all__ = ["check_convergence", "orbit_windows", "replot_unbalance", "run_envelope", "save_bifurcation_diagram",
            "write_composites", "write_orbits", "write_up_down_halves", "write_waterfalls"]
@@ -57,9 +64,6 @@ def write_composites(run, system, out, xscale="linear", title="run-up", orders=(
     list of Path
         The files written.
     """
-    from ..linear.campbell import campbell
-    from ..plots.style import readable
-    from ..signals.spectral import spectrogram
 
     lo, hi = float(run.speed_rpm.min()), float(run.speed_rpm.max())
     cd = campbell(system, "J", np.linspace(max(lo, 500.0), max(hi, lo + 1.0), 150)) if hi > lo else None
@@ -105,7 +109,6 @@ def write_up_down_halves(run, system, out, make_dir=None):
         ``make_dir(folder) -> Path``: how a half's folder is made (default: created with its parents; the CLI
         passes its results-folder claim).
     """
-    from ..nonlinear.recorder import RunupResult
 
     make_dir = make_dir or _mkdir
     df, top = run.to_dataframe(), np.flatnonzero(run.speed_rpm == run.speed_rpm.max())
@@ -138,8 +141,6 @@ def check_convergence(run, rerun, out, what, runner=None):
     """
     import pandas as pd
 
-    from ..signals.convergence import convergence_table, unconverged_summary
-    from ..signals.spectral import spectrogram
 
     folder = out / "convergence_check"
     tight = (runner or _kept)(lambda: rerun(folder), folder)
@@ -176,7 +177,6 @@ def replot_unbalance(out, names=None):
     """
     import matplotlib.pyplot as plt
 
-    from ..linear.unbalance import UnbalanceResponse, bode_figure
 
     stems = sorted(p.stem for p in out.glob("unbalance_*.json"))
     results = [UnbalanceResponse.load(out, s) for s in stems]
@@ -222,7 +222,6 @@ def orbit_windows(run, speeds_rpm=(), revolutions=20.0, time_windows=()):
     -------
     list of Orbits
     """
-    from ..signals.orbits import orbits
 
     return ([orbits(run, speed_rpm=float(s), revolutions=revolutions) for s in speeds_rpm]
             + [orbits(run, time_s=w) for w in time_windows])
@@ -273,7 +272,6 @@ def write_waterfalls(run, out, orders=(1.0,)):
     """
     import matplotlib.pyplot as plt
 
-    from ..signals.spectral import spectrogram
 
     paths = []
     for node in run.displacement:
@@ -313,8 +311,6 @@ def save_bifurcation_diagram(bd, system, out, speed_range_rpm, runs=(), campbell
     -------
     list of Path
     """
-    from ..linear.campbell import campbell
-    from ..signals.spectral import spectrogram
 
     lo, hi = speed_range_rpm
     envelopes = [run_envelope(folder, r) for folder, r in runs]

@@ -31,8 +31,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_real, read_json
+from ..core.errors import ParameterError, check_positive, check_real, read_json
+from ..core.progress import counter_bar, note
+from ..cosim.master import cosimulate, operating_point_overrides
+from ..cycles.continuation import continuation, hopf_points
+from ..linear.campbell import campbell
+from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
+from ..nonlinear.runup import SpeedProfile, Unbalance, check_speed, runup
+from ..plots.figures import write_html
 from ..plots.studies import stability_chart_figure, stability_map_figures
+from ..signals.spectral import spectrogram
+from ..system.methods import get_method
+from ..system.oil import OIL, oil_from_dict
+from ..system.presets import turbocharger
 
 #: parameters a study can vary (name -> (unit, description)); "<bearing>" and "<disc>" are the names in the system
 #: (the Table 2 system has the bearings "turbine", "compressor" and the discs "turbine_wheel", "compressor_wheel")
@@ -126,9 +137,6 @@ def check_options(analysis, options):
     ...     print(exc)
     method = 'Q' is unknown; valid methods are A, B, C, D, E, F, G, I, J (the paper has no H)
     """
-    from ..core.errors import check_positive
-    from ..nonlinear.runup import check_speed
-    from ..system.methods import get_method
 
     if "oil" in options:
         _option_oil(options["oil"])
@@ -216,7 +224,6 @@ def grid(params: dict, analysis="campbell", **options):
 
 def _option_oil(value):
     """The :class:`Oil` of a study's ``oil`` option: a named oil or an ``[oil]`` table (dict)."""
-    from ..system.oil import OIL, oil_from_dict
 
     if isinstance(value, str):
         return OIL(value)
@@ -265,7 +272,6 @@ def case_oil_supply(params, options, system):
     OilSupply or None
         None without an oil and without supply parameters.
     """
-    from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
 
     oil = _option_oil(options["oil"]) if "oil" in options else system.oil
     given = [n for n in SUPPLY_PARAMETERS if n in params]
@@ -329,8 +335,6 @@ def build_case_system(params, base=None):
     """
     from dataclasses import replace
 
-    from ..nonlinear.runup import Unbalance
-    from ..system.presets import turbocharger
 
     tc = base or turbocharger()
     p = {k: v for k, v in params.items() if k not in SUPPLY_PARAMETERS}
@@ -384,7 +388,6 @@ def _onset_rows_campbell(cd):
 def _onset_rows_run(run, label, node=None):
     """Onset rows of the sub-synchronous components of a run at ``node`` (default: the first disc). A component
     there from the start of the run has no onset ("onset [rpm]" NaN, "onset at sweep start" True)."""
-    from ..signals.spectral import spectrogram
 
     seg = min(0.1, max(0.01, (run.time[-1] - run.time[0]) / 40))
     rows = []
@@ -398,7 +401,6 @@ def _onset_rows_run(run, label, node=None):
 
 
 def _campbell_rows(tc, o, supply=None):
-    from ..linear.campbell import campbell
 
     # ascending grid whatever the order the user gave: the onsets are the lower ends of the unstable ranges
     a, b, n = o.get("speeds_rpm", (10e3, 250e3, 100))
@@ -412,7 +414,6 @@ def _campbell_rows(tc, o, supply=None):
 def _hopf_rows(tc, o):
     """Hopf points of the full model in the speed range (:func:`frbmodel.cycles.continuation.hopf_points`), numbered by
     speed: the linear onsets a two-parameter stability chart is drawn from."""
-    from ..cycles.continuation import hopf_points
 
     lo, hi = sorted(o.get("speed_rpm", (1e3, 250e3)))
     return [{"kind": "linear", "method": "full model", "item": f"Hopf #{k}", "onset [rpm]": hp.speed_rpm,
@@ -425,7 +426,6 @@ def _bifurcation_rows(tc, o, case_dir):
     from ``start``: its Hopf points by default, or the orbits at given speeds), written to ``case_dir``
     (``branch.csv``, ``bifurcations.csv``, ``branch.nc``, ``bifurcation.png`` / ``.html``); one row per bifurcation
     point (item: type and criticality; "onset [rpm]" its speed)."""
-    from ..cycles.continuation import continuation
 
     lo, hi = sorted(o.get("speed_rpm", (1e3, 250e3)))
     bd = continuation(tc, (lo, hi), start=o.get("start", "hopf"), max_points=int(o.get("max_points", 25)),
@@ -438,7 +438,6 @@ def _bifurcation_rows(tc, o, case_dir):
 
 
 def _runup_rows(tc, unb, o, supply=None):
-    from ..nonlinear.runup import SpeedProfile, runup
 
     start, end = o.get("speed_rpm", (1e3, 250e3))
     dur = float(o.get("duration", 2.0))
@@ -450,7 +449,6 @@ def _runup_rows(tc, unb, o, supply=None):
 
 
 def _cosim_rows(tc, unb, o):
-    from ..cosim.master import cosimulate, operating_point_overrides
 
     start, end = o.get("speed_rpm", (20e3, 250e3))
     dur = float(o.get("duration", 1.0))
@@ -838,7 +836,6 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
     >>> index["status"].tolist()
     ['failed']
     """
-    from ..core.progress import note
 
     if n_workers is not None and (int(n_workers) != n_workers or n_workers < 1):
         raise ParameterError(f"workers = {n_workers!r} is invalid: valid range integer >= 1 (worker processes)")
@@ -870,7 +867,6 @@ def run_study(cases, out_dir, scheduler=None, n_workers=None, progress=False, re
 def _run_cases(cases, todo, out, scheduler, n_workers, progress, say):
     """Run the cases ``todo`` of the study ``cases`` serially or on Dask, behind a progress bar, re-indexing after
     each; returns (the case results, the Dask timing and worker states)."""
-    from ..core.progress import counter_bar
 
     results, info = [], {}
     with counter_bar(len(todo), "study", progress, unit="case") as bar:
@@ -1053,7 +1049,6 @@ def plot_stability_map(out_dir, parameter=None):
     """
     import matplotlib.pyplot as plt
 
-    from ..plots.figures import write_html
 
     out = Path(out_dir)
     df = stability_map(out)

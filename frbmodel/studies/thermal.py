@@ -12,6 +12,8 @@ from ..core.errors import ParameterError, check_system
 from ..linear.campbell import campbell
 from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, thermal_losses
 from ..linear.whirl import film_names, film_onset_speeds
+from ..nonlinear.runup import runup
+from ..signals.spectral import spectrogram
 
 __all__ = ["RUNUP_RAMP_RPM", "SUPPLY_TEMPERATURES_K", "onsets_vs_supply", "runup_onsets_vs_supply"]
 
@@ -154,8 +156,6 @@ def runup_onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURE
     """
     import pandas as pd
 
-    from ..nonlinear.runup import runup
-    from ..signals.spectral import spectrogram
 
     check_system(system)
     temps = np.atleast_1d(np.asarray(supply_temperatures_K, dtype=float))

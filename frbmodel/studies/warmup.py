@@ -18,6 +18,15 @@ import hashlib
 import time
 from pathlib import Path
 
+from ..core.progress import counter_bar
+from ..core.version import __version__
+from ..linear.equilibrium import equilibrium
+from ..linear.losses import bearing_losses
+from ..nonlinear.components import BearingComponent, RotorComponent, ramp_speed
+from ..nonlinear.runup import INTEGRATORS, SpeedProfile, runup
+from ..physics.film import film_coefficients, film_force
+from ..system.presets import turbocharger
+
 #: the modules holding numba kernels (their sources stamp the marker), relative to the package
 KERNEL_MODULES = ("physics/film", "physics/bearing", "physics/dynamics", "nonlinear/compiled", "nonlinear/rosenbrock",
                   "nonlinear/runup", "nonlinear/components", "physics/losses")
@@ -34,7 +43,6 @@ def _stamp():
 def warmup_marker():
     import numba
 
-    from ..core.version import __version__
 
     name = f"frbmodel-kernels-{__version__}-numba{numba.__version__}-{_stamp()}.ok"
     pkg_cache = Path(__file__).resolve().parents[1] / "__pycache__"
@@ -60,12 +68,6 @@ def _tasks():
     """(label, callable) pairs that exercise every compiled kernel once on a tiny problem."""
     import numpy as np
 
-    from ..linear.equilibrium import equilibrium
-    from ..linear.losses import bearing_losses
-    from ..nonlinear.components import BearingComponent, RotorComponent, ramp_speed
-    from ..nonlinear.runup import INTEGRATORS, SpeedProfile, runup
-    from ..physics.film import film_coefficients, film_force
-    from ..system.presets import turbocharger
 
     tc = turbocharger()
     film = tc.bearings[0].inner
@@ -107,7 +109,6 @@ def warmup(progress=True):
     float
         Wall time [s]: ~40 s when numba compiles (first run on a 2-core machine), ~1-2 s when it loads its cache.
     """
-    from ..core.progress import counter_bar
 
     t0 = time.perf_counter()
     tasks = _tasks()
