@@ -18,10 +18,11 @@ from .core.errors import (
     check_speeds_in_range,
 )
 from .core.interrupt import Terminated
+from .core.manifest import claim as claim_folder
 from .core.manifest import extend
 from .core.version import __version__
 from .cosim.build import build_fmus
-from .cosim.linearize import linearize
+from .cosim.linearize import campbell_from_fmu, linearize
 from .cosim.master import COUPLING_TOL, cosimulate
 from .cosim.sources import find_source
 from .cosim.ssp import read_ssp
@@ -32,6 +33,7 @@ from .linear.campbell import campbell
 from .linear.equilibrium import equilibrium
 from .linear.losses import bearing_losses, with_ring_speed_ratio
 from .linear.modal import modes_from_state
+from .linear.modeshape import save_mode_shapes
 from .linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, at_operating_point, check_supply_pressure, thermal_losses
 from .linear.unbalance import bode_figure, critical_speeds, location_names, unbalance_response
 from .nonlinear.recorder import RunupResult
@@ -47,6 +49,7 @@ from .nonlinear.runup import (
     check_tolerances,
     runup,
 )
+from .plots.figures import html_plotlyjs, system_run_figure
 from .plots.losses import plot_bearing_losses
 from .plots.thermal import plot_onsets_vs_supply, plot_thermal_losses
 from .studies.compare import compare
@@ -61,7 +64,16 @@ from .studies.run_outputs import (
     write_up_down_halves,
     write_waterfalls,
 )
-from .studies.sweep import check_scheduler, example_cases, grid, plot_stability_map, run_study, stability_map
+from .studies.sweep import (
+    PARAMETERS,
+    check_scheduler,
+    example_cases,
+    grid,
+    plot_stability_map,
+    run_study,
+    stability_map,
+    write_index,
+)
 from .studies.thermal import onsets_vs_supply, runup_onsets_vs_supply
 from .studies.warmup import kernels_ready, warmup, warmup_marker
 from .system.methods import METHODS, get_method
@@ -199,8 +211,6 @@ def cmd_campbell(args):
         raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
                              "set); without it the system is --system / --outer-clearance")
     if args.from_fmu:
-        from .cosim.linearize import campbell_from_fmu
-
         args.parameter_set = args.parameter_set or "co36"
         _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky", "oil",
                                 "supply_temperature", "supply_pressure"))
@@ -242,8 +252,6 @@ def cmd_campbell(args):
         print(f"neutral modes (|D| <= round-off bound, undamped): up to {int(cd.n_neutral.max())} at one speed")
     paths.append(_critical_table(cd, None if args.from_fmu else tc, out / f"campbell_{cd.method}_critical.csv", kw))
     if mode_rpm is not None:
-        from .linear.modeshape import save_mode_shapes
-
         paths += save_mode_shapes(cd, mode_rpm, out, fmax)
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
@@ -307,7 +315,7 @@ def cmd_unbalance(args):
     unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"])
     tc = load_from_args(args)
     supply = _oil_supply_from_args(args, tc)
-    names = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
+    names = _locations(args)
     bad = [n for n in names or [] if n not in location_names(tc)]
     if bad:
         raise ParameterError(f"--locations {bad[0]!r} is unknown; valid: {', '.join(location_names(tc))}")
@@ -370,6 +378,11 @@ def cmd_paper_figures(args):
     paths = paper_figures(tc, args.out, n_speeds=args.n_speeds, progress=True)
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {Path(args.out).resolve()}")
+
+
+def _locations(args):
+    """The names of ``--locations NAME,NAME`` (None when not given)."""
+    return [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
 
 
 def _parse_unbalance(items):
@@ -620,8 +633,6 @@ def writable_dir(path, option="--out", claim=True):
     except OSError as exc:
         raise ParameterError(f"{option} = {str(path)!r} is not a writable folder: {exc.strerror or exc}") from None
     if claim and not any(c.folder.resolve() == p.resolve() for c in _CLAIMS):
-        from .core.manifest import claim as claim_folder
-
         _CLAIMS.append(claim_folder(p, " ".join(_COMMAND)))
     return p
 
@@ -675,7 +686,7 @@ def cmd_plot(args):
         if args.orbits or args.orbit_times or args.waterfall:
             raise ParameterError(f"{out}: an unbalance response; --orbits, --orbit-times and --waterfall need a "
                                  "run-up folder")
-        locations = [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
+        locations = _locations(args)
         print("wrote:\n  " + "\n  ".join(str(p) for p in replot_unbalance(out, locations)))
         print(f"results in {out.resolve()}")
         return
@@ -1037,9 +1048,7 @@ def _cosim_system(args):
     _finish_run(args, run, lambda: system_from_meta(run.meta), out,
                 title=f"turbocharger FMU in {Path(args.ssp).name} ({args.parameter_set})")
     if not args.no_figure and run.time.size >= 2:
-        import pandas as pd
-
-        from .plots.figures import system_run_figure
+        import pandas as pd  # (heavy: only for the figure)
 
         fig = system_run_figure(run, pd.read_csv(out / "signals.csv"),
                                 title=f"{Path(args.ssp).name} ({args.parameter_set}), frb cosim")
@@ -1108,8 +1117,6 @@ def cmd_sweep(args):
         idx = run_study(cases, args.out, scheduler=scheduler, n_workers=args.workers,
                         retry_failed=args.retry_failed, progress=True)
     except KeyboardInterrupt as exc:  # finished cases are on disk: index them and draw the map from them
-        from .studies.sweep import write_index
-
         interrupted = exc
         idx = write_index(cases, Path(args.out))
         print(f"\nfrb sweep: interrupted ({'SIGTERM' if isinstance(exc, Terminated) else 'Ctrl-C'}); the finished "
@@ -1120,8 +1127,6 @@ def cmd_sweep(args):
     print(f"{int((idx['status'] == 'finished').sum())} finished, {n_fail} failed, "
           f"{int((idx['status'] == 'pending').sum())} pending of {len(idx)} cases")
     if len(sm):
-        from .studies.sweep import PARAMETERS
-
         cols = [c for c in sm.columns if c.split(" [")[0] in PARAMETERS]
         print(sm[cols + ["method", "item", "onset [rpm]", "f at onset [Hz]"]].sort_values(cols + ["method", "item"])
               .to_string(index=False, float_format=lambda x: f"{x:.4g}"))
@@ -1618,8 +1623,6 @@ def check_numeric_options(args):
 def _dispatch(args):
     """Run the parsed command; its exit code (errors become messages and codes)."""
     try:
-        from .plots.figures import html_plotlyjs
-
         check_numeric_options(args)  # (before the first-run notice and any folder)
         mode = _html_mode(args)
         _first_run_notice(args.command)

@@ -56,6 +56,19 @@ def test_every_numeric_option_of_the_cli_is_bounded_in_one_table():
     assert set(cli.NUMERIC_OPTIONS) <= numeric, sorted(set(cli.NUMERIC_OPTIONS) - numeric)  # no stale rows
 
 
+def test_no_function_level_import_of_the_package_itself():
+    """Inside a function only optional or heavy outside libraries are imported (matplotlib, plotly, pandas, fmpy,
+    pythonfmu, dask, ...), never a module of the package: a function-level import of the package's own modules is
+    how issue #23's four circles were hidden (341 of them were counted then)."""
+    found = []
+    for path, fn in _functions():
+        for node in ast.walk(fn):
+            if isinstance(node, ast.ImportFrom) and (node.level > 0 or (node.module or "").startswith("frbmodel")) \
+                    or isinstance(node, ast.Import) and any(a.name.startswith("frbmodel") for a in node.names):
+                found.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno} in {fn.name}")
+    assert not found, found
+
+
 def test_no_import_circles_with_every_import_counted():
     """No module of the package imports, directly or through others, a module that imports it back: function-level
     imports included (grimp, import-linter's graph, counts them all). Issue #23 found four circles hidden by
@@ -93,3 +106,56 @@ def test_the_public_api_of_the_readme_and_the_guide_stays():
     assert len(used) >= 15  # the blocks were found
     missing = sorted(n for n in used | set(frb.__all__) if not hasattr(frb, n))
     assert not missing, missing
+
+
+def _options_read(funcs, name, seen):
+    """Names of ``args`` that function ``name`` of the CLI and the CLI functions it calls read: ``args.X``,
+    ``getattr(args, "X")`` and the names listed in tuple/list/set literals (``_refuse_with_fmu(args, ("k", ...))``)."""
+    if name in seen or name not in funcs:
+        return set()
+    seen.add(name)
+    out = set()
+    for node in ast.walk(funcs[name]):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "args":
+            out.add(node.attr)
+        elif isinstance(node, ast.Call) and getattr(node.func, "id", "") == "getattr" and len(node.args) > 1 \
+                and isinstance(node.args[1], ast.Constant):
+            out.add(node.args[1].value)
+        elif isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            out |= {e.value for e in node.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)}
+        elif isinstance(node, ast.Name) and node.id in funcs:
+            out |= _options_read(funcs, node.id, seen)
+    return out
+
+
+def _unread_options(parser):
+    """{command: [options its handler never reads]} for the CLI's parser: an option parsed and never read is one
+    that is dropped silently (issue #24 item 3)."""
+    import argparse
+    import inspect
+
+    from frbmodel import cli
+
+    funcs = {n.name: n for n in ast.parse(inspect.getsource(cli)).body if isinstance(n, ast.FunctionDef)}
+    common = _options_read(funcs, "_dispatch", set())
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    unread = {}
+    for cmd, sp in sub.choices.items():
+        used = _options_read(funcs, sp.get_default("func").__name__, set()) | common
+        unread[cmd] = [a.dest for a in sp._actions if a.dest not in ("help", "func") and a.dest not in used]
+    return {c: u for c, u in unread.items() if u}
+
+
+def test_every_cli_option_is_read_by_its_command():
+    """Every option of every command is read by the command's code (where it is used or refused): none is parsed
+    and dropped. The check is static (the CLI's handler and the CLI functions it calls); the probe shows it finds
+    an option that nothing reads."""
+    import argparse
+
+    from frbmodel import cli
+
+    assert _unread_options(cli.build_parser()) == {}
+    probe = cli.build_parser()
+    sub = next(a for a in probe._actions if isinstance(a, argparse._SubParsersAction))
+    sub.choices["runup"].add_argument("--never-read-probe", type=float)
+    assert _unread_options(probe) == {"runup": ["never_read_probe"]}

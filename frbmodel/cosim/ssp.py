@@ -33,6 +33,8 @@ from xml.etree import ElementTree as ET
 
 from ..core.errors import ParameterError
 from ..core.units import rpm_to_rad_s
+from ..linear.equilibrium import equilibrium
+from ..nonlinear.components import BearingComponent
 from ..system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES, turbocharger
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -155,19 +157,15 @@ def parameter_sets(clearances=PAPER_OUTER_CLEARANCES, start_rpm=20e3, end_rpm=25
         ``{set name: {component: {parameter: (type, value, unit)}}}`` with SSP types ``"Real"`` /
         ``"String"`` and SI units (None for strings).
     """
-    import frbmodel as frb
-
     base = _table2(system)
     sets = {}
     for c in clearances:
         tc = base.with_outer_clearance(c)
-        eq = frb.equilibrium(tc, "J", start_rpm)
+        eq = equilibrium(tc, "J", start_rpm)
         name = f"co{c * 1e6:.0f}"
         comp = {"rotor": {"speed_start": ("Real", rpm_to_rad_s(start_rpm), "rad/s"),
                           "speed_end": ("Real", rpm_to_rad_s(end_rpm), "rad/s"),
                           "ramp_time": ("Real", ramp_time, "s"), "gravity": ("Real", tc.gravity, "m/s2")}}
-        from ..nonlinear.components import BearingComponent
-
         w0 = rpm_to_rad_s(start_rpm)
         for (inst, prefix), b, e in zip(bearing_components(tc), tc.bearings, eq.bearings):
             jx = float(e.journal[0] + perturbation * (b.inner.clearance + b.outer.clearance))

@@ -39,7 +39,7 @@ from ..nonlinear.runup import (
 )
 from ..physics.film import check_model
 from ..signals.orbits import orbits
-from .branch import shoot_segments
+from .branch import hopf_guess, shoot_segments
 from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
 from .shooting import shoot, stable_multipliers
 
@@ -405,8 +405,6 @@ def _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced):
                                                                     "autonomous)" if guess == "hopf" else
                                                                     ": 'hopf', a LimitCycle, a RunupResult or "
                                                                     "(state, period)"))
-        from .branch import hopf_guess
-
         return (*hopf_guess(system, speed_rpm, model), None)
     if isinstance(guess, RunupResult):
         y_run, from_run = runup_state(guess, system, speed_rpm)

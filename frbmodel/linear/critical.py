@@ -8,6 +8,7 @@ import numpy as np
 
 from ..core.units import rpm_to_rad_s
 from ..system.methods import get_method
+from ..system.parameters import system_from_meta
 from .assembly import linear_system
 from .equilibrium import bearing_equilibrium
 from .modal import state_matrix
@@ -37,8 +38,6 @@ def system_of(cd, system):
     if system is not None:
         return system
     if isinstance(cd.meta.get("system"), dict):
-        from ..system.parameters import system_from_meta
-
         return system_from_meta(cd.meta)
     return None
 

@@ -34,7 +34,7 @@ import numpy as np
 from ..core.errors import ParameterError, check_positive, check_real, read_json
 from ..core.progress import counter_bar, note
 from ..cosim.master import cosimulate, operating_point_overrides
-from ..cycles.continuation import continuation, hopf_points
+from ..cycles.continuation import check_starts, continuation, hopf_points
 from ..linear.campbell import campbell
 from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
 from ..nonlinear.runup import SpeedProfile, Unbalance, check_speed, runup
@@ -43,7 +43,9 @@ from ..plots.studies import stability_chart_figure, stability_map_figures
 from ..signals.spectral import spectrogram
 from ..system.methods import get_method
 from ..system.oil import OIL, oil_from_dict
+from ..system.parameters import Turbocharger
 from ..system.presets import turbocharger
+from .warmup import kernels_ready, warmup
 
 #: parameters a study can vary (name -> (unit, description)); "<bearing>" and "<disc>" are the names in the system
 #: (the Table 2 system has the bearings "turbine", "compressor" and the discs "turbine_wheel", "compressor_wheel")
@@ -162,8 +164,6 @@ def check_options(analysis, options):
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or int(v) != v \
                     or v < low:
                 raise ParameterError(f"bifurcation {key} = {v!r} is invalid: valid range integer >= {low}")
-        from ..cycles.continuation import check_starts
-
         check_starts(options.get("start", "hopf"), options.get("speed_rpm", (1e3, 250e3)), "bifurcation start",
                      "speed_rpm")
 
@@ -208,8 +208,6 @@ def grid(params: dict, analysis="campbell", **options):
     _check_thermal_study(names, analysis, options)
     oil_base = None  # the system option's oil, if it has one, for the supply values' check
     if isinstance(options.get("system"), dict) and "oil" in options["system"]:
-        from ..system.parameters import Turbocharger
-
         oil_base = Turbocharger.from_dict(options["system"])
     for n in names:  # each value on its own, before any case runs (a refused value failed every case, exit 4)
         for v in params[n]:
@@ -505,8 +503,6 @@ def run_case(case: Case, out_dir) -> dict:
         o = dict(case.options)
         base = None
         if "system" in o:
-            from ..system.parameters import Turbocharger
-
             base = Turbocharger.from_dict(o["system"])
         tc, unb = build_case_system(case.params, base)
         supply = case_oil_supply(case.params, o, tc)
@@ -656,11 +652,6 @@ def prepare_worker() -> dict:
     _WORKER["prepare_calls"] += 1
     if _WORKER["warmups"] == 0:
         t0 = time.perf_counter()
-        from ..linear import campbell  # noqa: F401  (the analyses' modules: imported here, once)
-        from ..nonlinear import runup  # noqa: F401
-        from ..signals import spectral  # noqa: F401
-        from .warmup import warmup
-
         warmup(progress=False)
         _WORKER["warmup_s"] = time.perf_counter() - t0
         _WORKER["warmups"] += 1
@@ -891,8 +882,6 @@ def _run_on_dask(todo, out, scheduler, n_workers, report, say):
     flight, ``report`` each result as it arrives; returns timing and the workers' states for the summary."""
     dist = _distributed()
     if scheduler is None:
-        from .warmup import kernels_ready, warmup
-
         if not kernels_ready():  # compile once here; the workers then load numba's cache instead of compiling
             say("compiling the numba kernels once before starting the workers (first run only)")
             warmup(progress=False)
