@@ -159,3 +159,31 @@ def test_every_cli_option_is_read_by_its_command():
     sub = next(a for a in probe._actions if isinstance(a, argparse._SubParsersAction))
     sub.choices["runup"].add_argument("--never-read-probe", type=float)
     assert _unread_options(probe) == {"runup": ["never_read_probe"]}
+
+
+def test_the_public_api_has_numpydoc_parameters_and_returns():
+    """Every function of ``frbmodel.__all__`` documents its parameters and its return value in numpydoc sections
+    (the API reference of the docs site is built from them), and every public method of the public classes with
+    two or more parameters has a Parameters section."""
+    import inspect
+
+    import frbmodel as frb
+
+    ragged = []
+    for name in frb.__all__:
+        obj = getattr(frb, name)
+        if inspect.isfunction(obj):
+            doc = inspect.getdoc(obj) or ""
+            if inspect.signature(obj).parameters and "Parameters\n----------" not in doc:
+                ragged.append(f"{name}: no Parameters")
+            if "Returns\n-------" not in doc and "Yields\n------" not in doc:
+                ragged.append(f"{name}: no Returns")
+        elif inspect.isclass(obj):
+            for mname, m in vars(obj).items():
+                if mname.startswith("_") or not inspect.isfunction(m):
+                    continue
+                params = [p for p in inspect.signature(m).parameters if p not in ("self", "cls")]
+                doc = inspect.getdoc(m) or ""
+                if not doc or len(params) >= 2 and "Parameters\n----------" not in doc:
+                    ragged.append(f"{name}.{mname}: {'no docstring' if not doc else 'no Parameters'}")
+    assert not ragged, ragged

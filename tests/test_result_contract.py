@@ -2,6 +2,8 @@
 ``.plot_html(path)``, ``.to_dataframe()``, ``.to_xarray()`` / ``Type.from_xarray(ds)``, ``.save(folder)`` /
 ``Type.load(folder)`` — and what comes back from the dataset and from the folder is the result it was made from
 (its table equal, value for value; netCDF stores float64, so exactly)."""
+import inspect
+
 import matplotlib
 import numpy as np
 import pandas as pd
@@ -96,6 +98,9 @@ def test_every_result_type_keeps_the_one_contract(kind, tmp_path):
     r = _make(kind)
     cls = type(r)
     assert isinstance(r, Result)
+    args = {m: list(inspect.signature(getattr(cls, m)).parameters) for m in ("plot_html", "save", "load")}
+    assert args["plot_html"][1] == "path" and "include_plotlyjs" in args["plot_html"], args  # the same signatures
+    assert args["save"][1] == "out_dir" and args["load"][0] == "path", args
     fig = r.plot()
     assert isinstance(fig, matplotlib.figure.Figure)
     plt.close(fig)

@@ -221,7 +221,7 @@ def test_cli_unbalance(tmp_path, capsys):
     assert "critical speeds" in text and "1X crossing" in text and "response peak" in text
     for name in ("unbalance_A.csv", "unbalance_B_critical.csv", "unbalance_A.png", "unbalance_bode_AB.png"):
         assert (out / name).exists(), name
-    assert UnbalanceResponse.load(out, "unbalance_B").unbalance[0]["disc"] == "compressor_wheel"
+    assert UnbalanceResponse.load(out, stem="unbalance_B").unbalance[0]["disc"] == "compressor_wheel"
 
 
 @pytest.mark.parametrize("argv,match", [

@@ -204,10 +204,25 @@ class LimitCycle(Result):
 
         return orbits(self.orbit, time_s=(0.0, self.period)).plot(title=title or self.summary())
 
-    def plot_html(self, path=None, title=None):
-        """Interactive orbits over one period (written to ``path`` if given)."""
+    def plot_html(self, path=None, title=None, include_plotlyjs=None):
+        """Interactive orbits over one period (written to ``path`` if given).
 
-        return orbits(self.orbit, time_s=(0.0, self.period)).plot_html(path, title=title or self.summary())
+        Parameters
+        ----------
+        path : str or Path, optional
+            The HTML file (not written if None).
+        title : str, optional
+            Figure title (default: :meth:`summary`).
+        include_plotlyjs : {"directory", True}, optional
+            As for :func:`frbmodel.plots.figures.write_html`: plotly.js beside the page, or embedded in it.
+
+        Returns
+        -------
+        plotly.graph_objects.Figure
+        """
+
+        return orbits(self.orbit, time_s=(0.0, self.period)).plot_html(path, title=title or self.summary(),
+                                                                       include_plotlyjs=include_plotlyjs)
 
 
 def _crossings(t, x):

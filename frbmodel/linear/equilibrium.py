@@ -202,7 +202,21 @@ class EquilibriumResult(Result):
         return equilibrium_figure(self._figure_rows(), title or self._title())
 
     def plot_html(self, path=None, title=None, include_plotlyjs=None):
-        """The panels of :meth:`plot` as an interactive page, written to ``path`` (HTML) if given."""
+        """The panels of :meth:`plot` as an interactive page, written to ``path`` (HTML) if given.
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            The HTML file (not written if None).
+        title : str, optional
+            Figure title (default: method and speed).
+        include_plotlyjs : {"directory", True}, optional
+            As for :func:`frbmodel.plots.figures.write_html`: plotly.js beside the page, or embedded in it.
+
+        Returns
+        -------
+        plotly.graph_objects.Figure
+        """
 
         fig = equilibrium_figure_html(self._figure_rows(), title or self._title())
         if path is not None:

@@ -568,7 +568,7 @@ class UnbalanceResponse(Result):
             write_html(fig, path, include_plotlyjs)
         return fig
 
-    def save(self, out_dir, stem=None, png=True, html=True, netcdf=True, names=None):
+    def save(self, out_dir, stem=None, png=True, html=True, nc=True, names=None):
         """Write the tables, the metadata and the figures into ``out_dir``.
 
         Parameters
@@ -577,7 +577,7 @@ class UnbalanceResponse(Result):
             Folder (created if missing).
         stem : str, optional
             File name stem (default ``unbalance_<method>``).
-        png, html, netcdf : bool
+        png, html, nc : bool
             Write the PNG figure, the HTML figure, the netCDF dataset (:meth:`to_xarray`).
         names : sequence of str, optional
             Locations drawn in the figures (default: the discs).
@@ -609,17 +609,17 @@ class UnbalanceResponse(Result):
         if html:
             paths.append(out / f"{stem}.html")
             self.plot_html(paths[-1], names)
-        if netcdf:
+        if nc:
             paths.append(self.to_netcdf(out / f"{stem}.nc"))
         return paths
 
     @classmethod
-    def load(cls, out_dir, stem=None):
+    def load(cls, path, *, stem=None):
         """Read a result written by :meth:`save`.
 
         Parameters
         ----------
-        out_dir : str or Path
+        path : str or Path
             The folder.
         stem : str, optional
             File name stem (default: the only ``unbalance_*.json`` in the folder).
@@ -634,18 +634,18 @@ class UnbalanceResponse(Result):
         >>> ur = frb.unbalance_response(frb.turbocharger(), "B", [20e3, 40e3], {"turbine_wheel": 1e-6},
         ...                             critical=False)
         >>> with tempfile.TemporaryDirectory() as tmp:
-        ...     _ = ur.save(tmp, png=False, html=False, netcdf=False)
+        ...     _ = ur.save(tmp, png=False, html=False, nc=False)
         ...     back = UnbalanceResponse.load(tmp)
         >>> bool(np.array_equal(back.response, ur.response)), back.method
         (True, 'B')
         """
         import pandas as pd
 
-        out = Path(out_dir)
+        out = Path(path)
         if stem is None:
             found = sorted(p.stem for p in out.glob("unbalance_*.json"))
             if len(found) != 1:
-                raise ParameterError(f"folder = {str(out_dir)!r} holds {len(found)} unbalance_*.json files; expected "
+                raise ParameterError(f"folder = {str(path)!r} holds {len(found)} unbalance_*.json files; expected "
                                      "one (give stem=...)")
             stem = found[0]
         meta = read_json(out / f"{stem}.json", "unbalance-response metadata")

@@ -665,6 +665,15 @@ class RunupResult(Result):
         """The panels of :meth:`plot` as an interactive page, written to ``path`` (HTML) if given
         (:func:`frbmodel.plots.figures.write_html`).
 
+        Parameters
+        ----------
+        path : str or Path, optional
+            The HTML file (not written if None).
+        title : str, optional
+            Figure title.
+        include_plotlyjs : {"directory", True}, optional
+            As for :func:`frbmodel.plots.figures.write_html`: plotly.js beside the page, or embedded in it.
+
         Returns
         -------
         plotly.graph_objects.Figure

@@ -212,6 +212,29 @@ class SpectrogramResult(Result):
         (default: :func:`frbmodel.linear.equilibrium.linear_rsr` over the run's speeds, when the run carries its
         system). See :func:`frbmodel.plots.figures.composite_figure`.
 
+        Parameters
+        ----------
+        campbell : CampbellResult, optional
+            Method-J Campbell diagram whose unstable modes are drawn over the spectrogram.
+        whirl : bool
+            Draw the films' whirl curves (dashed) with ``campbell``.
+        rsr : bool
+            Add the RSR panel (run-up vs the linear methods).
+        fmax_hz : float, optional
+            Upper end of the frequency axis [Hz] (default: from the content).
+        components : bool
+            Label the tracked sub-synchronous components and mark where they vanish.
+        title : str, optional
+            Figure title.
+        xscale : {"linear", "log"}
+            Speed axis scale.
+        amplitude : {"db_max", "um", "db_um"}
+            Colour scale.
+        orders : sequence of float
+            Order lines k × f_rot drawn.
+        linear_rsr : dict, optional
+            The linear methods' RSR for the RSR panel.
+
         Returns
         -------
         matplotlib.figure.Figure
@@ -320,6 +343,19 @@ class SpectrogramResult(Result):
         """3-D waterfall (speed × frequency × amplitude in µm, or ``amplitude="db_um"``) with order lines
         (:func:`frbmodel.plots.figures.waterfall_figure`).
 
+        Parameters
+        ----------
+        fmax_hz : float, optional
+            Upper end of the frequency axis [Hz] (default: from the content).
+        amplitude : {"um", "db_um"}
+            Amplitude axis: µm, or dB re 1 µm.
+        orders : sequence of float
+            Order lines k × f_rot drawn.
+        n_lines : int
+            Number of spectra (speeds) drawn.
+        title : str, optional
+            Figure title.
+
         Returns
         -------
         matplotlib.figure.Figure
@@ -331,7 +367,20 @@ class SpectrogramResult(Result):
                        include_plotlyjs=None):
         """Interactive 3-D waterfall (plotly); written to ``path`` (HTML) if given.
 
-        ``include_plotlyjs`` as for :meth:`plot_html`.
+        Parameters
+        ----------
+        path : str or Path, optional
+            The HTML file (not written if None).
+        fmax_hz : float, optional
+            Upper end of the frequency axis [Hz] (default: from the content).
+        amplitude : {"um", "db_um"}
+            Amplitude axis: µm, or dB re 1 µm.
+        orders : sequence of float
+            Order lines k × f_rot drawn.
+        n_lines : int
+            Number of spectra (speeds) drawn.
+        include_plotlyjs : {"directory", True}, optional
+            As for :func:`frbmodel.plots.figures.write_html`: plotly.js beside the page, or embedded in it.
 
         Returns
         -------

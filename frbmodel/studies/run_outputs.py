@@ -179,7 +179,7 @@ def replot_unbalance(out, names=None):
 
 
     stems = sorted(p.stem for p in out.glob("unbalance_*.json"))
-    results = [UnbalanceResponse.load(out, s) for s in stems]
+    results = [UnbalanceResponse.load(out, stem=s) for s in stems]
     bad = [n for n in names or [] if n not in results[0].names]
     if bad:
         raise ParameterError(f"--locations {bad[0]!r} is unknown; valid: {', '.join(results[0].names)}")

@@ -74,6 +74,18 @@ class Method:
         a non-empty 1-D list of finite speeds within the model's range, each > 0 for a film method (the one speed
         check of the linear analyses: Campbell, unbalance, linear systems, FMU linearization).
 
+        Parameters
+        ----------
+        speeds_rpm : float or sequence of float
+            Rotor speeds [rpm].
+        name : str
+            The option or argument named in the error.
+
+        Returns
+        -------
+        numpy.ndarray
+            The speeds [rpm] as floats.
+
         Examples
         --------
         >>> METHODS["J"].check_speeds([2e3, 1e3]).tolist()
