@@ -328,8 +328,7 @@ def cmd_unbalance(args):
         print(f"method {letter}: {ur.meta['method_title']}; {speeds.size} speeds; unbalance "
               + ", ".join(f"{u['disc']} {u['m e [kg m]']:g} kg m at {u['phase [rad]']:g} rad" for u in ur.unbalance))
         if supply is not None:
-            print(f"thermal operating point at every speed: {supply.oil.name}, supply {supply.supply_temperature_K:g} "
-                  f"K, {supply.supply_pressure_Pa:g} Pa")
+            print(f"thermal operating point at every speed: {_supply_text(supply)}")
         _print_critical(ur.critical_speeds())
         results.append(ur)
     if len(results) > 1:
@@ -353,8 +352,7 @@ def cmd_equilibrium(args):
     out = writable_dir(args.out) if args.out else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
     if supply is not None:
-        print(f"thermal operating point: {supply.oil.name}, supply {supply.supply_temperature_K:g} K, "
-              f"{supply.supply_pressure_Pa:g} Pa; film viscosities [Pa s]: " + ", ".join(
+        print(f"thermal operating point: {_supply_text(supply)}; film viscosities [Pa s]: " + ", ".join(
                   f"{b.name} inner {b.inner.viscosity:.5g}, outer {b.outer.viscosity:.5g}" for b in tc.bearings))
     print(eq)
     if out is not None:
@@ -471,8 +469,7 @@ def cmd_runup(args):
     kind = RUN_TITLES.get(prof.direction, "run-up")
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
     if supply is not None:
-        print(f"  thermal model: {supply.oil.name}, supply {supply.supply_temperature_K:g} K, "
-              f"{supply.supply_pressure_Pa:g} Pa; film temperatures quasi-static in rotor speed")
+        print(f"  thermal model: {_supply_text(supply)}; film temperatures quasi-static in rotor speed")
 
     def run_at(tighten, folder):
         return runup(tc, profile=prof, duration=duration, unbalance=unbalance,
@@ -506,8 +503,11 @@ def cmd_bifurcation(args):
                              "list of them (e.g. 25000,60000)") from None
     start = check_starts(start, (lo, hi), "--start", "--speeds")
     runs = _load_runs(args.runs)  # (before hours of continuation: a wrong folder is refused now)
+    supply = _oil_supply_from_args(args, tc)
     out = writable_dir(args.out)
-    hps = hopf_points(tc, (lo, hi), restabilizing=True)
+    hps = hopf_points(tc, (lo, hi), restabilizing=True, oil_supply=supply)
+    if supply is not None:
+        print(f"thermal model: {_supply_text(supply)}; every speed at its own operating point")
     print(f"Hopf points of the full model, {lo:.0f} ... {hi:.0f} rpm (where a mode of the equilibrium loses or "
           "regains stability with rising speed):")
     for hp in hps:
@@ -528,15 +528,16 @@ def cmd_bifurcation(args):
 
     try:
         bd = continuation(tc, (lo, hi), start, max_points=args.max_points, progress=True, on_point=stream,
-                          segments=args.segments)
+                          segments=args.segments, oil_supply=supply)
         code = 0
     except KeyboardInterrupt as exc:
         code = 143 if isinstance(exc, Terminated) else 130
         print(f"\nfrb bifurcation: interrupted; the {len(points)} points computed are kept in {out.resolve()}",
               file=sys.stderr)
-        bd = BifurcationDiagram(points, [], {"status": "interrupted", "branches": [len(points)]})
+        bd = BifurcationDiagram(points, [], {"status": "interrupted", "branches": [len(points)],
+                                             **({"oil_supply": supply.to_dict()} if supply else {})})
     bd.meta.setdefault("status", "finished")
-    save_bifurcation_diagram(bd, tc, out, (lo, hi), runs)
+    save_bifurcation_diagram(bd, tc, out, (lo, hi), runs, oil_supply=supply)
     partial.unlink()
     tab = bd.bifurcation_table()
     print("bifurcation points:" if len(tab) else "no bifurcation points on the branches")
@@ -811,6 +812,11 @@ def _oil_supply_from_args(args, system):
     t_s = check_temperature("--supply-temperature", t_s, T_MIN_K, oil.max_temperature_K)
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
     return OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s))
+
+
+def _supply_text(supply):
+    """``"<oil>, supply <T> K, <p> Pa"`` of an OilSupply, for the console."""
+    return f"{supply.oil.name}, supply {supply.supply_temperature_K:g} K, {supply.supply_pressure_Pa:g} Pa"
 
 
 def _supply_from_args(args, oil):
@@ -1206,6 +1212,8 @@ def _add_bifurcation(sub):
     b.add_argument("--hopf-only", action="store_true", help="only list the Hopf points")
     b.add_argument("--out", default="results/bifurcation", help="output folder")
     _system_args(b)
+    _oil_args(b, "every speed of the Hopf points and the branches at its thermal operating point (quasi-static "
+                 "temperatures)")
     b.set_defaults(func=cmd_bifurcation)
 
 

@@ -1,7 +1,8 @@
 """The thermal model in the Hopf points and the limit cycles at a constant speed (issue #25 stage 3): a Hopf point
 with an oil supply is where the method-J linear system of its own thermal operating point loses stability, and the
 Hopf point of the system frozen at that operating point; a limit cycle with an oil supply is the limit cycle of the
-system whose viscosities are copied in by hand; continuation refuses an oil supply."""
+system whose viscosities are copied in by hand; a continuation with an oil supply integrates at every speed the
+by-hand system of that speed and starts at the thermal Hopf point."""
 import math
 from dataclasses import replace
 
@@ -11,9 +12,13 @@ from scipy.optimize import brentq
 
 import frbmodel as frb
 from frbmodel.core.errors import ParameterError
-from frbmodel.cycles.continuation import continuation, hopf_points
+from frbmodel.cycles.branch import ContinuationProblem, equilibrium_jacobian
+from frbmodel.cycles.continuation import BifurcationDiagram, continuation, hopf_points
+from frbmodel.cycles.flow import SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow
+from frbmodel.cycles.limitcycle import LimitCycle
 from frbmodel.linear.modal import state_matrix
 from frbmodel.linear.thermal import OilSupply, thermal_losses, thermal_system
+from frbmodel.nonlinear.runup import SpeedProfile, build_problem
 from frbmodel.system.oil import OILS
 
 OIL = OILS["SAE 5W-30"]
@@ -78,11 +83,65 @@ def test_a_thermal_limit_cycle_is_the_limit_cycle_of_its_operating_point():
     assert lc.meta["oil_supply"]["supply_temperature_K"] == 363.15
 
 
+def test_continuation_flows_are_those_of_each_speeds_own_operating_point():
+    """The flows of a continuation with an oil supply at 80 and 84 krpm are the flows of the by-hand systems of
+    those speeds (the same viscosities, the same integrator: equal to 1e-12 relative, round-off of identical
+    operations), and the frozen system of 80 krpm flown at 84 krpm differs from them by far more than the flows'
+    tolerance: a branch (and its speed column, differences of flows at two speeds) follows the temperatures."""
+    br = ContinuationProblem(TC, TC.film_model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, 80e3, 1, SUPPLY)
+    z = equilibrium_jacobian(TC, 80e3, oil_supply=SUPPLY)[0] + 1e-7  # 0.1 µm (and 1e-7 SI) off the equilibrium
+    ends = {}
+    for s in (80e3, 84e3):
+        ends[s], fl = br.ends(z, 2e-3, s)
+        by_hand = ConstantSpeedFlow(build_problem(_by_hand(s), SpeedProfile.constant(s, 1.0), TC.film_model),
+                                    SHOOT_RTOL, SHOOT_ATOL_M, fl.method)
+        np.testing.assert_allclose(ends[s], by_hand(z, 2e-3), rtol=1e-12, atol=1e-18)
+    frozen = ConstantSpeedFlow(build_problem(_by_hand(80e3), SpeedProfile.constant(84e3, 1.0), TC.film_model),
+                               SHOOT_RTOL, SHOOT_ATOL_M, fl.method)(z, 2e-3)
+    moved = np.abs(frozen - ends[84e3])[:TC.rotor.n_dof]  # rotor displacements [m]
+    assert moved.max() > 100 * SHOOT_ATOL_M
+
+
+def test_continuation_with_an_oil_supply_starts_at_the_thermal_hopf_point(tmp_path):
+    """The branch of the first Hopf point with the oil at 363.15 K: its Hopf record is hopf_points(oil_supply=)'s
+    point (1995 rpm; 2012 rpm at Table 2's viscosities, 0.85 % away), its first points lie within 0.1 % of it (a
+    branch integrated at constant viscosities would have to reach the 2012 rpm point), the diagram records the
+    supply and reads it back; a LimitCycle start of another supply is refused."""
+    hp = hopf_points(TC, (1e3, 6e3), oil_supply=SUPPLY)[0]
+    assert abs(hp.speed_rpm / hopf_points(TC, (1e3, 6e3))[0].speed_rpm - 1) > 5e-3
+    bd = continuation(TC, (1e3, 6e3), "hopf", max_points=3, oil_supply=SUPPLY)
+    rec = [b for b in bd.bifurcations if b["type"] == "Hopf"]
+    assert len(rec) == 1 and rec[0]["speed_rpm"] == pytest.approx(hp.speed_rpm, rel=1e-9)
+    assert all(p.speed_rpm == pytest.approx(hp.speed_rpm, rel=1e-3) for p in bd.points) and len(bd.points) == 3
+    assert all(p.period == pytest.approx(1 / hp.frequency_hz, rel=1e-3) for p in bd.points)
+    bd.save(tmp_path)
+    assert BifurcationDiagram.load(tmp_path).meta["oil_supply"] == SUPPLY.to_dict()
+    other = LimitCycle(3e3, 0.05, None, np.ones(3), True, np.zeros(3), True, {}, None)  # (refused before use)
+    with pytest.raises(ParameterError, match="computed with oil_supply = None, the continuation has"):
+        continuation(TC, (1e3, 6e3), other, oil_supply=SUPPLY)
+
+
 def test_refusals_name_the_option():
-    with pytest.raises(ParameterError, match="oil_supply cannot be combined with continuation"):
-        continuation(TC, (70e3, 90e3), oil_supply=SUPPLY)
     with pytest.raises(ParameterError, match="guess = a RunupResult cannot be combined with oil_supply"):
         run = frb.runup(TC, profile=frb.SpeedProfile.constant(60e3, 1e-3), duration=1e-3)
         frb.limit_cycle(TC, 60e3, guess=run, oil_supply=SUPPLY)
     with pytest.raises(ParameterError, match="oil_supply = 'SAE 5W-30' is a str"):
         hopf_points(TC, (70e3, 90e3), oil_supply="SAE 5W-30")
+
+
+def test_cli_bifurcation_with_an_oil_lists_the_thermal_hopf_points(tmp_path, capsys):
+    """`frb bifurcation --oil … --hopf-only` writes the Hopf points of hopf_points(oil_supply=) (called here: the
+    same values to the printed 0.1 rpm and in the CSV exactly) and says which supply it used."""
+    from frbmodel.cli import main
+
+    out = tmp_path / "h"
+    assert main(["bifurcation", "--oil", "SAE 5W-30", "--supply-temperature", "363.15", "--speeds", "5000:120000",
+                 "--hopf-only", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "thermal model: SAE 5W-30, supply 363.15 K, 300000 Pa" in text
+    ref = hopf_points(TC, (5e3, 120e3), restabilizing=True, oil_supply=SUPPLY)
+    import pandas as pd
+
+    csv = pd.read_csv(out / "hopf_points.csv")
+    assert csv.iloc[:, 0].tolist() == [h.speed_rpm for h in ref] and len(ref) == 2
+    assert all(f"{h.speed_rpm:10.1f} rpm" in text for h in ref)

@@ -192,6 +192,9 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["runup", "--unbalance", "turbine_wheel:1e-6:0:7", "--duration", "0.01"], ["2 or 3 fields, 4 given"]),
     (["runup", "--speeds", "20000:30000:7", "--duration", "0.01"], ["takes a speed range, START:END", "no COUNT"]),
     (["bifurcation", "--speeds", "1000:120000:5", "--hopf-only"], ["takes a speed range, START:END", "no COUNT"]),
+    (["bifurcation", "--supply-temperature", "363.15", "--hopf-only"], ["--supply-temperature needs an oil"]),
+    (["bifurcation", "--oil", "SAE 5W-30", "--supply-temperature", "90", "--hopf-only"],
+     ["--supply-temperature = 90", "K"]),
     (["runup", "--drive-torque", "0.05", "--duration", "0.01"], ["--drive-torque = 0.05 N m applies only with "
                                                                   "--profile torque"]),
     (["runup", "--system", "", "--duration", "0.01"], ["--system = '' is invalid"]),

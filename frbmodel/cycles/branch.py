@@ -51,11 +51,14 @@ class BranchPoint:
 
 
 class ContinuationProblem:
-    """Flows and residuals of the continuation problem at any speed (problems built per speed and cached)."""
+    """Flows and residuals of the continuation problem at any speed (problems built per speed and cached). With an
+    ``oil_supply`` the flow at each speed has the viscosities of that speed's thermal operating point
+    (:func:`frbmodel.linear.thermal.at_operating_point`: quasi-static temperatures), so the speed column of the
+    Jacobian, by differences of flows at two speeds, carries the viscosities' change with speed."""
 
-    def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm, segments=1):
+    def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm, segments=1, oil_supply=None):
 
-        self.system, self.model = system, model
+        self.system, self.model, self.oil_supply = system, model, check_oil_supply(oil_supply)
         self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
         self._flows = {}
         self._last = None  # the last flow made for a new speed (it has chosen its integrator by the next one)
@@ -98,7 +101,8 @@ class ContinuationProblem:
         if key not in self._flows:
             if len(self._flows) > 8:
                 self._flows.clear()
-            problem = build_problem(self.system, SpeedProfile.constant(key, 1.0), self.model)
+            problem = build_problem(at_operating_point(self.system, key, self.oil_supply),
+                                    SpeedProfile.constant(key, 1.0), self.model)
             if like is not None:
                 self._flows[key] = self._flow_cls(problem, self.rtol, self.atol_m, like.method)
             else:  # a new speed of the branch: its integrator chosen with the last chosen one as hint
@@ -413,10 +417,12 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, res
     return out
 
 
-def hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point, segments):
-    """The branch born at the Hopf point ``hp``, started along its eigenvector."""
+def hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point, segments, oil_supply=None):
+    """The branch born at the Hopf point ``hp`` (of :func:`hopf_points` with the same ``oil_supply``), started along
+    its eigenvector."""
 
-    br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments)
+    br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, hp.speed_rpm, segments,
+                             oil_supply)
     n = br.segments * br.n
     t_ref, w_ref = 0.01 / hp.frequency_hz, 0.01 * hp.speed_rpm
     x0, tangent, f0 = _hopf_start(br, hp, n, t_ref, w_ref)

@@ -22,6 +22,7 @@ import numpy as np
 from ..core.errors import ParameterError
 from ..core.results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
 from ..linear.campbell import campbell
+from ..linear.thermal import check_oil_supply
 from ..linear.whirl import film_names
 from ..nonlinear.runup import SpeedProfile, build_problem, check_speed
 from ..physics.film import check_model
@@ -234,38 +235,48 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
         Shooting segments per orbit: 1 single shooting; m > 1 multiple shooting (m flows of T/m, the defects between
         them as equations; same cost per Newton step), for strongly unstable orbits: a flow over the whole period
         amplifies errors by the largest multiplier |mu|, a segment by about |mu|^(1/m).
-    oil_supply : None
-        Not implemented: an :class:`~frbmodel.linear.thermal.OilSupply` is refused (a branch over speed would need
-        each speed's thermal operating point in its flows and in the speed derivative of its Jacobian); use
-        :func:`hopf_points` or :func:`frbmodel.cycles.limitcycle.limit_cycle` with ``oil_supply`` per speed.
+    oil_supply : OilSupply, optional
+        Film viscosities from the oil's temperatures (:class:`~frbmodel.linear.thermal.OilSupply`, method J's
+        thermal operating point at each speed of the branch: quasi-static temperatures, as in a slow run-up); the
+        Hopf points are those of :func:`hopf_points` with the same supply. Default: the films' constant viscosities.
+        A LimitCycle start must have been computed with the same supply.
 
     Returns
     -------
     BifurcationDiagram
     """
-    if oil_supply is not None:
-        raise ParameterError("oil_supply cannot be combined with continuation (not implemented: the branch's flows "
-                             "keep constant viscosities); use hopf_points(oil_supply=) or limit_cycle(oil_supply=) "
-                             "per speed")
-
+    supply = check_oil_supply(oil_supply)
     lo, hi = sorted(float(s) for s in speeds_rpm)
     model = check_model(film_model or system.film_model)
     if int(segments) != segments or segments < 1:
         raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
     starts = check_starts(start, (lo, hi))
+    _check_start_supply(starts, supply)
     branches, origins = [], []  # origins: the Hopf point a branch starts at, None for a branch through an orbit
     for s0 in starts:
         if isinstance(s0, str):
-            for hp in hopf_points(system, (lo, hi), model, restabilizing=True):
+            for hp in hopf_points(system, (lo, hi), model, restabilizing=True, oil_supply=supply):
                 branches.append(hopf_branch(system, model, hp, lo, hi, ds_max, max_points, progress, on_point,
-                                             segments))
+                                             segments, supply))
                 origins.append(hp)
         else:
-            lc = s0 if isinstance(s0, LimitCycle) else limit_cycle(system, float(s0), film_model=model)
+            lc = s0 if isinstance(s0, LimitCycle) else limit_cycle(system, float(s0), film_model=model,
+                                                                   oil_supply=supply)
             branches.append(_branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress, on_point,
-                                            segments))
+                                            segments, supply))
             origins.append(None)
-    return _diagram(system, model, branches, origins, lo, hi)
+    return _diagram(system, model, branches, origins, lo, hi, supply)
+
+
+def _check_start_supply(starts, supply):
+    """Refuse a LimitCycle start computed with another oil supply than the continuation's (its orbit is not on the
+    branch: the viscosities differ)."""
+    want = None if supply is None else supply.to_dict()
+    for s0 in starts:
+        if isinstance(s0, LimitCycle) and s0.meta.get("oil_supply") != want:
+            raise ParameterError(f"start = the limit cycle at {s0.speed_rpm:.0f} rpm was computed with oil_supply = "
+                                 f"{s0.meta.get('oil_supply')!r:.80}, the continuation has {want!r:.80}: compute it "
+                                 "with the same oil_supply (limit_cycle(oil_supply=...))")
 
 
 def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
@@ -301,10 +312,11 @@ def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
     return out
 
 
-def _branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress, on_point, segments):
+def _branch_through(system, model, lc, lo, hi, ds, ds_max, max_points, progress, on_point, segments, supply):
     """The branch through the orbit ``lc``, followed in both directions (lower speeds first in the result)."""
 
-    br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments)
+    br = ContinuationProblem(system, model, SHOOT_RTOL, SHOOT_ATOL_M, SCALE_M, WORKERS, lc.speed_rpm, segments,
+                             supply)
     n = br.segments * br.n
     t_ref, w_ref = 0.01 * lc.period, 0.01 * lc.speed_rpm
     starts = br.flow(lc.speed_rpm).states(lc.state, lc.period * np.arange(br.segments + 1) / br.segments)
@@ -329,7 +341,7 @@ def _event(kind, a, c, frac, between, films=(), mode=""):
             "between": between}
 
 
-def hopf_record(system, hp, branch=(), film_model=None):
+def hopf_record(system, hp, branch=(), film_model=None, oil_supply=None):
     """The bifurcation-table record of a Hopf point.
 
     ``type``: "Hopf", or "Hopf (restabilizing)" where the pair regains stability with rising speed
@@ -348,13 +360,15 @@ def hopf_record(system, hp, branch=(), film_model=None):
     branch : sequence of BranchPoint
         The branch started there (may be empty).
     film_model : str, optional
+    oil_supply : OilSupply, optional
+        The supply ``hp`` was found with (the Campbell mode is matched at its thermal operating point).
 
     Returns
     -------
     dict
     """
 
-    cd = campbell(system, "J", [hp.speed_rpm], whirl=False)
+    cd = campbell(system, "J", [hp.speed_rpm], whirl=False, oil_supply=oil_supply)
     j = int(np.nanargmin(np.abs(cd.frequencies_hz[0] - hp.frequency_hz)))
     p = build_problem(system, SpeedProfile.constant(hp.speed_rpm, 1.0), film_model or system.film_model)
     v, rel = hp.eigenvector, []
@@ -376,7 +390,7 @@ def hopf_record(system, hp, branch=(), film_model=None):
             "film": f"{film_names(system)[k]} ({100 * rel[k]:.0f} %)", "between": []}
 
 
-def _end_hopf(system, model, b, at_start, offset, films):
+def _end_hopf(system, model, b, at_start, offset, films, supply):
     """The record of the Hopf point at which the branch ``b`` (through a given orbit) collapses onto the equilibrium:
     the full model's Hopf point (either direction of crossing) within :data:`END_HOPF_REL` of the end's speed and
     frequency, recorded as from :func:`hopf_record` with the branch read from that end; without one, the end point
@@ -384,11 +398,12 @@ def _end_hopf(system, model, b, at_start, offset, films):
     end = b[0] if at_start else b[-1]
     s, f = end.speed_rpm, 1.0 / end.period
     near = [hp for hp in hopf_points(system, ((1 - END_HOPF_REL) * s, (1 + END_HOPF_REL) * s), model, n_grid=8,
-                                     restabilizing=True) if abs(hp.frequency_hz / f - 1) < END_HOPF_REL]
+                                     restabilizing=True, oil_supply=supply)
+            if abs(hp.frequency_hz / f - 1) < END_HOPF_REL]
     if not near:
         return _event("Hopf", end, end, 0.0, [offset + b.index(end)], films)
     hp = min(near, key=lambda h: abs(h.speed_rpm - s))
-    rec = hopf_record(system, hp, b if at_start else b[::-1], model)
+    rec = hopf_record(system, hp, b if at_start else b[::-1], model, supply)
     rec["between"] = [offset + b.index(end)]
     return rec
 
@@ -417,22 +432,24 @@ def _branch_events(b, off, films=(), mode=""):
 END_HOPF_REL = 0.03
 
 
-def _diagram(system, model, branches, origins, lo, hi):
+def _diagram(system, model, branches, origins, lo, hi, supply=None):
     """The BifurcationDiagram of computed branches (``origins``: per branch the Hopf point it starts at, or None):
     Hopf points, folds and multiplier crossings."""
 
     films = film_names(system)
     points, bifs = [], []
     for b, hp in zip(branches, origins):
-        ends = [hopf_record(system, hp, b, model)] if hp is not None else []
+        ends = [hopf_record(system, hp, b, model, supply)] if hp is not None else []
         for end in ((b[0], b[-1]) if hp is None and len(b) > 1 else ()):
             if end.turbine_radius_m < COLLAPSE * max(p.turbine_radius_m for p in b):  # the branch ends at a Hopf point
-                ends.append(_end_hopf(system, model, b, end is b[0], len(points), films))
+                ends.append(_end_hopf(system, model, b, end is b[0], len(points), films, supply))
         mode = next((e["mode"] for e in ends if e["mode"]), "")  # the branch's points inherit its Hopf point's mode
         bifs += ends + _branch_events(b, len(points), films, mode)
         points.extend(b)
     meta = {"system": system.to_dict(), "film_model": model, "speed_range_rpm": [lo, hi], "rtol": SHOOT_RTOL,
             "branches": [len(b) for b in branches]}
+    if supply is not None:
+        meta["oil_supply"] = supply.to_dict()
     return BifurcationDiagram(points, sorted(_unique_hopf(bifs), key=lambda e: e["speed_rpm"]), meta)
 
 

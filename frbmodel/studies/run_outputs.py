@@ -289,7 +289,8 @@ def write_waterfalls(run, out, orders=(1.0,)):
 BIFURCATION_CAMPBELL_SPEEDS = 120
 
 
-def save_bifurcation_diagram(bd, system, out, speed_range_rpm, runs=(), campbell_speeds=BIFURCATION_CAMPBELL_SPEEDS):
+def save_bifurcation_diagram(bd, system, out, speed_range_rpm, runs=(), campbell_speeds=BIFURCATION_CAMPBELL_SPEEDS,
+                             oil_supply=None):
     """Write a bifurcation diagram (:meth:`BifurcationDiagram.save`) with the envelopes of the run-up results
     ``runs`` (``[(folder, RunupResult)]``), the first run's spectrogram behind the branch frequencies and the
     method-J Campbell diagram's unstable modes and film whirl lines over the speed range.
@@ -306,6 +307,9 @@ def save_bifurcation_diagram(bd, system, out, speed_range_rpm, runs=(), campbell
     runs : sequence of (str, RunupResult)
     campbell_speeds : int
         Speeds of the Campbell diagram.
+    oil_supply : OilSupply, optional
+        The supply the diagram was computed with: the Campbell diagram then has each speed's thermal operating
+        point too.
 
     Returns
     -------
@@ -319,5 +323,5 @@ def save_bifurcation_diagram(bd, system, out, speed_range_rpm, runs=(), campbell
         run = runs[0][1]
         sp = spectrogram(run, run.schema.discs[0])
         lo, hi = min(lo, sp.speeds_rpm.min()), max(hi, sp.speeds_rpm.max())
-    cd = campbell(system, "J", np.linspace(lo, hi, campbell_speeds))
+    cd = campbell(system, "J", np.linspace(lo, hi, campbell_speeds), oil_supply=oil_supply)
     return bd.save(out, envelopes=envelopes, spectrogram=sp, campbell=cd)

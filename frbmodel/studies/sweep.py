@@ -230,9 +230,14 @@ def _option_oil(value):
     raise ParameterError(f"sweep option oil = {value!r:.60} is invalid: the name of a named oil or an [oil] table")
 
 
+#: the analyses that take an oil supply (the thermal model's quasi-static temperatures at each speed)
+THERMAL_ANALYSES = ("campbell", "runup", "hopf", "bifurcation")
+
+
 def _check_thermal_study(names, analysis, options):
     """A thermal study (an ``oil`` option, or supply parameters with the system option's oil) only where the
-    thermal model enters: Campbell diagrams of method J and run-ups, without the constant-viscosity parameters."""
+    thermal model enters: Campbell diagrams of method J, run-ups, Hopf points and bifurcation diagrams, without the
+    constant-viscosity parameters (the co-simulation's FMUs take the supply as inputs, not as a study option)."""
     supply = [n for n in names if n in SUPPLY_PARAMETERS]
     base_oil = isinstance(options.get("system"), dict) and "oil" in options["system"]
     if not (supply or "oil" in options):
@@ -240,9 +245,9 @@ def _check_thermal_study(names, analysis, options):
     if "oil" not in options and not base_oil:
         raise ParameterError(f"study parameter {supply[0]} needs an oil: give the option oil (frb sweep --oil NAME) "
                              "or a system with an [oil] table")
-    if analysis not in ("campbell", "runup"):
+    if analysis not in THERMAL_ANALYSES:
         raise ParameterError(f"analysis = {analysis!r} cannot take an oil supply: the thermal model is in the "
-                             "campbell (method J) and runup analyses")
+                             f"{', '.join(THERMAL_ANALYSES)} analyses (campbell: method J)")
     if analysis == "campbell" and [m.upper() for m in options.get("methods", ["J"])] != ["J"]:
         raise ParameterError(f"methods = {options['methods']!r} cannot be combined with an oil supply: the thermal "
                              "operating point is the method-J equilibrium; use methods ['J']")
@@ -409,17 +414,17 @@ def _campbell_rows(tc, o, supply=None):
     return rows
 
 
-def _hopf_rows(tc, o):
+def _hopf_rows(tc, o, supply=None):
     """Hopf points of the full model in the speed range (:func:`frbmodel.cycles.continuation.hopf_points`), numbered by
     speed: the linear onsets a two-parameter stability chart is drawn from."""
 
     lo, hi = sorted(o.get("speed_rpm", (1e3, 250e3)))
     return [{"kind": "linear", "method": "full model", "item": f"Hopf #{k}", "onset [rpm]": hp.speed_rpm,
              "end [rpm]": float("nan"), "f at onset [Hz]": hp.frequency_hz, "onset at sweep start": False}
-            for k, hp in enumerate(hopf_points(tc, (lo, hi)), start=1)]
+            for k, hp in enumerate(hopf_points(tc, (lo, hi), oil_supply=supply), start=1)]
 
 
-def _bifurcation_rows(tc, o, case_dir):
+def _bifurcation_rows(tc, o, case_dir, supply=None):
     """Limit-cycle branches of the case's system (:func:`frbmodel.cycles.continuation.continuation` over ``speed_rpm``
     from ``start``: its Hopf points by default, or the orbits at given speeds), written to ``case_dir``
     (``branch.csv``, ``bifurcations.csv``, ``branch.nc``, ``bifurcation.png`` / ``.html``); one row per bifurcation
@@ -427,7 +432,7 @@ def _bifurcation_rows(tc, o, case_dir):
 
     lo, hi = sorted(o.get("speed_rpm", (1e3, 250e3)))
     bd = continuation(tc, (lo, hi), start=o.get("start", "hopf"), max_points=int(o.get("max_points", 25)),
-                      segments=int(o.get("segments", 1)))
+                      segments=int(o.get("segments", 1)), oil_supply=supply)
     bd.save(case_dir)
     return [{"kind": "bifurcation", "method": "full model",
              "item": b["type"] + (f" ({b['criticality']})" if b.get("criticality") else ""),
@@ -506,7 +511,7 @@ def run_case(case: Case, out_dir) -> dict:
             base = Turbocharger.from_dict(o["system"])
         tc, unb = build_case_system(case.params, base)
         supply = case_oil_supply(case.params, o, tc)
-        if supply is not None and case.analysis not in ("campbell", "runup"):
+        if supply is not None and case.analysis not in THERMAL_ANALYSES:
             raise ParameterError(f"analysis = {case.analysis!r} cannot take an oil supply")
         if case.analysis == "campbell":
             rows = _campbell_rows(tc, o, supply)
@@ -515,9 +520,9 @@ def run_case(case: Case, out_dir) -> dict:
         elif case.analysis == "cosim":
             rows = _cosim_rows(tc, unb, o)
         elif case.analysis == "hopf":
-            rows = _hopf_rows(tc, o)
+            rows = _hopf_rows(tc, o, supply)
         elif case.analysis == "bifurcation":
-            rows = _bifurcation_rows(tc, o, out / "cases" / case.case_id)
+            rows = _bifurcation_rows(tc, o, out / "cases" / case.case_id, supply)
         else:
             raise ParameterError(f"analysis = {case.analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
         rec.update({"status": "finished", "rows": rows})
