@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -462,14 +463,16 @@ def cmd_runup(args):
 
     rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
     check_drive_torque(tc, prof, "--drive-torque")
-    supply = check_runup_oil(_oil_supply_from_args(args, tc), prof, args.integrator, None,
+    supply = check_runup_oil(_with_ring_capacity(args, _oil_supply_from_args(args, tc)), prof, args.integrator, None,
                              ("--integrator", "--profile"))
     unbalance = _parse_unbalance(args.unbalance)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
     if supply is not None:
-        print(f"  thermal model: {_supply_text(supply)}; film temperatures quasi-static in rotor speed")
+        lag = supply.model.ring_heat_capacity_J_K
+        print(f"  thermal model: {_supply_text(supply)}; " + ("film temperatures quasi-static in rotor speed" if lag
+              is None else f"rings' temperatures as states (m_R c_R = {lag:g} J/K), films quasi-static"))
 
     def run_at(tighten, folder):
         return runup(tc, profile=prof, duration=duration, unbalance=unbalance,
@@ -812,6 +815,16 @@ def _oil_supply_from_args(args, system):
     t_s = check_temperature("--supply-temperature", t_s, T_MIN_K, oil.max_temperature_K)
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
     return OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s))
+
+
+def _with_ring_capacity(args, supply):
+    """``supply`` with ``--ring-heat-capacity`` [J/K] in its thermal model (refused without an oil)."""
+    if args.ring_heat_capacity is None:
+        return supply
+    if supply is None:
+        raise ParameterError("--ring-heat-capacity needs an oil: give --oil NAME or an [oil] table in --system")
+    return OilSupply(supply.oil, supply.supply_temperature_K, supply.supply_pressure_Pa,
+                     replace(supply.model, ring_heat_capacity_J_K=args.ring_heat_capacity))
 
 
 def _supply_text(supply):
@@ -1268,6 +1281,9 @@ def _add_runup(sub):
     r.add_argument("--out", default="results/runup")
     _oil_args(r, "the films' viscosities follow the rotor speed (quasi-static temperatures of the thermal operating "
                  "points; torque-driven: a table up to the speed the drive could reach)")
+    r.add_argument("--ring-heat-capacity", type=float, default=None, metavar="J/K",
+                   help="m_R c_R of each ring [J/K] (e.g. 2.736: 7.2 g of bronze): the rings' temperatures as states "
+                        "that lag the speed (ramps and exponential profiles; needs an oil); default: quasi-static")
     _system_args(r)
     r.set_defaults(func=cmd_runup)
 
@@ -1604,6 +1620,7 @@ NUMERIC_OPTIONS = {
     "step": ("s", (0.0, None)),
     "stop_time": ("s", (0.0, None)),
     "supply_pressure": ("Pa", "frbmodel.linear.thermal.check_supply_pressure"),
+    "ring_heat_capacity": ("J/K", (0.0, None)),
     "supply_temperature": ("K", "frbmodel.system.oil.check_temperature (the oil's range)"),
     "workers": ("-", (1, None)),
 }

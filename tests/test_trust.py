@@ -193,6 +193,11 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["runup", "--speeds", "20000:30000:7", "--duration", "0.01"], ["takes a speed range, START:END", "no COUNT"]),
     (["bifurcation", "--speeds", "1000:120000:5", "--hopf-only"], ["takes a speed range, START:END", "no COUNT"]),
     (["bifurcation", "--supply-temperature", "363.15", "--hopf-only"], ["--supply-temperature needs an oil"]),
+    (["runup", "--ring-heat-capacity", "2.7", "--duration", "0.01"], ["--ring-heat-capacity needs an oil"]),
+    (["runup", "--oil", "SAE 5W-30", "--ring-heat-capacity", "2.7", "--profile", "torque", "--drive-torque", "0.05",
+      "--duration", "0.01"], ["--profile = torque-driven", "cannot take --ring-heat-capacity"]),
+    (["runup", "--oil", "SAE 5W-30", "--ring-heat-capacity", "-2", "--duration", "0.01"],
+     ["--ring-heat-capacity = -2.0 J/K is invalid"]),
     (["bifurcation", "--oil", "SAE 5W-30", "--supply-temperature", "90", "--hopf-only"],
      ["--supply-temperature = 90", "K"]),
     (["runup", "--drive-torque", "0.05", "--duration", "0.01"], ["--drive-torque = 0.05 N m applies only with "

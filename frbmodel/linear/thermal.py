@@ -16,7 +16,7 @@ import numpy as np
 
 from ..core.errors import ConvergenceError, ParameterError, check_real, check_speed, check_system
 from ..core.units import RPM
-from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, heat_flows
+from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, films_at_ring_temperature, heat_flows
 from ..system.oil import T_MIN_K, Oil, check_temperature
 from ..system.rotor import GRAVITY
 from .equilibrium import bearing_equilibrium
@@ -118,8 +118,9 @@ def _with_viscosities(bearing, mu_inner, mu_outer):
                    outer=replace(bearing.outer, viscosity=mu_outer))
 
 
-def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temps):
-    """Everything at film temperatures ``temps`` (clipped into the oil's range while the solver searches)."""
+def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temps, t_ring=None):
+    """Everything at film temperatures ``temps`` (clipped into the oil's range while the solver searches); with
+    ``t_ring`` [K] the ring is held there (its temperature a state) and ``ring_heat`` [W] is the heat into it."""
     t_i, t_o = (min(max(float(t), T_MIN_K), oil.max_temperature_K) for t in temps)
     b = _with_viscosities(bearing, oil.dynamic_viscosity(t_i), oil.dynamic_viscosity(t_o))
     eq = bearing_equilibrium(b, load, omega, "J", film_model, gravity)
@@ -129,20 +130,26 @@ def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temp
     q_i, q_o = flows["side_inner"] + flows["feed_inner"], flows["side_outer"] + flows["supply_outer"]
     cap_i = oil.density(t_i) * oil.specific_heat_J_kgK * q_i
     cap_o = oil.density(t_o) * oil.specific_heat_J_kgK * q_o
-    new = film_temperatures(b, model, p_i, p_o, cap_i, cap_o, t_s)
+    ring_heat = 0.0
+    if t_ring is None:
+        new = film_temperatures(b, model, p_i, p_o, cap_i, cap_o, t_s)
+    else:
+        *films, ring_heat = films_at_ring_temperature(b, model, p_i, p_o, cap_i, cap_o, t_s, t_ring)
+        new = (*films, float(t_ring))
     return {"bearing": b, "eq": eq, "torque": t_j, "powers": (p_i, p_o), "flows": flows, "q": (q_i, q_o),
-            "capacities": (cap_i, cap_o), "temperatures": new}
+            "capacities": (cap_i, cap_o), "temperatures": new, "ring_heat": ring_heat}
 
 
-def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity):
-    """Converged state of one bearing (see :func:`thermal_losses`), with iterations and residual."""
+def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, t_ring=None):
+    """Converged state of one bearing (see :func:`thermal_losses`), with iterations and residual; with ``t_ring``
+    the films' balance with the ring held at that temperature [K]."""
     from scipy.optimize import root
 
     count = {"n": 0}
 
     def residual(x):
         count["n"] += 1
-        s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, x)
+        s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, x, t_ring)
         return np.array(s["temperatures"][:2]) - x
 
     sol = root(residual, np.array([t_s, t_s]), method="hybr",
@@ -161,7 +168,7 @@ def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gra
             raise ParameterError(f"{exc}: beyond the oil's viscosity law, the oil flow cannot carry the film's "
                                  f"friction power (supply pressure {p_s:g} Pa; raise it, or the feed holes of the "
                                  "ThermalModel)") from None
-    s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, sol.x)
+    s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, sol.x, t_ring)
     s.update(iterations=count["n"], residual_K=res)
     return s
 
@@ -322,6 +329,64 @@ def bearing_operating_point(bearing, load_N, speed_rpm, oil_supply, film_model="
     s = _operating_point(bearing, float(load_N), rpm * RPM, sup.oil, sup.supply_temperature_K, sup.supply_pressure_Pa,
                          sup.model, film_model, gravity)
     return _row(rpm, sup.supply_temperature_K, sup.supply_pressure_Pa, sup.oil, sup.model, s)
+
+
+def ring_lag(system, time_s, speed_rpm, oil_supply, rtol=1e-8):
+    """Film and ring temperatures along a prescribed speed history with each ring's temperature as a state:
+    m_R c_R dT_R/dt = G_RI (T_I − T_R) + G_RO (T_O − T_R), the films in balance with the ring at every instant
+    (their oil is renewed within milliseconds) and the method-J equilibrium at the films' viscosities, as in
+    :func:`thermal_losses`; the ring starts at its steady temperature of the first speed.
+
+    Parameters
+    ----------
+    system : Turbocharger
+    time_s, speed_rpm : array_like
+        The speed history: times [s] (increasing) and rotor speeds [rpm] (> 0), linear between them.
+    oil_supply : OilSupply
+        Its ``model.ring_heat_capacity_J_K`` is m_R c_R [J/K] (required here).
+    rtol : float
+        Relative tolerance of the ring-temperature integration (scipy's LSODA: stiff when m_R c_R is small).
+
+    Returns
+    -------
+    time : ndarray (nt,)
+        ``time_s`` [s].
+    ring_K, inner_K, outer_K : ndarray (nb, nt)
+        Ring, inner-film and outer-film temperatures [K] per bearing.
+    viscosities : ndarray (2 nb, nt)
+        Inner and outer film viscosities [Pa s] per bearing (turbine inner, outer, compressor inner, outer).
+    ring_heat_W : ndarray (nb, nt)
+        Net heat into each ring [W] (m_R c_R dT_R/dt).
+    """
+    from scipy.integrate import solve_ivp
+
+    supply = check_oil_supply(oil_supply)
+    if supply is None or supply.model.ring_heat_capacity_J_K is None:
+        raise ParameterError("ring_lag needs an OilSupply whose model has ring_heat_capacity_J_K [J/K]")
+    t = np.asarray(time_s, dtype=float)
+    w = np.array([check_speed("speed_rpm", v) for v in np.atleast_1d(speed_rpm)]) * RPM
+    if t.shape != w.shape or t.size < 2 or not np.all(np.diff(t) > 0):
+        raise ParameterError(f"time_s ({t.size} values) must increase and match speed_rpm ({w.size} values)")
+    m, cap = supply.model, supply.model.ring_heat_capacity_J_K
+    pairs = list(zip(system.bearings, system.bearing_loads))
+
+    def at(k, omega, t_ring):
+        b, load = pairs[k]
+        return _operating_point(b, float(load), omega, supply.oil, supply.supply_temperature_K,
+                                supply.supply_pressure_Pa, m, system.film_model, system.gravity, t_ring)
+
+    def rhs(tt, t_r):
+        omega = float(np.interp(tt, t, w))
+        return [at(k, omega, t_r[k])["ring_heat"] / cap for k in range(len(pairs))]
+
+    t0 = [at(k, w[0], None)["temperatures"][2] for k in range(len(pairs))]
+    sol = solve_ivp(rhs, (t[0], t[-1]), t0, method="LSODA", t_eval=t, rtol=rtol, atol=1e-6)
+    states = [[at(k, wi, sol.y[k, i]) for i, wi in enumerate(w)] for k in range(len(pairs))]
+    temps = np.array([[s["temperatures"] for s in row] for row in states])  # (nb, nt, 3)
+    mu = np.array([[(s["bearing"].inner.viscosity, s["bearing"].outer.viscosity) for s in row] for row in states])
+    heat = np.array([[s["ring_heat"] for s in row] for row in states])
+    return (t, temps[:, :, 2], temps[:, :, 0], temps[:, :, 1], mu.transpose(0, 2, 1).reshape(2 * len(pairs), t.size),
+            heat)
 
 
 def at_operating_point(system, speed_rpm, oil_supply):

@@ -29,7 +29,7 @@ from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
 from ..core.units import RPM
 from ..linear.equilibrium import bearing_equilibrium
-from ..linear.thermal import at_operating_point, check_oil_supply, thermal_losses
+from ..linear.thermal import at_operating_point, check_oil_supply, ring_lag, thermal_losses
 from ..linear.whirl import film_names
 from ..physics.bearing import ring_speed_ratio
 from ..physics.dynamics import film_data_at_speed, rotor_polar_inertia
@@ -842,6 +842,52 @@ def table_speeds_rpm(profile, polar_inertia):
     return np.array([VISCOSITY_TABLE_MIN_RPM, max(top, VISCOSITY_TABLE_MIN_RPM)])
 
 
+def lagged_viscosity_table(system, profile, oil_supply):
+    """Film viscosities [Pa s] over rotor speed with the rings' temperatures as states (:func:`ring_lag` along the
+    profile's speed history, ``oil_supply.model.ring_heat_capacity_J_K``): on a monotonic prescribed profile each
+    speed is passed once, so the lagged temperatures are a function of the speed and go into the same uniform
+    table as :func:`viscosity_table`'s (the compiled right-hand side is unchanged).
+
+    Parameters
+    ----------
+    system : Turbocharger
+    profile : SpeedProfile
+        Prescribed, strictly monotonic in speed.
+    oil_supply : OilSupply
+
+    Returns
+    -------
+    speeds : ndarray (nv,)
+        Uniform grid [rad/s] (:data:`VISCOSITY_TABLE_SPEEDS` points) over the profile's speeds.
+    table : ndarray (4, nv)
+        Viscosities [Pa s]: turbine inner, outer, compressor inner, outer.
+    """
+    check_lag_profile(profile)
+    w = np.asarray(profile.omega, dtype=float)
+    d = np.diff(w)
+    lo, hi = max(float(w.min()) / RPM, VISCOSITY_TABLE_MIN_RPM), float(w.max()) / RPM
+    grid = np.linspace(lo, hi, VISCOSITY_TABLE_SPEEDS)
+    inc = d[0] > 0
+    times = np.interp(grid * RPM, w if inc else w[::-1], profile.t if inc else profile.t[::-1])
+    order = np.argsort(times)
+    mu = ring_lag(system, times[order], grid[order], oil_supply)[4]
+    table = np.empty_like(mu)
+    table[:, order] = mu
+    return grid * RPM, np.ascontiguousarray(table)
+
+
+def check_lag_profile(profile, name="profile", capacity_name="ring_heat_capacity_J_K"):
+    """Refuse a profile on which the rings' lagged temperatures are not a function of the speed (torque-driven,
+    constant, or not monotonic): a ParameterError naming ``name`` and ``capacity_name``."""
+    w = np.asarray(profile.omega, dtype=float)
+    d = np.diff(w)
+    if profile.torque_driven or w.size < 2 or not (np.all(d > 0) or np.all(d < 0)):
+        raise ParameterError(f"{name} = {profile.description} cannot take {capacity_name}: the rings' temperatures as "
+                             "states need a prescribed profile whose speed rises or falls throughout (a ramp or an "
+                             "exponential run-up/run-down), so that they are a function of the speed; leave "
+                             f"{capacity_name} unset (quasi-static temperatures)")
+
+
 def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile")):
     """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, or linear springs (no films). Every
     integrator takes it (the ``"radau"`` path packs the viscosity table, :func:`frbmodel.nonlinear.compiled.
@@ -852,6 +898,9 @@ def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None
         return None
     if linear_springs is not None:
         raise ParameterError("linear_springs cannot take an oil supply: the journals have no films")
+    if sup.model.ring_heat_capacity_J_K is not None:
+        check_lag_profile(profile, names[1], "--ring-heat-capacity" if names[1].startswith("--") else
+                          "ring_heat_capacity_J_K")
     return sup
 
 
@@ -872,8 +921,10 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
         Isotropic journal springs [N/m] instead of the films (method A's bearing, for verification).
     oil_supply : OilSupply, optional
         The thermal model with quasi-static temperatures: the films' viscosities follow the rotor speed through
-        :func:`viscosity_table` (interpolated in the compiled right-hand side); ``problem.system`` is the system at
-        the start speed's operating point (its initial equilibrium). None: constant viscosities, bit for bit.
+        :func:`viscosity_table` (interpolated in the compiled right-hand side); with the model's
+        ``ring_heat_capacity_J_K`` the rings' temperatures lag (:func:`lagged_viscosity_table`, monotonic prescribed
+        profiles only); ``problem.system`` is the system at the start speed's operating point (its initial
+        equilibrium). None: constant viscosities, bit for bit.
 
     Returns
     -------
@@ -896,7 +947,8 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs)
     visc = (None, None)
     if sup is not None:
-        visc = viscosity_table(system, table_speeds_rpm(profile, rotor_polar_inertia(rotor)), sup)
+        visc = lagged_viscosity_table(system, profile, sup) if sup.model.ring_heat_capacity_J_K is not None else \
+            viscosity_table(system, table_speeds_rpm(profile, rotor_polar_inertia(rotor)), sup)
         system = at_operating_point(system, max(float(profile.omega[0]) / RPM, VISCOSITY_TABLE_MIN_RPM), sup)
     arrays = [film_arrays(b, film_model) for b in system.bearings]
     geom = np.array([a[0] for a in arrays])

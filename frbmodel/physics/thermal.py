@@ -61,6 +61,11 @@ class ThermalModel:
         Convergence of the film temperatures of the fixed point [K]. Default 1e-9.
     max_evaluations : int
         Most evaluations (equilibrium + balance) of the fixed point per bearing and speed. Default 200.
+    ring_heat_capacity_J_K : float or None
+        m_R c_R [J/K] of each ring, for run-ups with the ring temperature as a state (the films' oil is renewed in
+        milliseconds and stays quasi-static; docs/theory/thermal.md#run-ups). Default None: the ring quasi-static
+        too. Steady analyses (equilibria, Campbell, Hopf points, limit cycles) are the long-time limit and do not
+        depend on it.
 
     Examples
     --------
@@ -85,6 +90,7 @@ class ThermalModel:
     centrifugal_feed: bool = True
     tolerance_K: float = 1e-9
     max_evaluations: int = 200
+    ring_heat_capacity_J_K: float = None
 
     def __post_init__(self):
         m = check_real("thermal model mixing", self.mixing, "")
@@ -96,6 +102,10 @@ class ThermalModel:
                                    ("feed_hole_diameter_m", "m", True), ("tolerance_K", "K", True)):
             object.__setattr__(self, name, check_real(f"thermal model {name}", getattr(self, name), unit,
                                                       minimum=0.0, inclusive=not strict))
+        if self.ring_heat_capacity_J_K is not None:
+            object.__setattr__(self, "ring_heat_capacity_J_K", check_real(
+                "thermal model ring_heat_capacity_J_K", self.ring_heat_capacity_J_K, "J/K", minimum=0.0,
+                inclusive=False))
         for name in ("shaft_temperature_K", "housing_temperature_K"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, check_real(f"thermal model {name}", getattr(self, name), "K",
@@ -237,14 +247,8 @@ def film_temperatures(bearing, model, power_inner_W, power_outer_W, capacity_inn
     >>> [round(t, 9) for t in film_temperatures(b, ThermalModel(), 0.0, 0.0, 2.0, 3.0, 363.15)]   # no power
     [363.15, 363.15, 363.15]
     """
-    g = _conductances(bearing, model, capacity_inner_W_K, capacity_outer_W_K)
-    t_s = supply_temperature_K
-    t_j = t_s if model.shaft_temperature_K is None else model.shaft_temperature_K
-    t_h = t_s if model.housing_temperature_K is None else model.housing_temperature_K
-    d_i = g["oil_inner"] + g["ring_inner"] + g["shaft"]
-    d_o = g["oil_outer"] + g["ring_outer"] + g["housing"]
-    b_i = power_inner_W + g["oil_inner"] * t_s + g["shaft"] * t_j
-    b_o = power_outer_W + g["oil_outer"] * t_s + g["housing"] * t_h
+    g, d_i, d_o, b_i, b_o = _film_balances(bearing, model, power_inner_W, power_outer_W, capacity_inner_W_K,
+                                           capacity_outer_W_K, supply_temperature_K)
     g_r = g["ring_inner"] + g["ring_outer"]
     if g_r == 0.0:  # the ring is uncoupled: two independent films
         if d_i == 0.0 or d_o == 0.0:
@@ -257,6 +261,58 @@ def film_temperatures(bearing, model, power_inner_W, power_outer_W, capacity_inn
         raise ParameterError(f"{bearing.name} bearing: the films have no heat sink (no oil flow, no wall path)")
     t_i, t_o = np.linalg.solve(a, [b_i, b_o])
     return float(t_i), float(t_o), float((g["ring_inner"] * t_i + g["ring_outer"] * t_o) / g_r)
+
+
+def _film_balances(bearing, model, power_inner_W, power_outer_W, capacity_inner_W_K, capacity_outer_W_K,
+                   supply_temperature_K):
+    """The conductances and each film's balance d T_f = b + G_Rf T_R without the ring term: (g, d_i, d_o, b_i, b_o)."""
+    g = _conductances(bearing, model, capacity_inner_W_K, capacity_outer_W_K)
+    t_s = supply_temperature_K
+    t_j = t_s if model.shaft_temperature_K is None else model.shaft_temperature_K
+    t_h = t_s if model.housing_temperature_K is None else model.housing_temperature_K
+    d_i = g["oil_inner"] + g["ring_inner"] + g["shaft"]
+    d_o = g["oil_outer"] + g["ring_outer"] + g["housing"]
+    b_i = power_inner_W + g["oil_inner"] * t_s + g["shaft"] * t_j
+    b_o = power_outer_W + g["oil_outer"] * t_s + g["housing"] * t_h
+    return g, d_i, d_o, b_i, b_o
+
+
+def films_at_ring_temperature(bearing, model, power_inner_W, power_outer_W, capacity_inner_W_K, capacity_outer_W_K,
+                              supply_temperature_K, ring_temperature_K):
+    """Film temperatures in steady balance with the ring at a given temperature, and the net heat into the ring:
+    the fast part of the balance when the ring's temperature is a state (m_R c_R dT_R/dt = that heat).
+
+    Parameters
+    ----------
+    bearing, model, power_inner_W, power_outer_W, capacity_inner_W_K, capacity_outer_W_K, supply_temperature_K
+        As :func:`film_temperatures`.
+    ring_temperature_K : float
+        T_R [K].
+
+    Returns
+    -------
+    T_inner, T_outer : float
+        [K].
+    ring_heat_W : float
+        G_RI (T_I − T_R) + G_RO (T_O − T_R) [W]; zero at the steady ring temperature of :func:`film_temperatures`.
+
+    Examples
+    --------
+    >>> import frbmodel as frb
+    >>> b = frb.turbocharger().bearings[0]
+    >>> t = film_temperatures(b, ThermalModel(), 20.0, 10.0, 2.0, 3.0, 363.15)
+    >>> t_i, t_o, q = films_at_ring_temperature(b, ThermalModel(), 20.0, 10.0, 2.0, 3.0, 363.15, t[2])
+    >>> bool(abs(t_i - t[0]) < 1e-9 and abs(q) < 1e-9)
+    True
+    """
+    g, d_i, d_o, b_i, b_o = _film_balances(bearing, model, power_inner_W, power_outer_W, capacity_inner_W_K,
+                                           capacity_outer_W_K, supply_temperature_K)
+    if d_i == 0.0 or d_o == 0.0:
+        raise ParameterError(f"{bearing.name} bearing: a film has no heat sink (no oil flow, no exchange)")
+    t_r = float(ring_temperature_K)
+    t_i = (b_i + g["ring_inner"] * t_r) / d_i
+    t_o = (b_o + g["ring_outer"] * t_r) / d_o
+    return float(t_i), float(t_o), float(g["ring_inner"] * (t_i - t_r) + g["ring_outer"] * (t_o - t_r))
 
 
 def heat_flows(bearing, model, temperatures_K, capacity_inner_W_K, capacity_outer_W_K, supply_temperature_K):
