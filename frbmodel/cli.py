@@ -349,7 +349,7 @@ def cmd_equilibrium(args):
     tc = load_from_args(args)  # (--speed-rpm is bounded by NUMERIC_OPTIONS)
     supply = _oil_supply_from_args(args, tc)
     if supply is not None:
-        tc = at_operating_point(tc, args.speed_rpm, supply)
+        tc = at_operating_point(tc, args.speed_rpm, supply, args.method)
     out = writable_dir(args.out) if args.out else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
     if supply is not None:
@@ -782,9 +782,9 @@ def _oil_from_args(args, system):
         if given:
             raise ParameterError(f"{given[0]} needs an oil: give --oil NAME or an [oil] table in --system (without an "
                                  "oil the films keep their constant viscosities)")
-    elif getattr(args, "method", "J") != "J":
-        raise ParameterError(f"--method {args.method} cannot be combined with an oil: the thermal operating point is "
-                             "the method-J equilibrium (ring torque balanced); use --method J")
+    elif any(not get_method(x).needs_films for x in str(getattr(args, "method", "J")).split(",") if x.strip()):
+        raise ParameterError(f"--method {args.method} cannot be combined with an oil: methods A, B and E have linear "
+                             "springs without oil films; use film methods (C, D, F, G, I, J)")
     elif getattr(args, "run", None):
         raise ParameterError("--run cannot be combined with an oil: a run-up's recorded losses are at the films' "
                              "constant viscosities; leave --oil (or the system's [oil]) out to overlay them")
@@ -796,7 +796,7 @@ def _oil_args(p, what):
     oil supply (:class:`frbmodel.linear.thermal.OilSupply`); ``what`` says what the thermal model changes."""
     p.add_argument("--oil", default=None, metavar="NAME",
                    help=f"thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46; or an "
-                        f"[oil] table in --system): {what} (method J)")
+                        f"[oil] table in --system): {what}")
     p.add_argument("--supply-temperature", type=float, default=None, metavar="K",
                    help="oil supply temperature [K] (default 363.15; needs an oil)")
     p.add_argument("--supply-pressure", type=float, default=None, metavar="PA",
@@ -860,6 +860,9 @@ def cmd_losses(args):
         raise ParameterError("--onsets needs an oil: give --oil NAME or an [oil] table in --system (the onsets are "
                              "computed at each supply temperature's thermal operating points)")
     ramp = _runup_ramp_from_args(args)
+    if args.onsets and args.method != "J":
+        raise ParameterError(f"--onsets cannot be combined with --method {args.method}: the onsets are those of the "
+                             "thermal Campbell diagram of method J (the full ring torque balance); use --method J")
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
@@ -872,8 +875,10 @@ def cmd_losses(args):
         cols = ["speed [rpm]", "bearing", "RSR [-]", "journal torque [N m]", "power loss [W]", "power loss inner [W]",
                 "power loss outer [W]"]
     else:
-        table = thermal_losses(tc, speeds, oil, temps, p_s)
-        stem, fig = "thermal_losses", plot_thermal_losses(table)
+        table = thermal_losses(tc, speeds, oil, temps, p_s, method=args.method)
+        stem = "thermal_losses" if args.method == "J" else f"thermal_losses_{args.method}"
+        fig = plot_thermal_losses(table, None if args.method == "J" else f"{oil.name}, supply {p_s:g} Pa, method "
+                                  f"{args.method} (RSR: {METHODS[args.method].rsr})")
         cols = ["supply temperature [K]", "speed [rpm]", "bearing", "RSR [-]", "inner film temperature [K]",
                 "outer film temperature [K]", "ring temperature [K]", "power loss [W]"]
     p_csv, p_png = out / f"{stem}.csv", out / f"{stem}.png"
@@ -1379,7 +1384,7 @@ def _add_sweep(sub):
     sw.add_argument("--oil", default=None, metavar="NAME",
                     help="thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46): "
                          "every case at its supply temperature (default 363.15 K) and pressure (3e5 Pa); campbell "
-                         "(method J) and runup")
+                         "(film methods), runup, hopf and bifurcation")
     sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default="campbell",
                     help="'hopf': the Hopf points of the full model (linear onsets) in --speeds START:END; two swept "
                          "parameters give a stability chart; 'bifurcation': the limit-cycle branches from those Hopf "

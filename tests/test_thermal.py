@@ -252,7 +252,7 @@ def test_bad_thermal_model_coefficients_are_refused(kwargs, message):
      "--supply-pressure = -200000.0 Pa is invalid: valid range 0 ... 2e+06 Pa"),
     (["--oil", "SAE 99W"], "oil name = 'SAE 99W' is unknown; known oils: SAE 0W-20, SAE 5W-30"),
     (["--supply-temperature", "363.15"], "--supply-temperature needs an oil: give --oil NAME"),
-    (["--oil", "ISO VG 46", "--method", "F"], "--method F cannot be combined with an oil"),
+    (["--oil", "ISO VG 46", "--method", "F", "--onsets"], "--onsets cannot be combined with --method F"),
     (["--oil", "ISO VG 46", "--run", "somewhere"], "--run cannot be combined with an oil"),
 ])
 def test_cli_losses_refuses_bad_thermal_options_with_one_line_and_writes_nothing(capsys, tmp_path, argv, message):

@@ -110,14 +110,12 @@ def test_outer_film_onsets_fall_as_the_supply_temperature_rises(onsets):
 
 
 def test_oil_supply_is_used_or_refused():
-    """An oil supply with a method other than J, or not an OilSupply, is refused with one line naming it."""
+    """An oil supply with a spring method (no films), or not an OilSupply, is refused with one line naming it."""
     sup = OilSupply(OIL)
-    with pytest.raises(ParameterError, match="method = 'F' cannot be combined with an oil supply"):
-        frb.campbell(TC, "F", [1e5], oil_supply=sup)
-    with pytest.raises(ParameterError, match="method = 'A' cannot be combined with an oil supply"):
-        frb.campbell(TC, "A", [1e5], oil_supply=sup)
-    with pytest.raises(ParameterError, match="method = 'F' cannot be combined with an oil supply"):
-        frb.film_onset_speeds(TC, "F", oil_supply=sup)
+    for letter in "ABE":
+        with pytest.raises(ParameterError, match=f"method = '{letter}' cannot be combined with an oil supply: its "
+                                                 "bearings are linear springs"):
+            frb.campbell(TC, letter, [1e5], oil_supply=sup)
     with pytest.raises(ParameterError, match="oil_supply = 'SAE 5W-30' is a str; expected an OilSupply"):
         frb.campbell(TC, "J", [1e5], oil_supply="SAE 5W-30")
     with pytest.raises(ParameterError, match="supply_temperature_K = 90.0 K is invalid"):
@@ -153,7 +151,7 @@ def test_cli_campbell_with_an_oil_is_the_library_diagram(capsys, tmp_path):
     (["campbell", "--oil", "SAE 5W-30", "--supply-pressure=-1"], "--supply-pressure = -1.0 Pa is invalid"),
     (["campbell", "--oil", "SAE 99W"], "oil name = 'SAE 99W' is unknown"),
     (["campbell", "--oil", "SAE 5W-30", "--from-fmu", "x.ssp"], "--oil cannot apply with an SSP"),
-    (["equilibrium", "--oil", "SAE 5W-30", "--method", "F"], "--method F cannot be combined with an oil"),
+    (["equilibrium", "--oil", "SAE 5W-30", "--method", "E"], "--method E cannot be combined with an oil"),
     (["equilibrium", "--oil", "SAE 5W-30", "--speed-rpm", "0"], "--speed-rpm = 0.0 rpm is invalid"),
 ])
 def test_cli_refuses_bad_thermal_options_with_one_line_and_writes_nothing(capsys, tmp_path, argv, message):

@@ -55,8 +55,8 @@ def test_supply_parameters_leave_the_system_unchanged():
 @pytest.mark.parametrize("params, analysis, opts, message", [
     ({"supply_temperature": [333.15]}, "campbell", {}, "study parameter supply_temperature needs an oil"),
     ({"supply_temperature": [333.15]}, "cosim", {"oil": "SAE 5W-30"}, "analysis = 'cosim' cannot take an oil supply"),
-    ({"supply_temperature": [333.15]}, "campbell", {"oil": "SAE 5W-30", "methods": ["F"]},
-     "methods = ['F'] cannot be combined with an oil supply"),
+    ({"supply_temperature": [333.15]}, "campbell", {"oil": "SAE 5W-30", "methods": ["J", "B"]},
+     "methods = ['J', 'B'] cannot be combined with an oil supply: method B has linear springs"),
     ({"viscosity_scale": [2.0]}, "campbell", {"oil": "SAE 5W-30"},
      "study parameter viscosity_scale cannot be combined with an oil supply"),
     ({"supply_temperature": [333.15, 90.0]}, "campbell", {"oil": "SAE 5W-30"},

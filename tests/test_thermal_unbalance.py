@@ -113,9 +113,9 @@ def test_cli_unbalance_with_an_oil_saves_the_library_result(tmp_path):
     assert saved.meta["oil_supply"]["supply_pressure_Pa"] == 2e5
 
 
-def test_library_refuses_an_oil_with_another_method():
-    with pytest.raises(ParameterError, match="method = 'F' cannot be combined with an oil supply"):
-        frb.unbalance_response(TC, "F", [60e3], oil_supply=SUPPLY)
+def test_library_refuses_an_oil_with_a_spring_method():
+    with pytest.raises(ParameterError, match="method = 'A' cannot be combined with an oil supply"):
+        frb.unbalance_response(TC, "A", [60e3], oil_supply=SUPPLY)
 
 
 @pytest.mark.parametrize("argv, message", [

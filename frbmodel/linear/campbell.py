@@ -661,9 +661,12 @@ def _sweep(system, m, speeds, whirl, bar, kw, oil_supply=None):
     i, stopped = 0, None
     try:
         for i, s in enumerate(speeds):
-            sys_s = at_operating_point(system, s, oil_supply)
+            sys_s = at_operating_point(system, s, oil_supply, m.letter)
             mu[i] = [f.viscosity for b in sys_s.bearings for f in (b.inner, b.outer)]
-            t_eq += _speed_row(sys_s, m, s, whirl, kw, loads, systems, (rsr, ecc, whirl_hz, margin), i)
+            # the whirl lines are method J's (Lund threshold at the torque balance), at J's own thermal point
+            sys_w = sys_s if oil_supply is None or m.letter == "J" or not whirl else \
+                at_operating_point(system, s, oil_supply, "J")
+            t_eq += _speed_row(sys_s, m, s, whirl, kw, loads, systems, (rsr, ecc, whirl_hz, margin), i, sys_w)
             bar.update(1)
         i = speeds.size
     except KeyboardInterrupt as exc:  # keep the speeds done: the caller returns them with the interruption
@@ -672,9 +675,10 @@ def _sweep(system, m, speeds, whirl, bar, kw, oil_supply=None):
     return systems, rsr[:i], ecc[:i], whirl_hz[:i], margin[:i], mu[:i], t_eq, stopped
 
 
-def _speed_row(system, m, s, whirl, kw, loads, systems, rows, i):
+def _speed_row(system, m, s, whirl, kw, loads, systems, rows, i, whirl_system=None):
     """One speed of :func:`_sweep`: appends the linear system (film methods) to ``systems`` and fills row ``i`` of
-    ``rows`` = (rsr, ecc, whirl_hz, margin). Returns the time spent in equilibria [s]."""
+    ``rows`` = (rsr, ecc, whirl_hz, margin), the whirl rows from ``whirl_system`` (default ``system``). Returns the
+    time spent in equilibria [s]."""
     rsr, ecc, whirl_hz, margin = rows
     t_eq = 0.0
     omega = rpm_to_rad_s(s)
@@ -687,10 +691,10 @@ def _speed_row(system, m, s, whirl, kw, loads, systems, rows, i):
         rsr[i] = [e.ring_speed_ratio for e in eqs]
         systems.append(linear_system(system, m.letter, s, equilibria=eqs, **kw))
     if whirl and omega > 0:
-        weqs = eqs if m.letter == "J" else tuple(
-            bearing_equilibrium(b, loads[k], omega, "J", system.film_model, system.gravity)
-            for k, b in enumerate(system.bearings))
-        whirl_hz[i], margin[i], ecc[i] = film_whirl_rows(system, weqs)
+        ws = system if whirl_system is None else whirl_system
+        weqs = eqs if m.letter == "J" and ws is system else tuple(
+            bearing_equilibrium(b, loads[k], omega, "J", ws.film_model, ws.gravity) for k, b in enumerate(ws.bearings))
+        whirl_hz[i], margin[i], ecc[i] = film_whirl_rows(ws, weqs)
     return t_eq
 
 
@@ -711,10 +715,12 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     progress : bool
         Show a progress bar over the speeds (tqdm, on stderr).
     oil_supply : OilSupply, optional
-        The thermal model (method J only): at each speed the films' viscosities are those of that speed's thermal
-        operating point (:func:`frbmodel.linear.thermal.thermal_system`), and so are the whirl curves and the exact
-        onsets (each at the temperatures of its onset speed). ``meta`` records it (``oil_supply``) and the films'
-        viscosities per speed (``film_viscosities_Pa_s``). None (default): the constant viscosities, bit for bit.
+        The thermal model (film methods C, D, F, G, I, J): at each speed the films' viscosities are those of that
+        speed's thermal operating point solved with this method's equilibrium
+        (:func:`frbmodel.linear.thermal.thermal_system`); the whirl curves and the exact onsets are method J's, at
+        J's thermal operating point (each onset at the temperatures of its onset speed). ``meta`` records it
+        (``oil_supply``) and the films' viscosities per speed (``film_viscosities_Pa_s``). None (default): the
+        constant viscosities, bit for bit.
     **kw
         Spring stiffnesses of A, B, E: ``k``, ``kx``, ``ky`` [N/m].
 

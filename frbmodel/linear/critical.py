@@ -24,7 +24,7 @@ CRITICAL_COLUMNS = ("source", "speed [rpm]", "frequency [Hz]", "mode", "kind", "
 def linear_at(system, m, speed_rpm, kw, oil_supply=None):
     """The method's linear system at one speed (equilibria solved for the film methods); with an
     :class:`~frbmodel.linear.thermal.OilSupply`, of the system at that speed's thermal operating point."""
-    system = at_operating_point(system, speed_rpm, oil_supply)
+    system = at_operating_point(system, speed_rpm, oil_supply, m.letter)
     eqs = None
     if m.needs_films:
         omega = rpm_to_rad_s(speed_rpm)

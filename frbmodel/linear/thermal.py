@@ -17,6 +17,7 @@ import numpy as np
 from ..core.errors import ConvergenceError, ParameterError, check_real, check_speed, check_system
 from ..core.units import RPM
 from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, films_at_ring_temperature, heat_flows
+from ..system.methods import get_method
 from ..system.oil import T_MIN_K, Oil, check_temperature
 from ..system.rotor import GRAVITY
 from .equilibrium import bearing_equilibrium
@@ -100,16 +101,17 @@ class OilSupply:
 
 
 def check_oil_supply(oil_supply, method="J"):
-    """``oil_supply`` if it is None or an :class:`OilSupply` used with method J, else a :class:`ParameterError`
-    (the thermal operating point is the method-J equilibrium: other methods would mix two equilibria)."""
+    """``oil_supply`` if it is None or an :class:`OilSupply` used with a film method (C, D, F, G, I, J: the
+    thermal operating point is solved with that method's own equilibrium), else a :class:`ParameterError` (the
+    spring methods A, B, E have no films)."""
     if oil_supply is None:
         return None
     if not isinstance(oil_supply, OilSupply):
         raise ParameterError(f"oil_supply = {oil_supply!r:.60} is a {type(oil_supply).__name__}; expected an "
                              "OilSupply(oil, supply_temperature_K, supply_pressure_Pa) or None")
-    if str(method).upper() != "J":
-        raise ParameterError(f"method = {method!r} cannot be combined with an oil supply: the thermal operating point "
-                             "is the method-J equilibrium (ring torque balanced); use method J")
+    if not get_method(method).needs_films:
+        raise ParameterError(f"method = {method!r} cannot be combined with an oil supply: its bearings are linear "
+                             "springs without oil films; use a film method (C, D, F, G, I, J)")
     return oil_supply
 
 
@@ -118,12 +120,12 @@ def _with_viscosities(bearing, mu_inner, mu_outer):
                    outer=replace(bearing.outer, viscosity=mu_outer))
 
 
-def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temps, t_ring=None):
+def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temps, t_ring=None, method="J"):
     """Everything at film temperatures ``temps`` (clipped into the oil's range while the solver searches); with
     ``t_ring`` [K] the ring is held there (its temperature a state) and ``ring_heat`` [W] is the heat into it."""
     t_i, t_o = (min(max(float(t), T_MIN_K), oil.max_temperature_K) for t in temps)
     b = _with_viscosities(bearing, oil.dynamic_viscosity(t_i), oil.dynamic_viscosity(t_o))
-    eq = bearing_equilibrium(b, load, omega, "J", film_model, gravity)
+    eq = bearing_equilibrium(b, load, omega, method, film_model, gravity)
     t_j, p_i, p_o = (float(v) for v in equilibrium_loss(b, eq, omega, film_model))
     flows = bearing_flows(b, eq.eps_inner, eq.eps_outer, omega, eq.ring_speed, p_s, oil.density(t_s),
                           oil.dynamic_viscosity(t_s), model)
@@ -137,10 +139,10 @@ def _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, temp
         *films, ring_heat = films_at_ring_temperature(b, model, p_i, p_o, cap_i, cap_o, t_s, t_ring)
         new = (*films, float(t_ring))
     return {"bearing": b, "eq": eq, "torque": t_j, "powers": (p_i, p_o), "flows": flows, "q": (q_i, q_o),
-            "capacities": (cap_i, cap_o), "temperatures": new, "ring_heat": ring_heat}
+            "capacities": (cap_i, cap_o), "temperatures": new, "ring_heat": ring_heat, "method": method}
 
 
-def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, t_ring=None):
+def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, t_ring=None, method="J"):
     """Converged state of one bearing (see :func:`thermal_losses`), with iterations and residual; with ``t_ring``
     the films' balance with the ring held at that temperature [K]."""
     from scipy.optimize import root
@@ -149,7 +151,7 @@ def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gra
 
     def residual(x):
         count["n"] += 1
-        s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, x, t_ring)
+        s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, x, t_ring, method)
         return np.array(s["temperatures"][:2]) - x
 
     sol = root(residual, np.array([t_s, t_s]), method="hybr",
@@ -168,7 +170,7 @@ def _operating_point(bearing, load, omega, oil, t_s, p_s, model, film_model, gra
             raise ParameterError(f"{exc}: beyond the oil's viscosity law, the oil flow cannot carry the film's "
                                  f"friction power (supply pressure {p_s:g} Pa; raise it, or the feed holes of the "
                                  "ThermalModel)") from None
-    s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, sol.x, t_ring)
+    s = _state(bearing, load, omega, oil, t_s, p_s, model, film_model, gravity, sol.x, t_ring, method)
     s.update(iterations=count["n"], residual_K=res)
     return s
 
@@ -196,18 +198,18 @@ def _row(rpm, t_s, p_s, oil, model, s):
             "heat to shaft [W]": h["shaft"], "heat to housing [W]": h["housing"],
             "energy-balance residual [W]": closure,
             "ring balance residual [W]": h["inner_to_ring"] - h["ring_to_outer"],
-            "temperature residual [K]": s["residual_K"], "iterations [-]": s["iterations"]}
+            "temperature residual [K]": s["residual_K"], "iterations [-]": s["iterations"], "method": s["method"]}
 
 
-def _isothermal(system, speeds):
-    """Constant viscosities (no oil): :func:`bearing_losses` (method J) with the RSR, no temperatures."""
-    return with_ring_speed_ratio(bearing_losses(system, speeds, "J"))
+def _isothermal(system, speeds, method="J"):
+    """Constant viscosities (no oil): :func:`bearing_losses` of ``method`` with the RSR, no temperatures."""
+    return with_ring_speed_ratio(bearing_losses(system, speeds, method))
 
 
 def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
-                   model=None):
+                   model=None, method="J"):
     """Film and ring temperatures, viscosities, ring speed, power losses and oil flows of every bearing at the
-    thermo-hydrodynamic operating point (method-J equilibrium at the films' temperatures).
+    thermo-hydrodynamic operating point (the equilibrium of ``method`` at the films' temperatures).
 
     Parameters
     ----------
@@ -223,6 +225,10 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
         Supply pressure above ambient [Pa], 0 ... 2e6.
     model : ThermalModel, optional
         Coefficients; default :class:`ThermalModel()`.
+    method : {"C", "D", "F", "G", "I", "J"}
+        The equilibrium (ring speed, eccentricities) the films' friction powers and flows are evaluated at: J
+        balances the ring torque (default; its RSR falls with speed as the inner film heats), F/G/C/D take the RSR
+        of eq. (6), which depends on the films' viscosity ratio, I that of eq. (7).
 
     Returns
     -------
@@ -252,12 +258,16 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
     import pandas as pd
 
     check_system(system)
+    method = get_method(method).letter
     speeds = [check_speed("speed_rpm", s) for s in np.atleast_1d(np.asarray(speed_rpm, dtype=float))]
     oil = system.oil if oil is None else oil
     if oil is None:
-        return _isothermal(system, speeds)
+        return _isothermal(system, speeds, method)
     if not isinstance(oil, Oil):
         raise ParameterError(f"oil = {oil!r:.60} is a {type(oil).__name__}; expected an Oil (frbmodel.OILS[name])")
+    if not get_method(method).needs_films:
+        raise ParameterError(f"method = {method!r} has no oil films: the thermal operating point needs one of C, D, F, "
+                             "G, I, J")
     model = ThermalModel() if model is None else model
     if not isinstance(model, ThermalModel):
         raise ParameterError(f"model = {model!r:.60} is a {type(model).__name__}; expected a ThermalModel")
@@ -269,12 +279,12 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
         for rpm in speeds:
             for b, load in zip(system.bearings, system.bearing_loads):
                 s = _operating_point(b, float(load), rpm * RPM, oil, t_s, p_s, model, system.film_model,
-                                     system.gravity)
+                                     system.gravity, method=method)
                 rows.append(_row(rpm, t_s, p_s, oil, model, s))
     return pd.DataFrame(rows)
 
 
-def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", gravity=GRAVITY):
+def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", gravity=GRAVITY, method="J"):
     """One bearing with its films' viscosities [Pa s] at their temperatures of the thermal operating point at
     ``speed_rpm`` (the per-bearing step of :func:`thermal_system`, for searches over speed such as the film whirl
     onsets).
@@ -290,15 +300,17 @@ def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", 
     film_model : str
     gravity : float
         The system's gravitational acceleration [m/s²].
+    method : str
+        The film method whose equilibrium the operating point uses (default J).
 
     Returns
     -------
     FloatingRingBearing
     """
-    sup = check_oil_supply(oil_supply)
+    sup = check_oil_supply(oil_supply, method)
     s = _operating_point(bearing, float(load_N), check_speed("speed_rpm", speed_rpm) * RPM, sup.oil,
                          sup.supply_temperature_K, sup.supply_pressure_Pa, sup.model, film_model,
-                         gravity)
+                         gravity, method=method)
     return s["bearing"]
 
 
@@ -389,23 +401,23 @@ def ring_lag(system, time_s, speed_rpm, oil_supply, rtol=1e-8):
             heat)
 
 
-def at_operating_point(system, speed_rpm, oil_supply):
+def at_operating_point(system, speed_rpm, oil_supply, method="J"):
     """``system`` itself without an oil supply (the films' constant viscosities, bit for bit), else
-    :func:`thermal_system` at ``speed_rpm`` with ``oil_supply``."""
+    :func:`thermal_system` at ``speed_rpm`` with ``oil_supply`` and the equilibria of ``method``."""
     if oil_supply is None:
         return system
     return thermal_system(system, speed_rpm, oil_supply.oil, oil_supply.supply_temperature_K,
-                          oil_supply.supply_pressure_Pa, oil_supply.model)
+                          oil_supply.supply_pressure_Pa, oil_supply.model, method)
 
 
 def thermal_system(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
-                   model=None):
+                   model=None, method="J"):
     """The Turbocharger with every film's viscosity at its temperature of the thermal operating point at one speed
     (:func:`thermal_losses`): what a Campbell diagram, a run-up or an FMU at that oil state uses.
 
     Parameters
     ----------
-    system, oil, supply_temperature_K, supply_pressure_Pa, model
+    system, oil, supply_temperature_K, supply_pressure_Pa, model, method
         As :func:`thermal_losses` (one supply temperature [K]).
     speed_rpm : float
         Rotor speed [rpm].
@@ -423,7 +435,7 @@ def thermal_system(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
     True
     """
     table = thermal_losses(system, check_speed("speed_rpm", speed_rpm), oil, check_real(
-        "supply_temperature_K", supply_temperature_K, "K"), supply_pressure_Pa, model)
+        "supply_temperature_K", supply_temperature_K, "K"), supply_pressure_Pa, model, method)
     if "inner viscosity [Pa s]" not in table:
         return system
     bearings = tuple(_with_viscosities(b, float(r["inner viscosity [Pa s]"]), float(r["outer viscosity [Pa s]"]))

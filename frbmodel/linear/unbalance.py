@@ -687,7 +687,8 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     progress : bool
         Show a progress bar over the speeds.
     oil_supply : OilSupply, optional
-        The thermal model (method J only): each speed's linear system is that of its own thermal operating point
+        The thermal model (film methods C, D, F, G, I, J): each speed's linear system is that of its own thermal
+        operating point, solved with this method's equilibrium
         (:func:`frbmodel.linear.thermal.thermal_system` at that speed), and so are the Campbell diagram, the root
         search of each 1X crossing and of each response peak (every trial speed at its own operating point).
         ``meta`` records it (``oil_supply``) and the films' viscosities per speed (``film_viscosities_Pa_s``).
@@ -723,7 +724,7 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     rows, ls, mu = [], None, []
     with counter_bar(speeds.size, f"unbalance {m.letter}", progress_enabled(progress), unit="speed") as bar:
         for s in speeds:
-            sys_s = at_operating_point(system, s, supply)
+            sys_s = at_operating_point(system, s, supply, m.letter)
             mu.append([f.viscosity for b in sys_s.bearings for f in (b.inner, b.outer)])
             ls = linear_at(sys_s, m, s, kw)
             omega = rpm_to_rad_s(s)

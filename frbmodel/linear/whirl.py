@@ -223,8 +223,8 @@ def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM, oil_
     oil_supply : OilSupply, optional
         With the thermal model: at every speed of the search each bearing's films have their viscosities at the
         thermal operating point of that speed (:func:`frbmodel.linear.thermal.thermal_bearing`), so an onset is at
-        the film temperatures of the onset speed. Method J only. None: the constant viscosities (bit for bit as
-        without the option).
+        the film temperatures of the onset speed (the operating point solved with ``method``'s equilibrium). None:
+        the constant viscosities (bit for bit as without the option).
 
     Returns
     -------
@@ -259,7 +259,8 @@ def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM, oil_
     res = []
     for i, b0 in enumerate(system.bearings):
         def margins(rpm, i=i, b0=b0):
-            b = b0 if supply is None else thermal_bearing(b0, loads[i], rpm, supply, film_model, system.gravity)
+            b = b0 if supply is None else thermal_bearing(b0, loads[i], rpm, supply, film_model, system.gravity,
+                                                          m.letter)
             eq = bearing_equilibrium(b, loads[i], rpm_to_rad_s(rpm), m.letter, film_model, system.gravity)
             return bearing_whirl(b, eq, film_model, system.gravity)[2:]
 

@@ -247,10 +247,11 @@ def _check_thermal_study(names, analysis, options):
                              "or a system with an [oil] table")
     if analysis not in THERMAL_ANALYSES:
         raise ParameterError(f"analysis = {analysis!r} cannot take an oil supply: the thermal model is in the "
-                             f"{', '.join(THERMAL_ANALYSES)} analyses (campbell: method J)")
-    if analysis == "campbell" and [m.upper() for m in options.get("methods", ["J"])] != ["J"]:
-        raise ParameterError(f"methods = {options['methods']!r} cannot be combined with an oil supply: the thermal "
-                             "operating point is the method-J equilibrium; use methods ['J']")
+                             f"{', '.join(THERMAL_ANALYSES)} analyses (campbell: the film methods)")
+    springs = [m for m in options.get("methods", ["J"]) if not get_method(m).needs_films]
+    if analysis == "campbell" and springs:
+        raise ParameterError(f"methods = {options['methods']!r} cannot be combined with an oil supply: method "
+                             f"{springs[0]} has linear springs, no oil films; use film methods (C, D, F, G, I, J)")
     fixed = [n for n in names if n.startswith("viscosity_")]
     if fixed:
         raise ParameterError(f"study parameter {fixed[0]} cannot be combined with an oil supply: the thermal model "
