@@ -54,17 +54,15 @@ class ConstantSpeedFlow:
     """The flow z(0) -> z(T) of the constant-speed model, z = the state without φ; compiled, without the GIL.
 
     Two integrators: CyRK's Radau IIA (:mod:`frbmodel.nonlinear.compiled`; 2-3.5x faster on whirl orbits) and the
-    Rosenbrock
-    method of the run-up (:mod:`frbmodel.nonlinear.rosenbrock`). Radau's internal Jacobian differences scale with the
-    states
-    themselves, and near an equilibrium (velocities ~0) it degrades: at the 2 krpm Hopf point of the 36 µm system a
-    5 ms flow of a 0.1 µm orbit took it 23k steps and 5 s with an error of 4e-4 of the motion, Rodas (difference
-    steps from the states' typical sizes) 55 steps and 3e-13 m, 5e-6 of the motion (LSODA at 1e-11 as reference).
-    ``method="auto"``: the first flow is integrated by Rodas, then by Radau with twice Rodas' steps as budget; Radau
-    is kept for this speed if it finishes, else Rodas. ``hint``: a flow at a neighbouring speed that chose Radau —
-    Radau is then tried first, with twice the neighbour's Rodas steps as budget, and Rodas only if it does not
-    finish (a continuation saves one Rodas flow per branch point). All flows of one instance use one integrator
-    (the monodromy's differences need it).
+    Rosenbrock method of the run-up (:mod:`frbmodel.nonlinear.rosenbrock`). Radau's internal Jacobian differences scale
+    with the states themselves, and near an equilibrium (velocities ~0) it degrades: at the 2 krpm Hopf point of the 36
+    µm system a 5 ms flow of a 0.1 µm orbit took it 23k steps and 5 s with an error of 4e-4 of the motion, Rodas
+    (difference steps from the states' typical sizes) 55 steps and 3e-13 m, 5e-6 of the motion (LSODA at 1e-11 as
+    reference). ``method="auto"``: the first flow is integrated by Rodas, then by Radau with twice Rodas' steps as
+    budget; Radau is kept for this speed if it finishes, else Rodas. ``hint``: a flow at a neighbouring speed that chose
+    Radau — Radau is then tried first, with twice the neighbour's Rodas steps as budget, and Rodas only if it does not
+    finish (a continuation saves one Rodas flow per branch point). All flows of one instance use one integrator (the
+    monodromy's differences need it).
     """
 
     def __init__(self, problem, rtol, atol_m, method=None, hint=None):

@@ -326,13 +326,12 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     speed_rpm : float
         Constant rotor speed [rpm].
     guess : LimitCycle, RunupResult, "hopf" or (ndarray, float), optional
-        A nearby orbit (e.g. at a neighbouring speed); ``"hopf"``: the orbit born at the nearest Hopf point,
-        followed there from its eigenvector (:func:`frbmodel.cycles.branch.hopf_guess`; autonomous orbits only); a
-        recorded run-up or run-down of this system, whose state
-        where it passes the speed (re-simulated, :func:`runup_state`) settles for ``settle_s`` instead of the
-        equilibrium: the orbit of the attractor the run is on there; or (state without the rotation angle [SI],
-        period [s]). Default: settle from the equilibrium for ``settle_s`` and read the orbit off
-        (:func:`settle_guess`).
+        A nearby orbit (e.g. at a neighbouring speed); ``"hopf"``: the orbit born at the nearest Hopf point, followed
+        there from its eigenvector (:func:`frbmodel.cycles.branch.hopf_guess`; autonomous orbits only); a recorded
+        run-up or run-down of this system, whose state where it passes the speed (re-simulated, :func:`runup_state`)
+        settles for ``settle_s`` instead of the equilibrium: the orbit of the attractor the run is on there; or (state
+        without the rotation angle [SI], period [s]). Default: settle from the equilibrium for ``settle_s`` and read the
+        orbit off (:func:`settle_guess`).
     film_model : {"short", "short_corrected"}, optional
         Default: the system's.
     unbalance : sequence of Unbalance

@@ -2,8 +2,7 @@
 
 :func:`mode_shape` solves the eigenproblem of the same linear system the Campbell diagram used
 (:func:`frbmodel.linear.assembly.linear_system` + :func:`frbmodel.linear.modal.modes`) at exactly the requested speed
-and picks the
-eigenvector of the tracked mode. :class:`ModeShape` holds it normalised (:func:`normalise`: largest orbit
+and picks the eigenvector of the tracked mode. :class:`ModeShape` holds it normalised (:func:`normalise`: largest orbit
 semi-major axis 1, its dominant whirl component real and positive) and gives the node amplitudes and phases, the
 Euler–Bernoulli (Hermite cubic) deflection line between nodes, the orbit ellipses at the nodes and the ring orbits.
 
@@ -530,10 +529,9 @@ def shape_hover_text(cd, shown=None):
     the orbit's semi-major axis (the largest orbit of the mode = 1), the phase of x [deg] relative to it and the
     whirl direction.
 
-    The linear system of the diagram (its system, method and options from ``cd.meta``) is solved again at each
-    grid speed (:func:`frbmodel.linear.assembly.linear_system`, :func:`frbmodel.linear.modal.modes`); each tracked mode
-    is the
-    eigenvalue equal to the diagram's, its eigenvector normalised by :func:`frbmodel.linear.modeshape.normalise`.
+    The linear system of the diagram (its system, method and options from ``cd.meta``) is solved again at each grid
+    speed (:func:`frbmodel.linear.assembly.linear_system`, :func:`frbmodel.linear.modal.modes`); each tracked mode is
+    the eigenvalue equal to the diagram's, its eigenvector normalised by :func:`frbmodel.linear.modeshape.normalise`.
 
     Parameters
     ----------

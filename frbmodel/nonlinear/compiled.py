@@ -6,11 +6,10 @@ the right-hand side (~1 million per run-up, 3-5 µs of interpreter overhead each
 numba C callback and handed to CyRK's compiled implicit Runge-Kutta solver (Radau IIA, order 5, with error
 control and its own finite-difference Jacobian), which runs the whole integration loop in C++.
 
-The callback receives its constant data as one flat float64 array (:func:`pack_problem`): a header of sizes and
-scalars, then every array of :attr:`frbmodel.nonlinear.runup.Problem.args` flattened in a fixed order.
-:func:`solve_chunk`
-integrates from one output time to the next few (a *chunk*); the run-up records, checks wall contact, progress
-and signals between chunks (:func:`frbmodel.nonlinear.runup.runup` with ``integrator="radau"``).
+The callback receives its constant data as one flat float64 array (:func:`pack_problem`): a header of sizes and scalars,
+then every array of :attr:`frbmodel.nonlinear.runup.Problem.args` flattened in a fixed order. :func:`solve_chunk`
+integrates from one output time to the next few (a *chunk*); the run-up records, checks wall contact, progress and
+signals between chunks (:func:`frbmodel.nonlinear.runup.runup` with ``integrator="radau"``).
 
 >>> import numpy as np, frbmodel as frb
 >>> from frbmodel.nonlinear.runup import SpeedProfile, build_problem, initial_state, atol_vector

@@ -1,17 +1,16 @@
 """Co-simulation components: one floating-ring bearing and the FE rotor as separately steppable models.
 
-These are the physics behind the FMUs (``fmu_src/``), kept here free of any FMI import. Coupling scheme
-(the staggered variant of docs/guides/fmus.md): at a communication point the rotor's journal state goes to each bearing,
-whose
-force F0 and interface Jacobian K = −∂F/∂x_J, C = −∂F/∂v_J are evaluated at that state. Each bearing first
-integrates its ring (lateral and spin; 2-stage L-stable SDIRK substeps with Newton iterations) over the macro step
-with the journal on a quadratic path x_p(τ) = x0 + v0 τ + a τ²/2, where a is the backward difference of the
-journal velocity (:class:`JournalHistory`), and reports the force F1 at the end of that path. The rotor then
-integrates its step (trapezoidal rule, linear-implicitly) with the force interpolated along the path and corrected
-for the deviation from it, F(τ) = F0 + (F1 − F0) τ/H + K a τ (H − τ)/2 − K (x − x_p) − C (v − v_p)
-(:meth:`RotorComponent.step`). Both sides use :func:`frbmodel.physics.bearing.ring_rhs_kernel` and
-:func:`frbmodel.physics.film.film_force_kernel`, the same code as the monolithic run-up; the rotor's accelerations are
-:func:`frbmodel.physics.dynamics.rotor_acceleration` with the bearing interface terms added to its matrices.
+These are the physics behind the FMUs (``fmu_src/``), kept here free of any FMI import. Coupling scheme (the staggered
+variant of docs/guides/fmus.md): at a communication point the rotor's journal state goes to each bearing, whose force F0
+and interface Jacobian K = −∂F/∂x_J, C = −∂F/∂v_J are evaluated at that state. Each bearing first integrates its ring
+(lateral and spin; 2-stage L-stable SDIRK substeps with Newton iterations) over the macro step with the journal on a
+quadratic path x_p(τ) = x0 + v0 τ + a τ²/2, where a is the backward difference of the journal velocity
+(:class:`JournalHistory`), and reports the force F1 at the end of that path. The rotor then integrates its step
+(trapezoidal rule, linear-implicitly) with the force interpolated along the path and corrected for the deviation from
+it, F(τ) = F0 + (F1 − F0) τ/H + K a τ (H − τ)/2 − K (x − x_p) − C (v − v_p) (:meth:`RotorComponent.step`). Both sides
+use :func:`frbmodel.physics.bearing.ring_rhs_kernel` and :func:`frbmodel.physics.film.film_force_kernel`, the same code
+as the monolithic run-up; the rotor's accelerations are :func:`frbmodel.physics.dynamics.rotor_acceleration` with the
+bearing interface terms added to its matrices.
 """
 from __future__ import annotations
 
@@ -67,10 +66,8 @@ def _bearing_force(geom, polys, ring_m, ring_i, grav, j, ring, omega_r, eps_cap)
 @njit(cache=True)
 def _inner_film_force(geom, polys, j, ring, omega_r, eps_cap):
     """The film force on the journal [N]: the inner film's force of :func:`frbmodel.physics.bearing.ring_rhs_kernel`
-    (the
-    same call of :func:`frbmodel.physics.film.film_force_kernel` with the same relative state), without the outer film
-    and
-    the ring's equations, which do not act on the journal."""
+    (the same call of :func:`frbmodel.physics.film.film_force_kernel` with the same relative state), without the outer
+    film and the ring's equations, which do not act on the journal."""
     g = geom[0]
     fx, fy, _ = film_force_kernel(g[0], g[1], g[2], g[3], polys[0, 0], polys[0, 1], j[0] - ring[0], j[1] - ring[1],
                                   j[2] - ring[2], j[3] - ring[3], omega_r + ring[4], eps_cap)

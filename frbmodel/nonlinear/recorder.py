@@ -1,13 +1,12 @@
 """Named-column, streamed time-series results of run-ups and co-simulations.
 
-The column schema follows the system: one group of columns per bearing (ring speed, RSR, journal and ring
-position, the eccentricity ratio of its inner and outer film), per disc (its displacement), and last per bearing the
-film torque on the journal and the bearing's friction power (:mod:`frbmodel.physics.losses`). Files written before the
-last two existed load with NaN there. The monolithic
-run-up (:func:`frbmodel.nonlinear.runup.runup`) and the co-simulation master (:mod:`frbmodel.cosim.master`) both fill
-rows by
-name through :meth:`RunupSchema.row` (the run-up a solver call's worth at a time through :meth:`RunupSchema.rows`)
-and stream them with a :class:`Recorder`, so their files are read back by the same :meth:`RunupResult.load`.
+The column schema follows the system: one group of columns per bearing (ring speed, RSR, journal and ring position, the
+eccentricity ratio of its inner and outer film), per disc (its displacement), and last per bearing the film torque on
+the journal and the bearing's friction power (:mod:`frbmodel.physics.losses`). Files written before the last two existed
+load with NaN there. The monolithic run-up (:func:`frbmodel.nonlinear.runup.runup`) and the co-simulation master
+(:mod:`frbmodel.cosim.master`) both fill rows by name through :meth:`RunupSchema.row` (the run-up a solver call's worth
+at a time through :meth:`RunupSchema.rows`) and stream them with a :class:`Recorder`, so their files are read back by
+the same :meth:`RunupResult.load`.
 
 >>> schema = RunupSchema(bearings=("front", "rear"), discs=("impeller",))
 >>> schema.columns[:4]
@@ -458,8 +457,7 @@ class RunupResult(Result):
     """Sampled result of a run-up or co-simulation (SI units; speeds also in rpm).
 
     Usually made by :func:`frbmodel.nonlinear.runup`, the co-simulation or :meth:`load`; see :meth:`from_rows` to build
-    one
-    from rows of a :class:`RunupSchema`.
+    one from rows of a :class:`RunupSchema`.
 
     Attributes
     ----------
@@ -488,8 +486,8 @@ class RunupResult(Result):
         linear springs, results of older versions, FMUs without the outputs).
     final_state : ndarray or None
         The full state vector [SI] at the last sample of a monolithic run-up (:func:`frbmodel.nonlinear.runup`), to
-        continue
-        from (e.g. :func:`frbmodel.limit_cycle`'s run-up guess); not saved: None for a loaded or co-simulated result.
+        continue from (e.g. :func:`frbmodel.limit_cycle`'s run-up guess); not saved: None for a loaded or co-simulated
+        result.
 
     Examples
     --------

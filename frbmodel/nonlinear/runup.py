@@ -1,17 +1,15 @@
 """Nonlinear run-up: FE rotor + both rings (lateral and spin) + nonlinear films, integrated in compiled code.
 
 The equations are docs/theory/equations-of-motion.md#equations-of-motion: all rotor FE DoFs with gyroscopics (``M q̈ + Ω
-G q̇ + (K + Ω̇ G) q``),
-gravity, optional unbalance per wheel, both rings' lateral DoFs and spin speed (ring speed is a state, driven
-by the film torques), and the nonlinear film forces of :mod:`frbmodel.physics.film` (short or finite-length corrected).
-The rotor speed follows a prescribed profile, or, torque-driven (:meth:`SpeedProfile.torque`), is a state driven by a
-drive torque and braked by the journals' film torques (:func:`frbmodel.physics.dynamics.spin_acceleration`). The
-recorded results include the film torque on each journal and each bearing's friction power
-(:func:`frbmodel.physics.losses.bearing_loss_kernel`). The right-hand side and its finite-difference Jacobian are
-compiled with numba; the stiff, error-controlled integration runs in compiled code too (the Rosenbrock method RODAS,
-:mod:`frbmodel.nonlinear.rosenbrock`, or Radau IIA, :mod:`frbmodel.nonlinear.compiled`), or, as the reference, in
-scipy's LSODA
-(``integrator="lsoda"``).
+G q̇ + (K + Ω̇ G) q``), gravity, optional unbalance per wheel, both rings' lateral DoFs and spin speed (ring speed is a
+state, driven by the film torques), and the nonlinear film forces of :mod:`frbmodel.physics.film` (short or
+finite-length corrected). The rotor speed follows a prescribed profile, or, torque-driven (:meth:`SpeedProfile.torque`),
+is a state driven by a drive torque and braked by the journals' film torques
+(:func:`frbmodel.physics.dynamics.spin_acceleration`). The recorded results include the film torque on each journal and
+each bearing's friction power (:func:`frbmodel.physics.losses.bearing_loss_kernel`). The right-hand side and its
+finite-difference Jacobian are compiled with numba; the stiff, error-controlled integration runs in compiled code too
+(the Rosenbrock method RODAS, :mod:`frbmodel.nonlinear.rosenbrock`, or Radau IIA, :mod:`frbmodel.nonlinear.compiled`),
+or, as the reference, in scipy's LSODA (``integrator="lsoda"``).
 """
 from __future__ import annotations
 
@@ -1238,9 +1236,8 @@ def modal_error_basis(problem, atol, speed_scale=None):
 def typical_sizes(problem, displacement_m=1e-5, speed_scale=None):
     """Typical size of each state, the floor of the compiled Rosenbrock integrator's difference steps
     (:func:`frbmodel.nonlinear.rosenbrock.jacobian`): ``displacement_m`` (about a film clearance) on displacements and,
-    scaled
-    from it as in :func:`atol_vector`, on rotations and velocities; the largest rotor speed on the ring speeds and
-    the rotor speed, 1 rad on the rotation angle (the scales on which the model's forces change).
+    scaled from it as in :func:`atol_vector`, on rotations and velocities; the largest rotor speed on the ring speeds
+    and the rotor speed, 1 rad on the rotation angle (the scales on which the model's forces change).
 
     Parameters
     ----------
@@ -1335,8 +1332,7 @@ def film_samples(ts, ys, ws, args, diag, geom, polys, journal_at, ring_at, ring_
     """For each state ys[k] at time ts[k] [s] and rotor speed ws[k] [rad/s]: the films' eccentricity ratios as the
     RHS fills ``diag`` (one :func:`frbmodel.physics.dynamics.monolithic_rhs` call with ``args``) into eps[k], and, per
     bearing b, the journal torque [N m] and friction power [W] of :func:`frbmodel.physics.losses.bearing_loss_kernel`
-    into
-    torque[k, b], power[k, b] (as :func:`_losses`)."""
+    into torque[k, b], power[k, b] (as :func:`_losses`)."""
     buf = np.empty(ys.shape[1])
     ring = np.empty(5)
     for k in range(ts.size):

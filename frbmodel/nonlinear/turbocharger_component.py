@@ -4,12 +4,10 @@ spin DoFs), integrated by the run-up's compiled monolithic integrator with its o
 :class:`TurbochargerComponent` is what the turbocharger FMU (``fmu_src/FloatingRingTurbocharger.py``) steps. It holds
 the run-up's problem (:func:`frbmodel.nonlinear.runup.build_problem`: the one right-hand side), its initial state, its
 tolerances and its integrator (:func:`frbmodel.nonlinear.rosenbrock.rodas_chunk`); :meth:`TurbochargerComponent.step`
-advances
-exactly to t + h for any h, the inputs (speed, drive torque, housing acceleration) held over the step. Because the
-integrator controls its own error, the trajectory does not depend on the step a master chooses, up to the
-integrator's tolerance and to how the inputs are sampled: with a prescribed ramp and a step equal to the run-up's
-solver call (:data:`frbmodel.nonlinear.runup.CHUNK_SAMPLES` samples) it is :func:`frbmodel.nonlinear.runup.runup` bit
-for bit.
+advances exactly to t + h for any h, the inputs (speed, drive torque, housing acceleration) held over the step. Because
+the integrator controls its own error, the trajectory does not depend on the step a master chooses, up to the
+integrator's tolerance and to how the inputs are sampled: with a prescribed ramp and a step equal to the run-up's solver
+call (:data:`frbmodel.nonlinear.runup.CHUNK_SAMPLES` samples) it is :func:`frbmodel.nonlinear.runup.runup` bit for bit.
 
 Inside each step the state is also evaluated on a fixed time grid (``check_rate_hz``, dense output of the
 integrator, which does not change the steps): wall contact is checked there as in the run-up, the smallest film
@@ -166,8 +164,7 @@ class TurbochargerComponent:
     speed_source : {"ramp", "input", "torque"}
         "ramp": linear from ``speed_start`` to ``speed_end`` in ``ramp_time``, then constant (the run-up's
         :meth:`~frbmodel.nonlinear.runup.SpeedProfile.ramp`); "input": the ``speed_in`` of each :meth:`step`, held over
-        the
-        step; "torque": the speed is a state, J_p Ω̇ = T_drive + Σ T_J (the torque-driven run-up), with the
+        the step; "torque": the speed is a state, J_p Ω̇ = T_drive + Σ T_J (the torque-driven run-up), with the
         ``drive_torque`` of each step held over it.
     speed_start, speed_end : float
         Rotor speed [rad/s] at t = 0 and after the ramp ("ramp"); ``speed_start`` is the start speed of "torque".

@@ -55,10 +55,9 @@ def ring_torque_kernel(inner_geom, outer_geom, ri_x, ri_y, fi_x, fi_y, ro_x, ro_
 def ring_rhs_kernel(geom, polys, ring_m, ring_i, grav, jx, jy, jvx, jvy, ring, omega_rotor, eps_cap, dring,
                     housing_ax=0.0, housing_ay=0.0):
     """Ring equations of docs/theory/equations-of-motion.md#floating-rings for one bearing (compiled; the one
-    implementation: the monolithic run-up
-    and the bearing FMU both call it), written relative to the bearing housing: a housing that accelerates by
-    (``housing_ax``, ``housing_ay``) loads the ring with −m (a_x, a_y) (docs/theory/housing.md; zero: bit for bit
-    the fixed-housing equations).
+    implementation: the monolithic run-up and the bearing FMU both call it), written relative to the bearing housing: a
+    housing that accelerates by (``housing_ax``, ``housing_ay``) loads the ring with −m (a_x, a_y)
+    (docs/theory/housing.md; zero: bit for bit the fixed-housing equations).
 
     Parameters
     ----------

@@ -11,9 +11,8 @@ Two film models exist (``film_model=``):
     Infinitely short bearing with half-Sommerfeld cavitation (π-film, moving cavitation boundary),
     closed form for arbitrary dynamic states (docs/theory/films.md#short-bearing-film-model).
 ``"short_corrected"``
-    The short-bearing forces multiplied by finite-length correction factors ``f_r(ε, L/D)``,
-    ``f_t(ε, L/D)`` in the line-of-centres frame (docs/theory/films.md#finite-length-correction), calibrated against a
-    finite-difference
+    The short-bearing forces multiplied by finite-length correction factors ``f_r(ε, L/D)``, ``f_t(ε, L/D)`` in the
+    line-of-centres frame (docs/theory/films.md#finite-length-correction), calibrated against a finite-difference
     solution of the finite-length Reynolds equation (:mod:`frbmodel.physics.finite_length`).
 """
 from __future__ import annotations
@@ -425,8 +424,7 @@ def static_position(film: Film, force, omega_sum: float, film_model: str = "shor
     """Relative position ``e`` [m] at which the film exerts ``force`` [N] on its inner member.
 
     Closed-form inverse of the static film law (docs/theory/films.md#static-equilibrium-of-one-film): ε from the load,
-    the attitude angle β,
-    and φ = ψ_F + β − π with ψ_F the direction of the required force.
+    the attitude angle β, and φ = ψ_F + β − π with ψ_F the direction of the required force.
 
     Parameters
     ----------

@@ -1,20 +1,17 @@
 """Bearing friction: film torque on the journal and friction power of both films
 (docs/theory/rings.md#friction-torque-and-power-loss).
 
-The journal torque and the power loss of a floating-ring bearing come from the same film kernels as the ring's
-torque balance (:func:`frbmodel.physics.film.film_force_kernel`, :func:`frbmodel.physics.film.film_torques_kernel`; the
-ring
+The journal torque and the power loss of a floating-ring bearing come from the same film kernels as the ring's torque
+balance (:func:`frbmodel.physics.film.film_force_kernel`, :func:`frbmodel.physics.film.film_torques_kernel`; the ring
 torque of :func:`frbmodel.physics.bearing.ring_torque_kernel` is the sum of the same two film torques), so the journal
 torque that brakes a torque-driven rotor (:func:`frbmodel.physics.dynamics.spin_acceleration`) is the reaction of the
 film torque that drives the ring.
 
 Sign conventions (docs/theory/conventions.md#conventions, rings.md#floating-ring): torques are CCW about +z; the journal
-torque T_J is the
-inner film's torque on
-the journal about its centre, negative when it brakes the rotor. The friction power of a film is the mechanical
-power its two walls put into it, P = −Σ_walls (T_wall ω_wall + F_wall · v_wall), with F_wall the film force on the
-wall and v_wall the velocity of the wall's centre. For the inner film (journal, ring) and the outer film (ring,
-fixed housing)::
+torque T_J is the inner film's torque on the journal about its centre, negative when it brakes the rotor. The friction
+power of a film is the mechanical power its two walls put into it, P = −Σ_walls (T_wall ω_wall + F_wall · v_wall), with
+F_wall the film force on the wall and v_wall the velocity of the wall's centre. For the inner film (journal, ring) and
+the outer film (ring, fixed housing)::
 
     P_I = −[T_J ω_R + M^I ω_FR + F^I · (v_J − v_FR)]
     P_O = −[M^O ω_FR + F^O · v_FR]

@@ -1132,11 +1132,10 @@ def _plotlyjs_source():
 def plotly_bundle(folder):
     """Make sure ``folder`` holds the installed plotly.js as :data:`PLOTLY_JS` (one copy per folder).
 
-    The file is written when missing or when its header (which names the plotly.js version) differs from the
-    installed one, so figures written by a newer plotly never load an older bundle; a current one is touched, so
-    that it counts among the files of the run that uses it (:mod:`frbmodel.core.manifest` removes a previous run's
-    files that the new run did not write). It is written to a temporary
-    name first and then renamed, so a reader never sees half a file.
+    The file is written when missing or when its header (which names the plotly.js version) differs from the installed
+    one, so figures written by a newer plotly never load an older bundle; a current one is touched, so that it counts
+    among the files of the run that uses it (:mod:`frbmodel.core.manifest` removes a previous run's files that the new
+    run did not write). It is written to a temporary name first and then renamed, so a reader never sees half a file.
 
     Parameters
     ----------

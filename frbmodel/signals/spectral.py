@@ -271,8 +271,7 @@ class SpectrogramResult(Result):
             its system).
         compact : bool
             Keep the file small (:func:`frbmodel.plots.figures.composite_plotly`): at most about a screen of heatmap
-            cells,
-            every peak kept, single precision.
+            cells, every peak kept, single precision.
         include_plotlyjs : {"directory", True}, optional
             How the file gets plotly.js (:func:`frbmodel.plots.figures.write_html`): ``"directory"`` (as every
             interactive figure of a results folder: ``plotly.min.js`` beside the file, one copy per folder; small

@@ -647,8 +647,7 @@ def worker_state() -> dict:
 
 def prepare_worker() -> dict:
     """Import the analysis modules and load the compiled kernels (:func:`frbmodel.studies.warmup.warmup`) into this
-    process
-    once; later calls return at once. Run on every Dask worker before the cases of a study.
+    process once; later calls return at once. Run on every Dask worker before the cases of a study.
 
     Returns
     -------

@@ -67,8 +67,7 @@ def turbocharger(outer_clearance: float = DEFAULT_OUTER_CLEARANCE_M, film_model:
     Notes
     -----
     The ring mass is 7.2e-3 kg: the table's "7.2 kg" is a typo (docs/theory/parameters.md#table-2-in-si-units: a steel
-    ring of these
-    dimensions weighs 7.4 g, and 7.2 g reproduces the table's polar inertia).
+    ring of these dimensions weighs 7.4 g, and 7.2 g reproduces the table's polar inertia).
 
     Examples
     --------
