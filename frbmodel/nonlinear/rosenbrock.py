@@ -11,7 +11,12 @@ torque-driven rotor), each bearing's columns by differences of that bearing's ke
 linear systems are solved reduced to the states after the rotor displacements, whose rows of the Jacobian are
 q' = q̇ exactly (:func:`_factor`).
 
-Everything runs in numba-compiled code; one call integrates through a chunk of output times.
+Everything runs in numba-compiled code; one call integrates through a chunk of output times. Two other methods
+share the code (``method`` of :func:`rodas_chunk`): Rodas5P (Steinebach 2023, order 5(4)) and a faster RODAS
+(the same method, its Jacobian's film columns and its linear systems formed with less work). Measured cost of a
+RODAS step of the main job inside the whirl (43 states, 2-core machine): 7 right-hand sides 9.9 µs, Jacobian 7.4 µs
+(of which the bearings' columns 6.4), LU 4.4 µs, 6 solves 4.0 µs, error norm 0.4 µs; 30 µs in all
+(docs/benchmarks.md).
 """
 from __future__ import annotations
 
@@ -99,39 +104,6 @@ H5 = np.array([  # continuous output: y(θ) = (1 − θ) y0 + θ (y1 + (1 − θ
      15.98066361424651, -6.789040303419874, -6.710236069923372],
     [11.419903575922262, 2.8879645146136994, 72.92137995996029, 80.12511834622643, -52.072871366152654,
      -59.78993625266729, -0.15582684282751913, 4.883087185713722]])
-
-
-def transformed(gamma, alpha, gam, b, bhat):
-    """The transformed coefficients (Hairer & Wanner II, Sect. IV.7, (7.4')) of a Rosenbrock or W-method given as
-    published (α_ij, γ_ij strictly lower, γ_ii = ``gamma``, weights b and embedded b̂): a = α Γ⁻¹,
-    C = diag(1/γ) − Γ⁻¹, m = b Γ⁻¹, the error weights m − m̂, the nodes c_i = Σ_j α_ij and d_i = Σ_j γ_ij."""
-    g = np.asarray(gam, dtype=float) + gamma * np.eye(len(b))
-    gi = np.linalg.inv(g)
-    a = np.asarray(alpha, dtype=float) @ gi
-    return (a, np.diag(np.diag(gi)) - gi, np.asarray(b) @ gi, (np.asarray(b) - np.asarray(bhat)) @ gi,
-            np.asarray(alpha, dtype=float).sum(axis=1), g.sum(axis=1))
-
-
-# ROS34PW2 (J. Rang, L. Angermann, "New Rosenbrock W-methods of order 3 for partial differential algebraic
-# equations of index 1", BIT Numer. Math. 45, 761-787 (2005), Table 4.2... as published): 4 stages, order 3 for any
-# matrix in place of the Jacobian (a W-method), embedded order 2, stiffly accurate, L-stable; tests/test_rosenbrock.py
-# checks its W-order conditions.
-GAMMA_W = 0.43586652150845900
-ALPHA_W = ((0.0, 0.0, 0.0, 0.0), (0.87173304301691801, 0.0, 0.0, 0.0),
-           (0.84457060015369423, -0.11299064236484185, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0))
-GAM_W = ((0.0, 0.0, 0.0, 0.0), (-0.87173304301691801, 0.0, 0.0, 0.0),
-         (-0.90338057013044082, 0.054180672388095326, 0.0, 0.0),
-         (0.24212380706095346, -1.2232505839045147, 0.54526025533510214, 0.0))
-B_W = (0.24212380706095346, -1.2232505839045147, 1.5452602553351020, 0.43586652150845900)
-BHAT_W = (0.37810903145819369, -0.096042292212423178, 0.5, 0.21793326075422950)
-TAB_W = (GAMMA_W,) + transformed(GAMMA_W, ALPHA_W, GAM_W, B_W, BHAT_W)
-# ROS4 of Shampine (L. F. Shampine, "Implementation of Rosenbrock methods", ACM TOMS 8, 93-113 (1982)), in the
-# transformed form as published there (γ = 1/2; 4 stages, 3 right-hand sides: stage 4 at stage 3's point; order 4,
-# embedded 3, A-stable)
-TAB_S4 = (0.5, np.array([[0, 0, 0, 0], [2.0, 0, 0, 0], [48 / 25, 6 / 25, 0, 0], [48 / 25, 6 / 25, 0, 0]]),
-          np.array([[0, 0, 0, 0], [-8.0, 0, 0, 0], [372 / 25, 12 / 5, 0, 0], [-112 / 125, -54 / 125, -2 / 5, 0]]),
-          np.array([0.0, 1.0, 3 / 5, 3 / 5]), np.array([0.5, -1.5, 121 / 50, 29 / 250]),
-          np.array([19 / 9, 0.5, 25 / 108, 125 / 108]), np.array([17 / 54, 7 / 36, 0.0, 125 / 108]))
 
 
 @njit(cache=True)
@@ -291,20 +263,9 @@ def _bearing_columns_films(y, jac, scale, omega, args):
 
 
 @njit(cache=True)
-def jacobian(t, y, f0, jac, work, yp, cols, scale, omega, omega_dot, args, films=False):
-    """∂(dy/dt)/∂y of :func:`frbmodel.physics.dynamics.monolithic_rhs` into ``jac``: the rotor rows exactly (q' = q̇,
-    q̇' = −(M⁻¹K + Ω̇ M⁻¹G) q − Ω M⁻¹G q̇ + ...) in every column, the bearings' journal, ring and ring-speed columns
-    added by differences of the bearing kernels (:func:`_bearing_columns`), the remaining columns of ``cols`` (the
-    rotation angle with unbalance, a torque-driven rotor speed) by forward differences of the whole right-hand side
-    (step 1.5e-8 · max(|y_k|, scale_k)). Journals on linear springs: all of ``cols`` by whole differences. ``f0`` =
-    dy/dt at (t, y)."""
-    n = y.size
-    n_r = args[2]
-    minv_k, minv_g = args[0][1], args[0][2]
-    springs = args[15] > 0.0
-    whole = np.zeros(n, dtype=np.bool_)
-    for c in cols:
-        whole[c] = springs or c >= 2 * n_r + 10
+def _rotor_columns(jac, whole, n_r, minv_k, minv_g, omega, omega_dot):
+    """The rotor's exact block of :func:`jacobian` in every column not ``whole``, the rest of those columns zero."""
+    n = jac.shape[0]
     for k in range(n):
         if whole[k]:
             continue
@@ -317,9 +278,35 @@ def jacobian(t, y, f0, jac, work, yp, cols, scale, omega, omega_dot, args, films
             jac[k - n_r, k] = 1.0
             for i in range(n_r):
                 jac[n_r + i, k] = -omega * minv_g[i, k - n_r]
-    if not springs and films and y.size == 2 * n_r + 11:
+
+
+@njit(cache=True)
+def jacobian(t, y, f0, jac, work, yp, cols, scale, omega, omega_dot, args, films=False):
+    """∂(dy/dt)/∂y of :func:`frbmodel.physics.dynamics.monolithic_rhs` into ``jac``: the rotor rows exactly (q' = q̇,
+    q̇' = −(M⁻¹K + Ω̇ M⁻¹G) q − Ω M⁻¹G q̇ + ...) in every column, the bearings' journal, ring and ring-speed columns
+    added by differences of the bearing kernels (:func:`_bearing_columns`), the remaining columns of ``cols`` (the
+    rotation angle with unbalance, a torque-driven rotor speed) by forward differences of the whole right-hand side
+    (step 1.5e-8 · max(|y_k|, scale_k)). Journals on linear springs: all of ``cols`` by whole differences. ``f0`` =
+    dy/dt at (t, y). ``films`` (the fast RODAS variant, prescribed speed): the bearings' columns by differences of
+    each film alone (:func:`_bearing_columns_films`), the same entries otherwise."""
+    n = y.size
+    n_r = args[2]
+    minv_k, minv_g = args[0][1], args[0][2]
+    springs = args[15] > 0.0
+    whole = np.zeros(n, dtype=np.bool_)
+    for c in cols:
+        whole[c] = springs or c >= 2 * n_r + 10
+    if films and not springs and y.size == 2 * n_r + 11:  # the same entries, written row by row
+        jac[:] = 0.0
+        for i in range(n_r):
+            jac[i, n_r + i] = 1.0
+            for k in range(n_r):
+                jac[n_r + i, k] = -(minv_k[i, k] + omega_dot * minv_g[i, k])
+                jac[n_r + i, n_r + k] = -omega * minv_g[i, k]
         _bearing_columns_films(y, jac, scale, omega, args)
-    elif not springs:
+    else:
+        _rotor_columns(jac, whole, n_r, minv_k, minv_g, omega, omega_dot)
+    if not springs and not (films and y.size == 2 * n_r + 11):
         _bearing_columns(y, jac, yp, scale, omega, omega_dot, args)
     for c in cols:
         if not whole[c]:
@@ -612,60 +599,6 @@ def _dense_output5(t, h, y, ynew, ks, t_eval, k_out, out):
 
 
 @njit(cache=True)
-def _stages_tab(t, h, y, f0, fx, w, piv, jac, ks, ynew, err, rhs, args, tab, blk):
-    """The stages of one step of the method ``tab`` = (γ, a, C, c, d, m, e) in transformed form with the factored
-    W: the new solution into ``ynew``, the embedded error estimate into ``err``. A stage whose point equals the
-    previous one's (a row of ``a`` repeated) reuses its right-hand side."""
-    gam, a, cm, cc, d, mw, ew = tab
-    n = y.size
-    n_r = args[2]
-    hg = h * gam
-    ns = mw.size
-    for s in range(ns):
-        same = s > 1 and cc[s] == cc[s - 1] and a[s, s - 1] == 0.0
-        if same:
-            for j in range(s - 1):
-                same = same and a[s, j] == a[s - 1, j]
-        if s == 0:
-            for i in range(n):
-                rhs[i] = f0[i]
-        elif not same:
-            for i in range(n):
-                acc = y[i]
-                for j in range(s):
-                    acc += a[s, j] * ks[j, i]
-                ynew[i] = acc
-            monolithic_rhs(t + cc[s] * h, ynew, rhs, *args)
-        for i in range(n):
-            acc = rhs[i] + h * d[s] * fx[i]
-            for j in range(s):
-                acc += cm[s, j] / h * ks[j, i]
-            ks[s, i] = acc
-        _solve(w, piv, jac, hg, n_r, ks[s], blk)
-    for i in range(n):
-        acc, e = y[i], 0.0
-        for j in range(ns):
-            acc += mw[j] * ks[j, i]
-            e += ew[j] * ks[j, i]
-        ynew[i] = acc
-        err[i] = e
-
-
-@njit(cache=True)
-def _dense_hermite(t, h, y, ynew, f0, f1, t_eval, k_out, out):
-    """Cubic Hermite output (order 3) of the step (t, y) -> (t + h, ynew) from the slopes ``f0``, ``f1`` at its ends,
-    as :func:`_dense_output`."""
-    n = y.size
-    while k_out < t_eval.size and t_eval[k_out] <= t + h * (1 + 1e-12):
-        th = (t_eval[k_out] - t) / h
-        h00, h10, h01, h11 = (1 + 2 * th) * (1 - th) ** 2, th * (1 - th) ** 2, th * th * (3 - 2 * th), th * th * (th - 1)
-        for i in range(n):
-            out[k_out, i] = h00 * y[i] + h10 * h * f0[i] + h01 * ynew[i] + h11 * h * f1[i]
-        k_out += 1
-    return k_out
-
-
-@njit(cache=True)
 def _dense_output(t, h, y, ynew, ks, t_eval, k_out, out):
     """Continuous output (order 3) of the step (t, y) -> (t + h, ynew) at the output times inside (t, t + h], from
     ``t_eval[k_out]`` on, into ``out``; returns the next output index."""
@@ -680,74 +613,13 @@ def _dense_output(t, h, y, ynew, ks, t_eval, k_out, out):
     return k_out
 
 
-@njit(cache=True, nogil=True)
-def w_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args, modal, reuse, tab, expo):
-    """:func:`rodas_chunk` with the W-method ROS34PW2: the Jacobian (and the time derivative) kept over ``reuse``
-    accepted steps (taken afresh after a rejected step), the iteration matrix factored every step, cubic Hermite
-    output. Returns as :func:`rodas_chunk`."""
-    n = y0.size
-    n_r = args[2]
-    out = np.empty((t_eval.size, n))
-    out[0] = y0
-    ks = np.zeros((tab[5].size, n))
-    f0, f1, fx, work, yp, ynew, err, rhs = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                                            np.empty(n), np.empty(n), np.empty(n))
-    jac = np.empty((n, n))
-    w = np.empty((n - n_r, n - n_r))
-    piv = np.empty(n - n_r, dtype=np.int64)
-    blk = block_workspace(n, n_r, True)
-    y = y0.copy()
-    t = t_eval[0]
-    k_out, steps, rejected, status = 1, 0, 0, 0
-    t_end = t_eval[-1]
-    monolithic_rhs(t, y, f0, *args)
-    age = reuse
-    while k_out < t_eval.size:
-        if steps >= max_steps:
-            status = 1
-            break
-        h = min(h, t_end - t, max_step)
-        if h < 1e-14 * max(abs(t), 1e-3):
-            status = 2
-            break
-        if age >= reuse:
-            omega, omega_dot = _omegas(t, y, f0, n_r, args)
-            jacobian(t, y, f0, jac, work, yp, cols, scale, omega, omega_dot, args)
-            dt = 1e-7 * max(h, 1e-9)
-            monolithic_rhs(t + dt, y, work, *args)
-            for i in range(n):
-                fx[i] = (work[i] - f0[i]) / dt
-            age = 0
-        if not _factor(jac, h * tab[0], n_r, w, piv, blk):
-            status = 3
-            break
-        _stages_tab(t, h, y, f0, fx, w, piv, jac, ks, ynew, err, rhs, args, tab, blk)
-        e = _error_norm(err, y, ynew, rtol, atol, modal)
-        steps += 1
-        if not (e <= 1.0):  # rejected (also NaN): a fresh Jacobian for the retry
-            rejected += 1
-            h *= max(0.2, 0.9 * e ** expo) if e == e else 0.25
-            if age > 0:
-                age = reuse
-            continue
-        monolithic_rhs(t + h, ynew, f1, *args)
-        k_out = _dense_hermite(t, h, y, ynew, f0, f1, t_eval, k_out, out)
-        t += h
-        for i in range(n):
-            y[i] = ynew[i]
-            f0[i] = f1[i]
-        if n > 2 * n_r + 11 and not 0.0 < y[n - 1] <= OMEGA_MAX:
-            status = 4
-            break
-        age += 1
-        h *= min(5.0, max(0.2, 0.9 * max(e, 1e-10) ** expo))
-    return out, k_out, h, steps, rejected, status
-
-
 @njit(cache=True, nogil=True)  # the shooting flows integrate monodromy columns in threads
 def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args, modal, method=RODAS4):
-    """Integrate from t_eval[0] through the times t_eval with RODAS (see the module docstring), or, ``method`` =
-    :data:`RODAS5P`, with Rodas5P (8 stages, order 5(4): fewer steps at tight tolerances).
+    """Integrate from t_eval[0] through the times t_eval with RODAS (see the module docstring); ``method``
+    :data:`RODAS5P`: with Rodas5P (8 stages, order 5(4): fewer steps at tight tolerances, as many at the run-up's
+    defaults); :data:`RODAS4_FAST`: RODAS with each film's Jacobian columns differenced alone
+    (:func:`_bearing_columns_films`) and the ring blocks eliminated before the LU (:func:`_factor_blocks`), the same
+    method at 0.85 of the cost per step (benchmarks/default_convergence.py).
 
     Returns (states at t_eval (k, n), number of rows filled, next step size [s], steps, rejected steps, status:
     0 done, 1 step budget exhausted, 2 step size underflow, 3 singular matrix, 4 a torque-driven speed out of
