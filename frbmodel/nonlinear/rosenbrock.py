@@ -619,7 +619,7 @@ def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, arg
     :data:`RODAS5P`: with Rodas5P (8 stages, order 5(4): fewer steps at tight tolerances, as many at the run-up's
     defaults); :data:`RODAS4_FAST`: RODAS with each film's Jacobian columns differenced alone
     (:func:`_bearing_columns_films`) and the ring blocks eliminated before the LU (:func:`_factor_blocks`), the same
-    method at 0.85 of the cost per step (benchmarks/default_convergence.py).
+    method at 0.84 of the cost per step (benchmarks/default_convergence.py).
 
     Returns (states at t_eval (k, n), number of rows filled, next step size [s], steps, rejected steps, status:
     0 done, 1 step budget exhausted, 2 step size underflow, 3 singular matrix, 4 a torque-driven speed out of
