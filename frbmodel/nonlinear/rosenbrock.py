@@ -15,8 +15,8 @@ Everything runs in numba-compiled code; one call integrates through a chunk of o
 share the code (``method`` of :func:`rodas_chunk`): Rodas5P (Steinebach 2023, order 5(4)) and a faster RODAS
 (the same method, its Jacobian's film columns and its linear systems formed with less work). Measured cost of a
 RODAS step of the main job inside the whirl (43 states, 2-core machine): 7 right-hand sides 9.9 µs, Jacobian 7.4 µs
-(of which the bearings' columns 6.4), LU 4.4 µs, 6 solves 4.0 µs, error norm 0.4 µs; 30 µs in all
-(docs/benchmarks.md).
+(of which the bearings' columns 6.4), LU 4.4 µs, 6 solves 4.0 µs, error norm 0.4 µs; 27.7 µs a step in all
+(docs/validation/nonlinear.md, "Cost of the integrator").
 """
 from __future__ import annotations
 
