@@ -6,8 +6,13 @@ Usage::
 
 The main job's run-up (Table 2 turbocharger, c_o = 36 µm, 20 -> 250 krpm in 1 s, output at 40 kHz) at:
 
-- ``baseline``: the defaults of the issue's filing (rtol 1e-7, atol 1e-10 m, error norm per state): the wall-time
-  baseline, measured in the same run, alternating with ``default``;
+- ``baseline``: the defaults of the issue's filing (rtol 1e-7, atol 1e-10 m, error norm per state, RODAS): the
+  wall-time baseline, measured in the same run, alternating with ``default`` and ``rodas4-fast``;
+- ``rodas4-fast``: the defaults' tolerances and norm with the fast RODAS variant (the same method; each film's
+  Jacobian columns differenced alone, the ring blocks eliminated before the LU:
+  :data:`frbmodel.nonlinear.rosenbrock.RODAS4_FAST`);
+- ``rodas5p`` / ``rodas5p x0.1``: Rodas5P (order 5(4), :data:`frbmodel.nonlinear.rosenbrock.RODAS5P`) at the
+  defaults and tightened tenfold;
 - ``per-state 1e-11``: atol 1e-11 m with the error norm per state (the default of 2026-12-02 morning);
 - ``default``: today's defaults (rtol 1e-7, atol 1e-11 m, the rotor's error in free-free modal coordinates,
   :func:`frbmodel.nonlinear.runup.modal_error_basis`);
@@ -16,15 +21,18 @@ The main job's run-up (Table 2 turbocharger, c_o = 36 µm, 20 -> 250 krpm in 1 s
 - ``…, offset ±1e-9``: the same with the initial journal offset (5 % of the clearance) changed by a relative 1e-9,
   i.e. 1.8e-15 m: what moves then is the model's own sensitivity inside the developed whirl, not the integrator's.
 
-For each: wall time (median over ``--repeats`` for baseline and default), solver steps, the three strongest peaks of
+For each: wall time (median over ``--repeats`` for baseline, default and rodas4-fast; also min and max), solver
+steps, the three strongest peaks of
 the turbine wheel's x spectrum between 0.05 and 0.9 X at 150 / 170 / 200 / 230 krpm (4096 samples about the speed,
 Hann window; a bin is 9.8 Hz) and the onsets of the sub-synchronous components (:func:`frbmodel.spectrogram`). The
-per-state baseline is run by replacing ``modal_error_basis`` with the identity for that run (a benchmark, not the
-API). Writes ``default_convergence.csv`` and prints a markdown table.
+per-state baseline is run by replacing ``modal_error_basis`` with the identity for that run, a RODAS variant by
+passing its method code to the compiled integrator for that run (a benchmark, not the API). Writes
+``default_convergence.csv`` and prints a markdown table.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import statistics
 import time
 from pathlib import Path
@@ -35,11 +43,15 @@ from scipy.signal import find_peaks
 
 import frbmodel as frb
 import frbmodel.nonlinear.runup as ru
-from frbmodel.nonlinear.rosenbrock import NO_MODAL
+from frbmodel.nonlinear.rosenbrock import METHODS, NO_MODAL
 
-#: (label, rtol, atol [m], integrator, modal error norm, initial perturbation [of the clearance])
+#: (label, rtol, atol [m], integrator, modal error norm, initial perturbation [of the clearance]); "rodas" with a
+#: variant: "rodas:<name of METHODS>"
 P0, DP = 0.05, 1e-9  # the default initial offset; a relative change of it (1.8e-15 m) far below every tolerance
+PAIRED = 3  # the first PAIRED runs alternate --repeats times
 RUNS = (("baseline", 1e-7, 1e-10, "rodas", False, P0), ("default", 1e-7, 1e-11, "rodas", True, P0),
+        ("rodas4-fast", 1e-7, 1e-11, "rodas:rodas4-fast", True, P0),
+        ("rodas5p", 1e-7, 1e-11, "rodas:rodas5p", True, P0), ("rodas5p x0.1", 1e-8, 1e-12, "rodas:rodas5p", True, P0),
         ("per-state 1e-11", 1e-7, 1e-11, "rodas", False, P0), ("default x0.1", 1e-8, 1e-12, "rodas", True, P0),
         ("lsoda x0.1", 1e-8, 1e-12, "lsoda", False, P0),
         ("default, offset +1e-9", 1e-7, 1e-11, "rodas", True, P0 * (1 + DP)),
@@ -60,16 +72,30 @@ def peaks_hz(run, rpm, n=4096):
     return [round(float(f[k])) for k in idx[np.argsort(spec[idx])[::-1][:3]]]
 
 
+@contextlib.contextmanager
+def rosenbrock_method(variant):
+    """frb.runup's compiled Rosenbrock integrator with the method ``variant`` (a name of METHODS; "": RODAS)."""
+    real = ru.rodas_chunk
+    if variant:
+        ru.rodas_chunk = lambda *a: real(*a, METHODS[variant])
+    try:
+        yield
+    finally:
+        ru.rodas_chunk = real
+
+
 def one_run(tc, rtol, atol, integrator, modal, perturbation):
     """(run, wall [s]) of the main job at these tolerances and initial offset."""
     real = ru.modal_error_basis
     if not modal:
         ru.modal_error_basis = lambda problem, a, speed_scale=None: (NO_MODAL, a)
+    integrator, _, variant = integrator.partition(":")
     try:
-        t0 = time.perf_counter()
-        run = frb.runup(tc, speed_rpm=(20e3, 250e3), duration=1.0, rtol=rtol, atol=atol, integrator=integrator,
-                        output_rate_hz=40e3, perturbation=perturbation)
-        return run, time.perf_counter() - t0
+        with rosenbrock_method(variant):
+            t0 = time.perf_counter()
+            run = frb.runup(tc, speed_rpm=(20e3, 250e3), duration=1.0, rtol=rtol, atol=atol, integrator=integrator,
+                            output_rate_hz=40e3, perturbation=perturbation)
+            return run, time.perf_counter() - t0
     finally:
         ru.modal_error_basis = real
 
@@ -79,7 +105,8 @@ def row(label, run, walls, baseline_s):
     comps = {c.label: c.onset_rpm for c in frb.spectrogram(run, "turbine_wheel").components()
              if c.label.startswith("sub")}
     wall = statistics.median(walls)
-    return {"run": label, "wall [s]": round(wall, 2), "wall / baseline [-]": round(wall / baseline_s, 2),
+    return {"run": label, "wall [s]": round(wall, 2), "wall min / max [s]": f"{min(walls):.2f} / {max(walls):.2f}",
+            "wall / baseline [-]": round(wall / baseline_s, 2),
             "solver work": run.meta.get("solver_steps", run.meta.get("rhs_evaluations")),
             **{f"peaks {s / 1e3:.0f} krpm [Hz]": " / ".join(map(str, peaks_hz(run, s))) for s in SPEEDS_RPM},
             **{f"{k} onset [rpm]": (f"{v:,.0f}" if np.isfinite(v) else "-") for k, v in sorted(comps.items())}}
@@ -87,19 +114,23 @@ def row(label, run, walls, baseline_s):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeats", type=count, default=3, help="paired repeats of baseline and default (wall: median)")
+    ap.add_argument("--repeats", type=count, default=3,
+                    help="alternating repeats of baseline, default and rodas4-fast (wall: median)")
     ap.add_argument("--out", default="results/default_convergence", help="output folder")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     tc = frb.turbocharger(36e-6)
-    frb.runup(tc, speed_rpm=(20e3, 25e3), duration=0.01)  # load the kernels (not timed)
+    frb.runup(tc, speed_rpm=(20e3, 25e3), duration=0.01)  # load the kernels (not timed), also the variants'
+    for variant in METHODS:
+        with rosenbrock_method(variant):
+            frb.runup(tc, speed_rpm=(20e3, 25e3), duration=0.01)
     runs, walls = {}, {label: [] for label, *_ in RUNS}
-    for _ in range(args.repeats):  # baseline and default alternate: the ratio of one machine state
-        for label, *cfg in RUNS[:2]:
+    for _ in range(args.repeats):  # baseline, default and rodas4-fast alternate: the ratios of one machine state
+        for label, *cfg in RUNS[:PAIRED]:
             runs[label], w = one_run(tc, *cfg)
             walls[label].append(w)
-    for label, *cfg in RUNS[2:]:
+    for label, *cfg in RUNS[PAIRED:]:
         runs[label], w = one_run(tc, *cfg)
         walls[label].append(w)
     base = statistics.median(walls["baseline"])
@@ -111,7 +142,7 @@ def main():
     print("| " + " | ".join(df.columns) + " |\n|" + "---|" * len(df.columns))
     for _, r in df.iterrows():
         print("| " + " | ".join(str(v) for v in r) + " |")
-    for label in ("baseline", "default"):
+    for label, *_ in RUNS[:PAIRED]:
         print(f"{label} walls: {', '.join(f'{w:.2f}' for w in walls[label])} s")
     print(f"wrote {out / 'default_convergence.csv'}")
 
