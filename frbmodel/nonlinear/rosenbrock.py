@@ -11,9 +11,11 @@ torque-driven rotor), each bearing's columns by differences of that bearing's ke
 linear systems are solved reduced to the states after the rotor displacements, whose rows of the Jacobian are
 q' = q̇ exactly (:func:`_factor`).
 
-Everything runs in numba-compiled code; one call integrates through a chunk of output times. Two other methods
-share the code (``method`` of :func:`rodas_chunk`): Rodas5P (Steinebach 2023, order 5(4)) and a faster RODAS
-(the same method, its Jacobian's film columns and its linear systems formed with less work). Measured cost of a
+Everything runs in numba-compiled code; one call integrates through a chunk of output times. Three methods share
+the code (``method`` of :func:`rodas_chunk`): the default :data:`RODAS4_FAST` (RODAS with its Jacobian's film
+columns and its linear systems formed with less work: each film differenced alone, the ring blocks eliminated before
+the LU; the same method, 0.84 of the cost per step), plain RODAS (:data:`RODAS4`, the reference of its test) and
+Rodas5P (Steinebach 2023, order 5(4)). Measured cost of a
 RODAS step of the main job inside the whirl (43 states, 2-core machine): 7 right-hand sides 9.9 µs, Jacobian 7.4 µs
 (of which the bearings' columns 6.4), LU 4.4 µs, 6 solves 4.0 µs, error norm 0.4 µs; 27.7 µs a step in all
 (docs/validation/nonlinear.md, "Cost of the integrator").
@@ -614,12 +616,13 @@ def _dense_output(t, h, y, ynew, ks, t_eval, k_out, out):
 
 
 @njit(cache=True, nogil=True)  # the shooting flows integrate monodromy columns in threads
-def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args, modal, method=RODAS4):
+def rodas_chunk(y0, t_eval, h, rtol, atol, scale, cols, max_steps, max_step, args, modal, method=RODAS4_FAST):
     """Integrate from t_eval[0] through the times t_eval with RODAS (see the module docstring); ``method``
-    :data:`RODAS5P`: with Rodas5P (8 stages, order 5(4): fewer steps at tight tolerances, as many at the run-up's
-    defaults); :data:`RODAS4_FAST`: RODAS with each film's Jacobian columns differenced alone
+    :data:`RODAS4_FAST` (default): RODAS with each film's Jacobian columns differenced alone
     (:func:`_bearing_columns_films`) and the ring blocks eliminated before the LU (:func:`_factor_blocks`), the same
-    method at 0.84 of the cost per step (benchmarks/default_convergence.py).
+    method at 0.84 of the cost per step (benchmarks/default_convergence.py); :data:`RODAS4`: plain RODAS;
+    :data:`RODAS5P`: Rodas5P (8 stages, order 5(4): fewer steps at tight tolerances, as many at the run-up's
+    defaults).
 
     Returns (states at t_eval (k, n), number of rows filled, next step size [s], steps, rejected steps, status:
     0 done, 1 step budget exhausted, 2 step size underflow, 3 singular matrix, 4 a torque-driven speed out of
