@@ -403,8 +403,11 @@ def _parse_unbalance(items):
 
 #: the named speed profiles of ``frb runup --profile`` (or a FILE.csv)
 PROFILES = ("ramp", "exponential", "constant", "up-down", "torque")
+#: default ``frb runup --speeds`` [rpm] (START:END; constant and torque profiles take its START)
+RUNUP_SPEEDS = "20000:250000"
 #: figure titles of the runs by :attr:`frbmodel.nonlinear.runup.SpeedProfile.direction` (else "run-up")
-RUN_TITLES = {"down": "run-down", "up-down": "run-up and run-down", "mixed": "run with rising and falling speed"}
+RUN_TITLES = {"constant": "constant-speed run", "down": "run-down", "up-down": "run-up and run-down",
+              "mixed": "run with rising and falling speed"}
 
 
 def _profile_arg(text):
@@ -417,25 +420,47 @@ def _profile_arg(text):
 def _profile(args):
 
     if args.profile.lower().endswith(".csv"):
+        given = [o for o, v in (("--speeds", args.speeds), ("--drive-torque", args.drive_torque)) if v is not None]
+        if given:  # (they were ignored: the table is the speed)
+            raise ParameterError(f"{given[0]} cannot be combined with --profile {args.profile}: the table "
+                                 "prescribes the speed at every time")
         prof = SpeedProfile.from_csv(args.profile)
         if args.duration is not None and args.duration > prof.t[-1]:
             raise ParameterError(f"--duration = {args.duration!r} s is invalid with --profile {args.profile}: valid "
                                  f"range up to the profile's last time, {prof.t[-1]:g} s")
         return prof
-    if args.profile != "torque" and args.drive_torque:
+    if args.profile != "torque" and args.drive_torque is not None:
         raise ParameterError(f"--drive-torque = {args.drive_torque!r} N m applies only with --profile torque (the "
                              f"--profile {args.profile} prescribes the speed)")
     duration = 1.0 if args.duration is None else args.duration
-    a, b = _speed_pair(args.speeds)
+    if args.profile in ("torque", "constant"):
+        a = _start_speed(args.speeds or RUNUP_SPEEDS.split(":")[0], args.profile)
+        if args.profile == "torque":
+            return SpeedProfile.torque(args.drive_torque or 0.0, a, duration)
+        return SpeedProfile.constant(a, duration)
+    a, b = _speed_pair(args.speeds or RUNUP_SPEEDS)
     if args.profile == "ramp":
         return SpeedProfile.ramp(a, b, duration)
     if args.profile == "exponential":
         return SpeedProfile.exponential(a, b, duration)
-    if args.profile == "up-down":
-        return SpeedProfile.up_down(a, b, duration / 2)
-    if args.profile == "torque":
-        return SpeedProfile.torque(args.drive_torque, a, duration)
-    return SpeedProfile.constant(a, duration)
+    return SpeedProfile.up_down(a, b, duration / 2)
+
+
+def _start_speed(text, profile):
+    """The one speed [rpm] of ``--speeds`` for ``--profile constant`` (the speed held) or ``torque`` (the start
+    speed): START, or START:END with END = START; another END is refused (it was ignored)."""
+    fields = text.split(":")
+    if len(fields) == 1:
+        try:
+            return float(fields[0])
+        except ValueError:
+            raise ParameterError(f"--speeds = {text!r} is invalid: give the speed in rpm, e.g. 20000") from None
+    a, b = _speed_pair(text)
+    if a != b:
+        what = "holds one speed" if profile == "constant" else "starts at START and the drive torque sets the speed"
+        raise ParameterError(f"--speeds = {text!r} is invalid with --profile {profile}: the run {what}, so END "
+                             f"would be ignored; give --speeds {fields[0]}")
+    return a
 
 
 def _speed_pair(text):
@@ -499,8 +524,16 @@ def cmd_bifurcation(args):
 
     tc = load_from_args(args)
     lo, hi = sorted(check_speed(f"--speeds {name}", v) for name, v in zip(("START", "END"), _speed_pair(args.speeds)))
+    if args.hopf_only:  # (they were ignored: no branch is followed)
+        given = [f"--{n.replace('_', '-')}" for n in ("start", "max_points", "segments", "runs")
+                 if getattr(args, n) is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} cannot be combined with --hopf-only: "
+                                 f"{'it applies' if len(given) == 1 else 'they apply'} to the limit-cycle branches, "
+                                 "which --hopf-only does not follow")
     try:
-        start = [s if s == "hopf" else float(s) for s in (x.strip() for x in (args.start or "").split(","))]
+        text = "hopf" if args.start is None else args.start
+        start = [s if s == "hopf" else float(s) for s in (x.strip() for x in text.split(","))]
     except ValueError:
         raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm, or a comma-separated "
                              "list of them (e.g. 25000,60000)") from None
@@ -530,8 +563,8 @@ def cmd_bifurcation(args):
             fh.write(f"{p.speed_rpm:.6f},{1 / p.period:.6f},{p.turbine_radius_m * 1e6:.6f},{p.stable}\n")
 
     try:
-        bd = continuation(tc, (lo, hi), start, max_points=args.max_points, progress=True, on_point=stream,
-                          segments=args.segments, oil_supply=supply)
+        bd = continuation(tc, (lo, hi), start, max_points=40 if args.max_points is None else args.max_points,
+                          progress=True, on_point=stream, segments=args.segments or 1, oil_supply=supply)
         code = 0
     except KeyboardInterrupt as exc:
         code = 143 if isinstance(exc, Terminated) else 130
@@ -630,6 +663,7 @@ def writable_dir(path, option="--out", claim=True):
     import tempfile
 
     p = Path(path)
+    created = next((q for q in [*reversed(p.absolute().parents), p.absolute()] if not q.exists()), None)
     try:
         p.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=p, prefix=".frb_write_check_"):
@@ -637,7 +671,7 @@ def writable_dir(path, option="--out", claim=True):
     except OSError as exc:
         raise ParameterError(f"{option} = {str(path)!r} is not a writable folder: {exc.strerror or exc}") from None
     if claim and not any(c.folder.resolve() == p.resolve() for c in _CLAIMS):
-        _CLAIMS.append(claim_folder(p, " ".join(_COMMAND)))
+        _CLAIMS.append(claim_folder(p, " ".join(_COMMAND), created))
     return p
 
 
@@ -659,8 +693,8 @@ def parse_orders(text: str) -> tuple:
 
     Parameters
     ----------
-    text : str
-        E.g. ``"0.5,1,2"``; ``"none"`` (or empty) for no order lines.
+    text : str or None
+        E.g. ``"0.5,1,2"``; ``"none"`` (or empty) for no order lines; None: the default ``"0.5,1"``.
 
     Returns
     -------
@@ -672,9 +706,32 @@ def parse_orders(text: str) -> tuple:
     >>> parse_orders("0.5,1,2"), parse_orders("none")
     ((0.5, 1.0, 2.0), ())
     """
+    if text is None:
+        text = DEFAULT_ORDERS
     if text.strip().lower() in ("", "none"):
         return ()
     return tuple(check_positive("--orders", x.strip()) for x in text.split(",") if x.strip())
+
+
+#: the default order lines of ``frb plot --orders`` (0.5X and 1X)
+DEFAULT_ORDERS = "0.5,1"
+#: the ``frb plot`` options that only one kind of results folder takes (the others are refused, not ignored)
+PLOT_OPTIONS = {"runup": ("xscale", "orbits", "orbit_times", "revolutions", "waterfall", "orders"),
+                "unbalance": ("locations",), "bifurcation": ("runs",)}
+PLOT_KINDS = {"runup": "a run-up folder (frb runup, frb cosim)", "unbalance": "an unbalance-response folder "
+              "(frb unbalance)", "bifurcation": "a bifurcation folder (frb bifurcation)"}
+
+
+def _plot_kind_options(args, out, kind):
+    """Refuse the ``frb plot`` options that the folder ``out`` of ``kind`` (a key of :data:`PLOT_OPTIONS`) has no
+    use for: each applies to one kind of folder only (they were ignored)."""
+    for other, names in PLOT_OPTIONS.items():
+        given = [f"--{n.replace('_', '-')}" for n in names if other != kind and getattr(args, n, None) not in
+                 (None, False)]
+        if given:
+            takers = ", ".join(f"--{n.replace('_', '-')}" for n in names)
+            raise ParameterError(f"{', '.join(given)} cannot apply to {out}, {PLOT_KINDS[kind]}: {takers} "
+                                 f"need{'s' if len(names) == 1 else ''} {PLOT_KINDS[other]}")
 
 
 def cmd_plot(args):
@@ -682,18 +739,21 @@ def cmd_plot(args):
     interrupted) or by frb unbalance."""
 
     out = Path(args.dir)
+    if out.is_file():  # (the figures are written into DIR: a file there was a traceback, "File exists")
+        raise ParameterError(f"DIR = {args.dir!r} is a file; give the results folder that holds it "
+                             f"(frb plot {str(out.parent)!r})")
     _CLAIMS.append(extend(out, " ".join(_COMMAND)))  # the figures it draws belong to the run whose folder it is
     orders = parse_orders(args.orders)
     if (out / "branch.nc").exists():
+        _plot_kind_options(args, out, "bifurcation")
         return replot_bifurcation(args, out)
     if out.is_dir() and not (out / "runup.csv").exists() and any(out.glob("unbalance_*.json")):
-        if args.orbits or args.orbit_times or args.waterfall:
-            raise ParameterError(f"{out}: an unbalance response; --orbits, --orbit-times and --waterfall need a "
-                                 "run-up folder")
+        _plot_kind_options(args, out, "unbalance")
         locations = _locations(args)
         print("wrote:\n  " + "\n  ".join(str(p) for p in replot_unbalance(out, locations)))
         print(f"results in {out.resolve()}")
         return
+    _plot_kind_options(args, out, "runup")
     run = RunupResult.load(out)
     if run.time.size < 64:
         raise ParameterError(f"{out}: {run.time.size} samples recorded; the figures need at least 64")
@@ -702,7 +762,7 @@ def cmd_plot(args):
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
     windows = _orbit_windows(args, run)  # every option checked before the composites are redrawn
-    write_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
+    write_composites(run, system, out, xscale=args.xscale or "linear", title=title, orders=orders)
     write_orbits(windows, out, data=True)
     if args.waterfall:
         write_waterfalls(run, out, orders=orders)
@@ -985,7 +1045,7 @@ def cmd_cosim(args):
     profile, overrides = None, {}
     if args.profile is not None:
         given = [f"{o} {v}" for o, v in (("--speed-source", args.speed_source), ("--drive-torque", args.drive_torque))
-                 if v]
+                 if v is not None]
         if given:
             raise ParameterError(f"--profile {args.profile} and {' / '.join(given)} are mutually exclusive: the "
                                  "profile prescribes the rotor speed (the rotor FMU's speed_in)")
@@ -994,8 +1054,9 @@ def cmd_cosim(args):
         source = args.speed_source or "ramp"
         overrides = {"rotor": {"speed_source": ("String", source)}}
         if source == "torque":
-            overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque, "N m"))
-        elif args.drive_torque:
+            overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque or 0.0,
+                                                                       "N m"))
+        elif args.drive_torque is not None:
             raise ParameterError("--drive-torque applies only with --speed-source torque")
     _check_ssp(args.ssp, args.parameter_set)
     out = writable_dir(args.out)
@@ -1050,7 +1111,7 @@ def _cosim_system(args):
     """``frb cosim`` of an SSP with the turbocharger FMU (e.g. build/engine_turbocharger.ssp): the fixed-step
     Jacobi master, the FMU's own record at 20 kHz, the composite figures."""
 
-    given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None)]
+    given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None) not in (None, False)]
     if given:
         raise ParameterError(f"{' / '.join(given)} applies to the bearing + rotor split; {args.ssp} holds the "
                              "turbocharger FMU, which integrates itself with error control at any macro step (set its "
@@ -1217,13 +1278,14 @@ def _add_bifurcation(sub):
     b = sub.add_parser("bifurcation", formatter_class=_Formatter,
                        help="Hopf points, limit-cycle branches vs speed (continuation), bifurcation diagram")
     b.add_argument("--speeds", default="1000:250000", metavar="RANGE", help="speed range [rpm]: START:END")
-    b.add_argument("--start", default="hopf",
-                   help="'hopf': a branch from each Hopf point in the range; or a speed [rpm]: the branch through "
-                        "the orbit the whirl settles on there (both directions); or a comma-separated list of "
-                        "these (e.g. 25000,60000)")
-    b.add_argument("--max-points", type=int, default=40, help="points per branch and direction at most")
-    b.add_argument("--segments", type=int, default=1,
-                   help="shooting segments per orbit (multiple shooting, e.g. 4, for strongly unstable branches)")
+    b.add_argument("--start", default=None,
+                   help="'hopf' (default): a branch from each Hopf point in the range; or a speed [rpm]: the branch "
+                        "through the orbit the whirl settles on there (both directions); or a comma-separated list "
+                        "of these (e.g. 25000,60000)")
+    b.add_argument("--max-points", type=int, default=None, help="points per branch and direction at most (default 40)")
+    b.add_argument("--segments", type=int, default=None,
+                   help="shooting segments per orbit (multiple shooting, e.g. 4, for strongly unstable branches; "
+                        "default 1)")
     b.add_argument("--runs", default=None, metavar="DIR[,DIR]",
                    help="run-up / run-down folders whose turbine-wheel orbit envelopes are drawn behind the branches "
                         "(and the first one's spectrogram behind the branch frequencies)")
@@ -1259,16 +1321,18 @@ def _add_runup(sub):
 
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
-    r.add_argument("--speeds", default="20000:250000", metavar="RANGE",
-                   help="speed range [rpm]: START:END (up-down: START:TOP)")
+    r.add_argument("--speeds", default=None, metavar="RANGE",
+                   help=f"speed range [rpm]: START:END (up-down: START:TOP; constant: the speed, torque: the start "
+                        f"speed; default {RUNUP_SPEEDS})")
     r.add_argument("--duration", type=float, default=None,
                    help="simulated time [s] (default: 1; with a CSV profile its last time)")
     r.add_argument("--profile", type=_profile_arg, default="ramp", metavar="{" + ",".join(PROFILES) + "}|FILE.csv",
                    help="speed profile; 'up-down': START -> TOP -> START, half the duration each way; 'torque': the "
                         "spin is a state driven by --drive-torque and braked by the films (starts at START of "
                         "--speeds); FILE.csv: header 'time [s], speed [rpm]', one row per point from t = 0, the speed "
-                        "linear in between (--speeds unused)")
-    r.add_argument("--drive-torque", type=float, default=0.0, help="net drive torque about +z [N m] (--profile torque)")
+                        "linear in between (without --speeds)")
+    r.add_argument("--drive-torque", type=float, default=None,
+                   help="net drive torque about +z [N m] (--profile torque; default 0: the films brake the rotor)")
     r.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
                    help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable)")
     r.add_argument("--rate", type=float, default=20e3, help="output sampling rate [Hz]")
@@ -1341,8 +1405,9 @@ def _add_cosim(sub):
                     help="rotor speed from a CSV table 'time [s], speed [rpm]' (linear in between) through the rotor "
                          "FMU's speed_in; excludes --speed-source and --drive-torque; the stop time defaults to the "
                          "table's last time")
-    cs.add_argument("--drive-torque", type=float, default=0.0,
-                    help="net drive torque about +z [N m] for --speed-source torque")
+    cs.add_argument("--drive-torque", type=float, default=None,
+                    help="net drive torque about +z [N m] for --speed-source torque (default 0: the bearings brake "
+                         "the rotor)")
     cs.add_argument("--adaptive", action="store_true",
                     help="error-controlled macro step: steps whose journal path defect exceeds --coupling-tol are "
                          "rolled back and retried shorter, quiet phases grow the step (up to 12.5 us); outputs at "
@@ -1459,7 +1524,7 @@ def _add_plot(sub):
     pl.add_argument("dir", help="folder with runup.csv and runup.json, or with the unbalance_<M>.json/_dofs.csv files "
                                 "of frb unbalance (then the Bode, polar and film-orbit figures are redrawn), or with "
                                 "the branch.nc of frb bifurcation (then the diagram)")
-    pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
+    pl.add_argument("--xscale", choices=["linear", "log"], default=None, help="speed axis scale (default linear)")
     pl.add_argument("--orbits", metavar="SPEEDS", default=None,
                     help="also write orbits_<rpm>.png/.html/.csv/.nc at these speeds [rpm] (comma list or "
                          "start:stop:count; ± --revolutions about each): journal in ring, ring in housing (µm and ε), "
@@ -1471,9 +1536,9 @@ def _add_plot(sub):
                          "e.g. the settled end of a constant-speed run")
     pl.add_argument("--waterfall", action="store_true",
                     help="also write the 3-D waterfall waterfall_<disc>.png/.html (amplitude in µm, order lines)")
-    pl.add_argument("--orders", metavar="K", default="0.5,1",
-                    help="order lines k × rotor frequency drawn on the spectrograms and waterfalls (comma list, "
-                         "e.g. 0.5,1,2; 'none' for none)")
+    pl.add_argument("--orders", metavar="K", default=None,
+                    help=f"order lines k × rotor frequency drawn on the spectrograms and waterfalls (comma list, "
+                         f"e.g. 0.5,1,2; 'none' for none; default {DEFAULT_ORDERS})")
     pl.add_argument("--locations", default=None,
                     help="unbalance folders: locations drawn, comma list (default: the discs)")
     pl.add_argument("--runs", default=None, metavar="DIR[,DIR]",

@@ -208,6 +208,22 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["runup", "--profile", "torque", "--drive-torque", "1e9", "--integrator", "lsoda", "--duration", "0.01"],
      ["--drive-torque = 1e+09 N m is invalid: valid range |torque| <= 1.32e+04 N m"]),
     (["campbell", "--system", ""], ["--system = '' is invalid"]),
+    # trust4: options that were dropped without a word
+    (["runup", "--profile", "ramp", "--drive-torque", "0", "--duration", "0.01"],
+     ["--drive-torque = 0.0 N m applies only with --profile torque"]),
+    (["runup", "--profile", "constant", "--speeds", "20000:30000", "--duration", "0.01"],
+     ["--speeds = '20000:30000' is invalid with --profile constant", "END would be ignored", "give --speeds 20000"]),
+    (["runup", "--profile", "torque", "--speeds", "20000:30000", "--duration", "0.01"],
+     ["--speeds = '20000:30000' is invalid with --profile torque", "give --speeds 20000"]),
+    (["runup", "--profile", "torque", "--speeds", "fast", "--duration", "0.01"], ["--speeds = 'fast' is invalid"]),
+    (["bifurcation", "--hopf-only", "--speeds", "1000:5000", "--start", "3000", "--max-points", "3"],
+     ["--start, --max-points cannot be combined with --hopf-only"]),
+    (["bifurcation", "--hopf-only", "--speeds", "1000:5000", "--segments", "4"],
+     ["--segments cannot be combined with --hopf-only"]),
+    (["bifurcation", "--start", "", "--speeds", "1000:5000"], ["--start = '' is invalid"]),
+    # trust4: refused while computing, after the folder was made: it was left behind, empty
+    (["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"],
+     ["turbine inner film temperature at 10000 rpm", "beyond the oil's viscosity law"]),
 ])
 def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, words, tmp_path, capsys):
     """Issue #24 items 2-3: each case ran (exit 0) with a meaningless result or dropped the input; now exit 2 with
@@ -442,3 +458,60 @@ def test_api_inputs_that_were_misread_or_ignored_are_refused():
     for bad in (-1.0, 0.0):
         with pytest.raises(ParameterError, match="segment_s = "):
             frb.spectrogram(run, "w", segment_s=bad)
+
+
+def test_runup_profile_options_that_were_ignored_are_refused_and_one_speed_profiles_take_one_speed(tmp_path, capsys):
+    """trust4: with --profile FILE.csv, --speeds and --drive-torque were ignored (the run followed the table); with
+    --profile constant (torque), --speeds START:END ran at (from) START and dropped END. Now the CSV cases are
+    refused with nothing written, and a one-speed profile takes --speeds START: the run holds exactly that speed."""
+    table = tmp_path / "p.csv"
+    table.write_text("time [s],speed [rpm]\n0,20000\n0.01,21000\n")
+    for extra, option in ((["--speeds", "50000:60000"], "--speeds"), (["--drive-torque", "0.05"], "--drive-torque")):
+        out = tmp_path / option.strip("-")
+        assert main(["runup", "--profile", str(table), *extra, "--no-figure", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"{option} cannot be combined with --profile {table}" in err and "Traceback" not in err, err
+        assert not out.exists()
+    out = tmp_path / "held"
+    assert main(["runup", "--profile", "constant", "--speeds", "25000", "--duration", "0.005", "--no-figure",
+                 "--out", str(out)]) == 0
+    assert "constant-speed run: constant 25000 rpm" in capsys.readouterr().out
+    np.testing.assert_array_equal(frb.RunupResult.load(out).speed_rpm, 25000.0)
+
+
+def test_plot_refuses_a_file_and_the_options_of_another_kind_of_folder(tmp_path, capsys):
+    """trust4: `frb plot DIR/runup.csv` (the file, not its folder) ended in a FileExistsError traceback; --locations
+    (unbalance folders) and --runs (bifurcation folders) on a run-up folder, --orders / --xscale on an unbalance
+    folder were ignored. Now each is one line, exit 2, with nothing added to the folder."""
+    run = tmp_path / "run"
+    assert main(["runup", "--duration", "0.005", "--no-figure", "--out", str(run)]) == 0
+    capsys.readouterr()
+    before = sorted(p.name for p in run.iterdir())
+    cases = [([str(run / "runup.csv")], f"DIR = '{run / 'runup.csv'}' is a file; give the results folder"),
+             ([str(run), "--locations", "turbine_wheel"], "--locations cannot apply to"),
+             ([str(run), "--runs", str(run)], "--runs needs a bifurcation folder")]
+    for argv, words in cases:
+        assert main(["plot", *argv]) == 2, argv
+        err = capsys.readouterr().err
+        assert words in err and "Traceback" not in err, err
+    assert sorted(p.name for p in run.iterdir()) == before
+    ub = tmp_path / "ub"
+    assert main(["unbalance", "--method", "A", "--speeds", "3000:30000:3", "--out", str(ub)]) == 0
+    capsys.readouterr()
+    assert main(["plot", str(ub), "--orders", "1", "--xscale", "log"]) == 2
+    assert "--xscale, --orders cannot apply to" in capsys.readouterr().err
+
+
+def test_a_refused_command_removes_the_folders_it_made_and_keeps_those_that_were_there(tmp_path, capsys):
+    """trust4: a command refused while computing (here a supply temperature at the oil's limit: the first film is
+    beyond it) left the --out folder it had made, empty, with its parents. Now it removes the folders it made; a
+    folder that was there stays, with its files."""
+    argv = ["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"]
+    assert main([*argv, "--out", str(tmp_path / "a" / "b" / "c")]) == 2
+    assert "beyond the oil's viscosity law" in capsys.readouterr().err
+    assert not (tmp_path / "a").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    (kept / "note.txt").write_text("mine")
+    assert main([*argv, "--out", str(kept)]) == 2
+    assert sorted(p.name for p in kept.iterdir()) == ["note.txt"]
