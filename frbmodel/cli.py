@@ -129,6 +129,12 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
     return speeds
 
 
+def _given(value, default):
+    """An option's value, or ``default`` when it was not given (an empty text is a value: it is checked and refused
+    where it is parsed, not replaced by the default)."""
+    return default if value is None else value
+
+
 def check_method_speeds(option, text, speeds, letters):
     """Refuse, before any folder is made, speeds that the methods ``letters`` cannot take (film methods need speeds
     > 0; :func:`frbmodel.linear.campbell.check_speeds`), naming the option and its value."""
@@ -212,9 +218,10 @@ def cmd_campbell(args):
         raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
                              "set); without it the system is --system / --outer-clearance")
     if args.from_fmu:
-        args.parameter_set = args.parameter_set or "co36"
+        args.parameter_set = _given(args.parameter_set, "co36")
         _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky", "oil",
                                 "supply_temperature", "supply_pressure"))
+        _check_ssp(args.from_fmu, args.parameter_set)  # (the user's SSP and set named, before the folder is made)
         out = writable_dir(args.out)
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
         tc, kw = None, {}
@@ -434,11 +441,11 @@ def _profile(args):
                              f"--profile {args.profile} prescribes the speed)")
     duration = 1.0 if args.duration is None else args.duration
     if args.profile in ("torque", "constant"):
-        a = _start_speed(args.speeds or RUNUP_SPEEDS.split(":")[0], args.profile)
+        a = _start_speed(_given(args.speeds, RUNUP_SPEEDS.split(":")[0]), args.profile)
         if args.profile == "torque":
             return SpeedProfile.torque(args.drive_torque or 0.0, a, duration)
         return SpeedProfile.constant(a, duration)
-    a, b = _speed_pair(args.speeds or RUNUP_SPEEDS)
+    a, b = _speed_pair(_given(args.speeds, RUNUP_SPEEDS))
     if args.profile == "ramp":
         return SpeedProfile.ramp(a, b, duration)
     if args.profile == "exponential":
@@ -895,7 +902,7 @@ def _supply_text(supply):
 def _supply_from_args(args, oil):
     """Supply temperatures [K] (each checked against the oil's range) and pressure [Pa] of ``frb losses``."""
 
-    text = args.supply_temperature or "333.15,363.15,393.15"
+    text = _given(args.supply_temperature, "333.15,363.15,393.15")
     try:
         values = [float(x) for x in text.split(",")]
     except ValueError:
@@ -962,7 +969,7 @@ def _runup_ramp_from_args(args):
         return None
     if not args.onsets:
         raise ParameterError("--runup-onsets needs --onsets (the run-up onsets are drawn beside the linear ones)")
-    text = args.runup_speeds or "20000:250000"
+    text = _given(args.runup_speeds, "20000:250000")
     try:
         lo, hi = (float(x) for x in text.split(":"))
     except ValueError:
@@ -1161,39 +1168,73 @@ def cmd_linearize(args):
         print(f"wrote {p.resolve()}")
 
 
+#: ``frb sweep`` options that only some analyses take (given for another, they were ignored)
+SWEEP_OPTIONS = {"methods": ("campbell",), "duration": ("runup", "cosim"), "max_points": ("bifurcation",),
+                 "ssp": ("cosim",)}
+
+
+def _sweep_params(items):
+    """``{name: [values]}`` of the repeatable ``--param NAME=V1,V2,...`` (SI); a name given twice is refused (the
+    second replaced the first)."""
+    params = {}
+    for item in items:
+        try:
+            name, vals = item.split("=", 1)
+            values = [float(v) for v in vals.split(",")]
+        except ValueError:
+            raise ParameterError(f"--param {item!r} is invalid: use NAME=V1,V2,... with SI values") from None
+        if name.strip() in params:
+            raise ParameterError(f"--param {item!r}: {name.strip()} is given twice; give all its values in one "
+                                 f"--param {name.strip()}=V1,V2,...")
+        params[name.strip()] = values
+    return params
+
+
+def _sweep_cases(args):
+    """The cases of ``frb sweep``: ``--example``, or the grid of ``--param`` with the analysis' options (an option
+    the analysis has no use for is refused, naming the analyses that take it)."""
+    options = ("param", "oil", "analysis", "methods", "speeds", "duration", "max_points", "ssp")
+    if args.example:
+        given = [f"--{n.replace('_', '-')}" for n in options if getattr(args, n) is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} cannot be combined with --example {args.example}: the built-in "
+                                 "study sets its own parameters and analyses (give --param NAME=V1,V2,... instead)")
+        return example_cases(args.example)
+    if not args.param:
+        raise ParameterError("frb sweep needs --param NAME=V1,V2,... (or --example outer-clearance)")
+    params = _sweep_params(args.param)
+    analysis = args.analysis or "campbell"
+    for name, takers in SWEEP_OPTIONS.items():
+        if getattr(args, name) is not None and analysis not in takers:
+            raise ParameterError(f"--{name.replace('_', '-')} cannot apply to --analysis {analysis}: it is an option "
+                                 f"of --analysis {' / '.join(takers)}")
+    if analysis == "campbell":
+        speeds = parse_speeds(_given(args.speeds, "1000:250000:200"))
+        opts = {"methods": [m.strip().upper() for m in _given(args.methods, "J").split(",")],
+                "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
+    else:
+        opts = {"speed_rpm": _speed_pair(_given(args.speeds, "1000:250000"))}
+        if analysis in ("runup", "cosim"):
+            opts["duration"] = 2.0 if args.duration is None else args.duration
+        if analysis == "bifurcation":
+            opts["max_points"] = 25 if args.max_points is None else args.max_points
+        if analysis == "cosim":
+            if not args.ssp:
+                raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
+            opts["ssp"] = str(Path(args.ssp).resolve())
+    if args.oil is not None:
+        opts["oil"] = args.oil
+    return grid(params, analysis, **opts)
+
+
 def cmd_sweep(args):
     """``frb sweep``: parameter study (on Dask or serial) and its stability map; exit code 4 if a case failed."""
 
-    if args.example:
-        cases = example_cases(args.example)
-    else:
-        if not args.param:
-            raise ParameterError("frb sweep needs --param NAME=V1,V2,... (or --example outer-clearance)")
-        params = {}
-        for item in args.param:
-            try:
-                name, vals = item.split("=", 1)
-                params[name.strip()] = [float(v) for v in vals.split(",")]
-            except ValueError:
-                raise ParameterError(f"--param {item!r} is invalid: use NAME=V1,V2,... with SI values") from None
-        opts = {}
-        if args.analysis == "campbell":
-            speeds = parse_speeds(args.speeds or "1000:250000:200")
-            opts = {"methods": [m.strip().upper() for m in args.methods.split(",")],
-                    "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
-        else:
-            lo, hi = _speed_pair(args.speeds or "1000:250000")
-            opts = {"speed_rpm": (lo, hi)} if args.analysis in ("hopf", "bifurcation") else \
-                {"speed_rpm": (lo, hi), "duration": args.duration}
-            if args.analysis == "bifurcation":
-                opts["max_points"] = args.max_points
-            if args.analysis == "cosim":
-                if not args.ssp:
-                    raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
-                opts["ssp"] = str(Path(args.ssp).resolve())
-        if args.oil is not None:
-            opts["oil"] = args.oil
-        cases = grid(params, args.analysis, **opts)
+    cases = _sweep_cases(args)
+    if args.workers is not None and (args.serial or args.scheduler):
+        raise ParameterError(f"--workers {args.workers} cannot be combined with "
+                             f"{'--serial' if args.serial else '--scheduler'}: it sets the processes of the "
+                             "LocalCluster frb sweep starts itself")
     scheduler = "serial" if args.serial else args.scheduler
     check_scheduler(scheduler)  # (before the folder is made: a wrong address leaves nothing behind)
     writable_dir(args.out, claim=False)  # (a study resumes in its folder: its index owns it)
@@ -1450,16 +1491,18 @@ def _add_sweep(sub):
                     help="thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46): "
                          "every case at its supply temperature (default 363.15 K) and pressure (3e5 Pa); campbell "
                          "(film methods), runup, hopf and bifurcation")
-    sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default="campbell",
-                    help="'hopf': the Hopf points of the full model (linear onsets) in --speeds START:END; two swept "
+    sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default=None,
+                    help="'campbell' (default): the Campbell diagrams' onsets; 'hopf': the Hopf points of the full "
+                         "model (linear onsets) in --speeds START:END; two swept "
                          "parameters give a stability chart; 'bifurcation': the limit-cycle branches from those Hopf "
                          "points (each case's diagram in cases/<id>/, its bifurcation points in the map)")
-    sw.add_argument("--max-points", type=int, default=25, help="bifurcation: points per branch and direction")
-    sw.add_argument("--methods", default="J", help="Campbell methods, comma list")
+    sw.add_argument("--max-points", type=int, default=None,
+                    help="bifurcation: points per branch and direction (default 25)")
+    sw.add_argument("--methods", default=None, help="campbell: methods, comma list (default J)")
     sw.add_argument("--speeds", default=None, metavar="GRID|RANGE",
                     help="campbell: START:STOP:COUNT (default 1000:250000:200); the other analyses: START:END "
                          "(default 1000:250000) [rpm]")
-    sw.add_argument("--duration", type=float, default=2.0, help="run-up duration [s]")
+    sw.add_argument("--duration", type=float, default=None, help="runup, cosim: simulated time [s] (default 2)")
     sw.add_argument("--ssp", default=None, help="SSP for --analysis cosim")
     sw.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler (tcp://host:port)")
     sw.add_argument("--workers", type=int, default=None, help="LocalCluster worker processes (default: cores)")

@@ -221,6 +221,23 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["bifurcation", "--hopf-only", "--speeds", "1000:5000", "--segments", "4"],
      ["--segments cannot be combined with --hopf-only"]),
     (["bifurcation", "--start", "", "--speeds", "1000:5000"], ["--start = '' is invalid"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "hopf", "--methods", "B", "--serial"],
+     ["--methods cannot apply to --analysis hopf: it is an option of --analysis campbell"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "hopf", "--duration", "5", "--serial"],
+     ["--duration cannot apply to --analysis hopf", "runup / cosim"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--ssp", "x.ssp", "--serial"],
+     ["--ssp cannot apply to --analysis campbell"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--param", "outer_clearance=40e-6", "--serial"],
+     ["outer_clearance is given twice"]),
+    (["sweep", "--example", "outer-clearance", "--oil", "SAE 5W-30", "--serial"],
+     ["--oil cannot be combined with --example outer-clearance"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--serial", "--workers", "2"],
+     ["--workers 2 cannot be combined with --serial"]),
+    # trust4: an empty value was replaced by the default
+    (["losses", "--oil", "SAE 5W-30", "--supply-temperature", "", "--speeds", "100000"],
+     ["--supply-temperature = '' is invalid"]),
+    (["runup", "--speeds", "", "--duration", "0.01"], ["--speeds = '' is invalid"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--methods", "", "--serial"], ["method = '' is unknown"]),
     # trust4: refused while computing, after the folder was made: it was left behind, empty
     (["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"],
      ["turbine inner film temperature at 10000 rpm", "beyond the oil's viscosity law"]),
@@ -515,3 +532,57 @@ def test_a_refused_command_removes_the_folders_it_made_and_keeps_those_that_were
     (kept / "note.txt").write_text("mine")
     assert main([*argv, "--out", str(kept)]) == 2
     assert sorted(p.name for p in kept.iterdir()) == ["note.txt"]
+
+
+def test_commands_at_constant_viscosities_refuse_a_system_with_an_oil(tmp_path, capsys):
+    """trust4: `frb compare`, `frb paper-figures` and `frb build-fmus --rotor-file` of a system file with an [oil]
+    table ran at the films' constant viscosities, the oil ignored without a word (and build-fmus left its folder).
+    Now each is refused before any folder is made; the library functions refuse it too."""
+    from frbmodel.cosim.fmu_system import check_rotor_system
+    from frbmodel.studies.compare import compare
+    from frbmodel.studies.paper import paper_figures
+
+    path = frb.turbocharger().save(tmp_path / "oily.toml")
+    path.write_text(path.read_text() + '\n[oil]\nname = "SAE 5W-30"\n')
+    assert frb.load_system(path).oil.name == "SAE 5W-30"
+    for argv in (["compare", "--system", str(path), "--duration", "0.01"], ["paper-figures", "--system", str(path)],
+                 ["build-fmus", "--rotor-file", str(path)]):
+        out = tmp_path / argv[0]
+        assert main([*argv, "--out", str(out)]) == 2, argv
+        err = capsys.readouterr().err
+        assert "has an oil (SAE 5W-30, its [oil] table)" in err and "would ignore it" in err, err
+        assert "Traceback" not in err and not out.exists()
+    tc = frb.load_system(path)
+    for call in (lambda: compare(tc, out_dir=tmp_path / "c"), lambda: paper_figures(tc, tmp_path / "p"),
+                 lambda: check_rotor_system(tc)):
+        with pytest.raises(ParameterError, match="has an oil"):
+            call()
+    assert check_rotor_system(frb.turbocharger()).oil is None
+
+
+def test_study_options_an_analysis_does_not_take_are_refused():
+    """trust4: grid() kept options its analysis never reads (a duration for Hopf points, methods for a run-up) and
+    ran a runup study with profile = 'constant' as a ramp. Now each is refused, naming the analysis' options."""
+    from frbmodel.studies.sweep import grid
+
+    for analysis, opts, words in (("hopf", {"duration": 1.0}, "sweep option duration = 1.0 does not apply to "
+                                                              "analysis 'hopf': its options are speed_rpm, oil"),
+                                  ("runup", {"methods": ["J"]}, "sweep option methods"),
+                                  ("runup", {"profile": "constant"}, "runup profile = 'constant' is unknown"),
+                                  ("runup", {"output_rate_hz": 0.0}, "runup output_rate_hz = 0.0 Hz is invalid")):
+        with pytest.raises(ParameterError, match=words.replace("(", r"\(")):
+            grid({"outer_clearance": [36e-6]}, analysis, **opts)
+    assert grid({"outer_clearance": [36e-6]}, "runup", profile="ramp", duration=0.1)[0].options["profile"] == "ramp"
+
+
+def test_campbell_from_fmu_names_an_unknown_parameter_set_of_the_users_ssp_first(built, tmp_path, capsys):
+    """trust4: `frb campbell --from-fmu X.ssp --parameter-set co99` built the linearization variant, made the folder
+    and then named a temporary SSP; `--parameter-set ''` fell back to co36. Now both are refused at once, naming
+    the user's SSP, with nothing written."""
+    for pset in ("co99", ""):
+        out = tmp_path / f"c{pset}"
+        assert main(["campbell", "--from-fmu", str(built / "turbocharger.ssp"), "--parameter-set", pset,
+                     "--speeds", "100000", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"parameter set = {pset!r} is not in SSP '{built / 'turbocharger.ssp'}'" in err, err
+        assert not out.exists()

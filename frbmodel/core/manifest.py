@@ -134,6 +134,12 @@ class Claim:
         :attr:`folder`), where they are empty."""
         if self.created is None:
             return
+        for root, dirs, _ in os.walk(self.folder, topdown=False):  # (empty subfolders it made, e.g. build/fmus)
+            for d in dirs:
+                try:
+                    (Path(root) / d).rmdir()  # (only if empty)
+                except OSError:
+                    pass
         top, p = Path(self.created).resolve(), self.folder.resolve()
         chain = [p, *[q for q in p.parents if q == top or top in q.parents]]
         for q in chain:

@@ -14,12 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.errors import check_system
 from ..core.progress import counter_bar, note
 from ..linear.campbell import campbell
 from ..nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, RunupStopped, SpeedProfile, runup
 from ..plots.style import readable
 from ..signals.convergence import convergence_table
 from ..signals.spectral import spectrogram
+from ..system.oil import check_no_oil
 from ..system.presets import PAPER_OUTER_CLEARANCES
 
 
@@ -214,6 +216,7 @@ def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), d
     import pandas as pd
 
 
+    check_no_oil(check_system(system), "frb compare (frbmodel.studies.compare)")
     node = node or system.rotor.discs[0].name
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
