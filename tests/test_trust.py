@@ -586,3 +586,69 @@ def test_campbell_from_fmu_names_an_unknown_parameter_set_of_the_users_ssp_first
         err = capsys.readouterr().err
         assert f"parameter set = {pset!r} is not in SSP '{built / 'turbocharger.ssp'}'" in err, err
         assert not out.exists()
+
+
+def _ring_lag(**kw):
+    from frbmodel.linear.thermal import ring_lag
+    from frbmodel.physics.thermal import ThermalModel
+
+    args = dict(system=frb.turbocharger(), time_s=[0.0, 1.0], speed_rpm=[2e4, 3e4],
+                oil_supply=frb.OilSupply(frb.OILS["SAE 5W-30"], model=ThermalModel(ring_heat_capacity_J_K=2.7)))
+    return ring_lag(**{**args, **kw})
+
+
+def _thermal_model(**kw):
+    from frbmodel.physics.thermal import ThermalModel
+
+    return ThermalModel(**kw)
+
+
+@pytest.mark.parametrize("call, message", [
+    # thermal_losses without an oil returned the constant-viscosity table and dropped the supply
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], None, 333.15), "supply_temperature_K needs an oil"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], None, supply_pressure_Pa=4e5),
+     "supply_pressure_Pa needs an oil"),
+    # an empty table (0 rows, 0 columns) for no speed or no supply temperature; text converted to numbers
+    (lambda: frb.thermal_losses(frb.turbocharger(), [], frb.OILS["SAE 5W-30"]), "speed_rpm = [] is invalid"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"], []),
+     "supply_temperature_K = [] is invalid"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), "1e5", frb.OILS["SAE 5W-30"]), "speed_rpm = '1e5' is invalid"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"], "333"),
+     "supply_temperature_K = '333' is invalid"),
+    # ThermalModel: a wall temperature of a path that is off had no effect; 'no' switched the centrifugal feed on;
+    # a tolerance of 1e9 K accepted any unconverged operating point
+    (lambda: _thermal_model(shaft_temperature_K=400.0), "shaft_temperature_K = 400.0 K has no effect with "
+                                                         "shaft_heat_transfer_W_m2K = 0"),
+    (lambda: _thermal_model(housing_temperature_K=400.0), "housing_temperature_K = 400.0 K has no effect"),
+    (lambda: _thermal_model(centrifugal_feed="no"), "centrifugal_feed = 'no' is a str; expected True or False"),
+    (lambda: _thermal_model(tolerance_K=1e9), "tolerance_K = 1000000000.0 K is invalid: valid range 0 < "
+                                              "tolerance_K <= 0.001 K"),
+    # OilSupply.from_dict of an incomplete table: KeyError / TypeError
+    (lambda: frb.OilSupply.from_dict({"oil": {"name": "SAE 5W-30"}}), "oil_supply = {'oil': "),
+    (lambda: frb.OilSupply.from_dict("x"), "oil_supply = 'x' is invalid: expected a table with the keys"),
+    # ring_lag: rtol 0 / -1 / 10 taken by LSODA (10 changed the temperatures), text times converted, a string system
+    # an AttributeError
+    (lambda: _ring_lag(rtol=0.0), "rtol = 0.0 is invalid"),
+    (lambda: _ring_lag(rtol=10.0), "rtol = 10.0 is invalid: valid range 1e-13 ... 1e-3"),
+    (lambda: _ring_lag(time_s=["0", "1"]), "time_s = ['0', '1'] is invalid"),
+    (lambda: _ring_lag(system="tc"), "system = 'tc' is a str; expected a Turbocharger"),
+    # a nan supply temperature was named without the temperatures' range
+    (lambda: frb.OilSupply(frb.OILS["SAE 5W-30"], float("nan")), "supply_temperature_K = nan K is invalid: valid "
+                                                                  "range 243.15 ... 473.15 K"),
+])
+def test_thermal_api_inputs_that_were_dropped_converted_or_accepted_are_refused(call, message):
+    """trust4: each call returned a result (or a traceback of another kind); now a ParameterError naming the
+    argument, its value and what is valid."""
+    with pytest.raises(ParameterError) as exc:
+        call()
+    assert message in str(exc.value), str(exc.value)
+
+
+def test_thermal_losses_defaults_are_the_documented_supply():
+    """Without supply arguments thermal_losses is at 363.15 K and 3e5 Pa (the defaults now None in the signature);
+    the two calls give the same table to the last bit."""
+    oil = frb.OILS["SAE 5W-30"]
+    a = frb.thermal_losses(frb.turbocharger(), [1e5], oil)
+    b = frb.thermal_losses(frb.turbocharger(), [1e5], oil, 363.15, 3e5)
+    assert (a["supply temperature [K]"] == 363.15).all() and (a["supply pressure [Pa]"] == 3e5).all()
+    assert a.drop(columns="iterations [-]").equals(b.drop(columns="iterations [-]"))

@@ -72,7 +72,8 @@ def check_temperature(name, temperature_K, minimum_K=T_MIN_K, maximum_K=T_MAX_K)
     ...     print(exc)
     supply temperature = 90.0 K is invalid: valid range 243.15 ... 473.15 K (-30 ... 200 °C); temperatures are in K
     """
-    t = check_real(name, temperature_K, "K")
+    nonfinite = isinstance(temperature_K, float) and not math.isfinite(temperature_K)  # (given the range below)
+    t = temperature_K if nonfinite else check_real(name, temperature_K, "K")
     if not minimum_K <= t <= maximum_K:
         raise ParameterError(f"{name} = {t!r} K is invalid: valid range {minimum_K:g} ... {maximum_K:g} K "
                              f"({minimum_K - 273.15:.0f} ... {maximum_K - 273.15:.0f} °C); temperatures are in K")
