@@ -357,7 +357,7 @@ def cmd_equilibrium(args):
     supply = _oil_supply_from_args(args, tc)
     if supply is not None:
         tc = at_operating_point(tc, args.speed_rpm, supply, args.method)
-    out = writable_dir(args.out) if args.out else None
+    out = writable_dir(args.out) if args.out is not None else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
     if supply is not None:
         print(f"thermal operating point: {_supply_text(supply)}; film viscosities [Pa s]: " + ", ".join(
@@ -387,8 +387,14 @@ def cmd_paper_figures(args):
 
 
 def _locations(args):
-    """The names of ``--locations NAME,NAME`` (None when not given)."""
-    return [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
+    """The names of ``--locations NAME,NAME`` (None when not given; a text that names none is refused)."""
+    if args.locations is None:
+        return None
+    names = [x.strip() for x in args.locations.split(",") if x.strip()]
+    if not names:  # (it drew the default locations)
+        raise ParameterError(f"--locations = {args.locations!r} names no location: give a comma list of names, e.g. "
+                             "turbine_wheel,compressor_wheel")
+    return names
 
 
 def _parse_unbalance(items):
@@ -669,6 +675,8 @@ def writable_dir(path, option="--out", claim=True):
     """
     import tempfile
 
+    if not str(path).strip():  # (Path("") is the current folder: the results went there)
+        raise ParameterError(f"{option} = {str(path)!r} is invalid: give a folder (e.g. {option} results/run)")
     p = Path(path)
     created = next((q for q in [*reversed(p.absolute().parents), p.absolute()] if not q.exists()), None)
     try:
@@ -1153,7 +1161,7 @@ def cmd_linearize(args):
     """``frb linearize``: global state matrix from the FMUs at one operating point; prints its modes."""
 
     _check_ssp(args.ssp, args.parameter_set)  # (--speed-rpm is bounded by NUMERIC_OPTIONS)
-    out = writable_dir(args.out) if args.out else None
+    out = writable_dir(args.out) if args.out is not None else None
     A, tc = linearize(args.ssp, args.speed_rpm, args.method, args.parameter_set)
     md = modes_from_state(A, A.shape[0] // 2)
     print(f"global A from the FMUs: {A.shape[0]} states, method {args.method.upper()} operating point at "

@@ -31,6 +31,9 @@ def run_cli(capsys, *argv):
     (lambda: SpeedProfile.ramp(20e3, 1e9, 1.0), "end speed = 1000000000.0 rpm is invalid: valid range 0 < speed"),
     (lambda: SpeedProfile.constant(float("nan"), 1.0), "start speed = nan rpm is invalid"),
     (lambda: SpeedProfile.from_function(lambda t: 1e3 - 2e3 * t, 1.0), "speed = 0.0 rpm at t = 0.5 s"),
+    # trust4: "" is the current folder: "cannot read the speed profile: Is a directory"
+    (lambda: SpeedProfile.from_csv(""), "speed profile file = '' is invalid: give the path of a CSV file"),
+    (lambda: SpeedProfile.from_csv("."), "speed profile file = '.' is a folder; expected a CSV file"),
 ])
 def test_speed_profiles_refuse_bad_speeds_with_the_value_and_range(call, message):
     with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(".", r"\.")):
@@ -237,6 +240,7 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["losses", "--oil", "SAE 5W-30", "--supply-temperature", "", "--speeds", "100000"],
      ["--supply-temperature = '' is invalid"]),
     (["runup", "--speeds", "", "--duration", "0.01"], ["--speeds = '' is invalid"]),
+    (["unbalance", "--locations", ",", "--speeds", "10000:20000:2"], ["--locations = ',' names no location"]),
     (["sweep", "--param", "outer_clearance=36e-6", "--methods", "", "--serial"], ["method = '' is unknown"]),
     # trust4: refused while computing, after the folder was made: it was left behind, empty
     (["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"],
@@ -652,3 +656,15 @@ def test_thermal_losses_defaults_are_the_documented_supply():
     b = frb.thermal_losses(frb.turbocharger(), [1e5], oil, 363.15, 3e5)
     assert (a["supply temperature [K]"] == 363.15).all() and (a["supply pressure [Pa]"] == 3e5).all()
     assert a.drop(columns="iterations [-]").equals(b.drop(columns="iterations [-]"))
+
+
+@pytest.mark.parametrize("argv", [["campbell", "--speeds", "100000"], ["losses", "--speeds", "100000"],
+                                  ["equilibrium", "--speed-rpm", "50000"], ["build-fmus"]])
+def test_an_empty_out_is_refused_not_the_current_folder(argv, tmp_path, monkeypatch, capsys):
+    """trust4: `--out ""` is Path("") = the current folder: campbell and losses wrote their results (and a manifest
+    that a later run would clean) there, equilibrium dropped it. Now it is refused, and nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    assert main([*argv, "--out", ""]) == 2
+    err = capsys.readouterr().err
+    assert "--out = '' is invalid: give a folder" in err and "Traceback" not in err, err
+    assert list(tmp_path.iterdir()) == []

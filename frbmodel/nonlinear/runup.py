@@ -553,6 +553,10 @@ class SpeedProfile:
         ...         print(str(exc).replace(str(path), "bad.csv"))
         bad.csv, line 3: speed = -3.0 rpm is invalid: valid range is finite and > 0 rpm
         """
+        if not str(path).strip():  # (Path("") is the current folder: "cannot read the speed profile: Is a directory")
+            raise ParameterError(f"speed profile file = {str(path)!r} is invalid: give the path of a CSV file")
+        if Path(path).is_dir():
+            raise ParameterError(f"speed profile file = {str(path)!r} is a folder; expected a CSV file")
         path = Path(path)
         t, rpm, lines = _read_profile_csv(path)
         _check_knots(t, rpm, lambda i: f"{path}" + ("" if i is None else f", line {lines[i]}"))
