@@ -214,6 +214,10 @@ def cmd_campbell(args):
     if args.mode_shapes is not None and args.from_fmu:
         raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
     mode_rpm = args.mode_shapes  # (bounded by NUMERIC_OPTIONS, before any work)
+    if mode_rpm is not None and not speeds.min() <= mode_rpm <= speeds.max():  # (was refused after the diagram)
+        raise ParameterError(f"--mode-shapes = {mode_rpm:g} rpm is outside --speeds {args.speeds} "
+                             f"({speeds.min():g} ... {speeds.max():g} rpm): the shapes are the diagram's modes, "
+                             "give a speed inside its grid")
     if args.parameter_set is not None and not args.from_fmu:
         raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
                              "set); without it the system is --system / --outer-clearance")
@@ -941,7 +945,7 @@ def cmd_losses(args):
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
-    run = RunupResult.load(args.run) if args.run else None
+    run = _same_system_run(args.run, tc) if args.run is not None else None
     out = writable_dir(args.out)
     if oil is None:
         table = with_ring_speed_ratio(bearing_losses(tc, speeds, args.method))
@@ -964,6 +968,20 @@ def cmd_losses(args):
     paths = [p_csv, p_png] + (_write_onsets(tc, oil, temps, p_s, speeds, out, ramp) if args.onsets else [])
     print("wrote:\n  " + "\n  ".join(str(p) for p in paths))
     print(f"results in {out.resolve()}")
+
+
+def _same_system_run(folder, system):
+    """The run of ``frb losses --run DIR``, refused if it was computed for another system than ``system`` (its
+    losses were drawn beside curves they cannot be compared with)."""
+    run = RunupResult.load(folder)
+    theirs = {k: v for k, v in run.meta.get("system", {}).items() if k != "name"}
+    ours = {k: v for k, v in system.to_dict().items() if k != "name"}
+    if theirs and theirs != ours:
+        diff = ", ".join(k for k in ours if theirs.get(k) != ours[k])
+        raise ParameterError(f"--run {folder}: the run was computed for another system (they differ in {diff}): its "
+                             "recorded losses cannot be compared with these; give the run's system (--system, "
+                             "--outer-clearance, --film-model) or leave --run out")
+    return run
 
 
 def _runup_ramp_from_args(args):

@@ -262,6 +262,9 @@ def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, 
     (["campbell", "--speeds", "1000:inf:3"], ["--speeds = '1000:inf:3' contains inf rpm"]),
     (["campbell", "--speeds", "10000:250000:100000000"], ["has 100000000 speeds: valid range 1 ... 10000"]),
     (["campbell", "--mode-shapes", "999999999"], ["--mode-shapes = 999999999.0 rpm is invalid"]),
+    # trust4: refused after the whole diagram was computed and written ("mode 0 is not present at 5000 rpm")
+    (["campbell", "--mode-shapes", "5000", "--speeds", "10000:20000:2"],
+     ["--mode-shapes = 5000 rpm is outside --speeds 10000:20000:2 (10000 ... 20000 rpm)"]),
     (["unbalance", "--method", "B", "--k", "5e6"], ["sets a spring of methods A, E (method B takes --kx, --ky)"]),
     (["unbalance", "--method", "J", "--kx", "5e6"], ["sets a spring of method B (method J takes no spring)"]),
     (["sweep", "--param", "outer_clearance=40e-6,-1e-6"], ["study parameter outer_clearance = -1e-06 [m]",
@@ -668,3 +671,19 @@ def test_an_empty_out_is_refused_not_the_current_folder(argv, tmp_path, monkeypa
     err = capsys.readouterr().err
     assert "--out = '' is invalid: give a folder" in err and "Traceback" not in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_losses_refuses_a_run_of_another_system_to_overlay(tmp_path, capsys):
+    """trust4: `frb losses --run DIR --outer-clearance 46e-6` drew the 36 um run's recorded losses beside the 46 um
+    curves, exit 0. Now a run of another system is refused before any folder is made; the run's own system works."""
+    run = tmp_path / "run"
+    assert main(["runup", "--duration", "0.005", "--no-figure", "--out", str(run)]) == 0
+    capsys.readouterr()
+    for extra, differ in ((["--outer-clearance", "46e-6"], "bearings"), (["--film-model", "short_corrected"],
+                                                                        "film_model")):
+        out = tmp_path / differ
+        assert main(["losses", "--run", str(run), *extra, "--speeds", "20000:30000:3", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"--run {run}: the run was computed for another system (they differ in {differ})" in err, err
+        assert not out.exists()
+    assert main(["losses", "--run", str(run), "--speeds", "20000:30000:3", "--out", str(tmp_path / "same")]) == 0
