@@ -126,7 +126,19 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
         check_speed_count(name, n)  # before the grid is made (1e8 speeds: 800 MB)
         speeds = np.linspace(a, b, n)
     check_speeds_in_range(name, speeds)
+    if np.unique(speeds).size < speeds.size:  # (a diagram or table over repeated speeds: rows twice, a 0-wide grid)
+        twice = next(float(v) for v in speeds if np.count_nonzero(speeds == v) > 1)
+        raise ParameterError(f"{name} repeats {twice:g} rpm: give distinct speeds")
     return speeds
+
+
+def _distinct(name, values, unit=""):
+    """``values`` if no value repeats, else a ParameterError naming the first repeated one (the same case, curve or
+    table rows computed twice)."""
+    twice = next((v for k, v in enumerate(values) if v in values[:k]), None)
+    if twice is not None:
+        raise ParameterError(f"{name} repeats {twice:g}{' ' + unit if unit else ''}: give distinct values")
+    return values
 
 
 def _given(value, default):
@@ -555,7 +567,7 @@ def cmd_bifurcation(args):
         raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm, or a comma-separated "
                              "list of them (e.g. 25000,60000)") from None
     start = check_starts(start, (lo, hi), "--start", "--speeds")
-    runs = _load_runs(args.runs)  # (before hours of continuation: a wrong folder is refused now)
+    runs = _load_runs(args.runs, tc)  # (before hours of continuation: a wrong folder is refused now)
     supply = _oil_supply_from_args(args, tc)
     out = writable_dir(args.out)
     hps = hopf_points(tc, (lo, hi), restabilizing=True, oil_supply=supply)
@@ -600,11 +612,12 @@ def cmd_bifurcation(args):
     return code
 
 
-def _load_runs(text):
+def _load_runs(text, system):
     """``[(folder, run-up result)]`` of ``--runs`` (comma-separated folders), loaded; a ParameterError names a
-    folder without one."""
+    folder without one, or with a run of another system than ``system`` (its envelope was drawn behind branches it
+    cannot be compared with)."""
 
-    return [(d, RunupResult.load(d)) for d in (text or "").split(",") if d]
+    return [(d, _same_system_run(d, system, "--runs")) for d in (text or "").split(",") if d]
 
 
 def _on_sigterm(signum, frame):
@@ -698,7 +711,8 @@ def cmd_compare(args):
     """``frb compare``: run-ups vs method-J stability per outer clearance (figures and onset table)."""
 
     tc = load_from_args(args)
-    cl = [check_positive("--clearances", x, "m") for x in args.clearances.split(",")]
+    cl = _distinct(f"--clearances = {args.clearances!r}", [check_positive("--clearances", x, "m")
+                                                            for x in args.clearances.split(",")], "m")
     a, b = _speed_pair(args.speeds)
     writable_dir(args.out)  # (after every check: a refused option leaves no folder)
     table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out, progress=True,
@@ -794,8 +808,8 @@ def replot_bifurcation(args, out):
 
     bd = BifurcationDiagram.load(out)
     lo, hi = bd.meta.get("speed_range_rpm", [min(p.speed_rpm for p in bd.points), max(p.speed_rpm for p in bd.points)])
-    runs = _load_runs(getattr(args, "runs", None))
     system = system_from_meta(bd.meta, out / "branch.nc", "the Campbell lines")
+    runs = _load_runs(getattr(args, "runs", None), system)
     save_bifurcation_diagram(bd, system, out, (lo, hi), runs)
     print(f"results in {out.resolve()} (bifurcation.png/.html)")
     return 0
@@ -921,6 +935,7 @@ def _supply_from_args(args, oil):
         raise ParameterError(f"--supply-temperature = {text!r} is invalid: give a temperature [K] or a comma list "
                              "(e.g. 333.15,363.15)") from None
     temps = [check_temperature("--supply-temperature", v, T_MIN_K, oil.max_temperature_K) for v in values]
+    _distinct(f"--supply-temperature = {text!r}", temps, "K")
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
     return temps, check_supply_pressure("--supply-pressure", p_s)
 
@@ -970,17 +985,17 @@ def cmd_losses(args):
     print(f"results in {out.resolve()}")
 
 
-def _same_system_run(folder, system):
-    """The run of ``frb losses --run DIR``, refused if it was computed for another system than ``system`` (its
-    losses were drawn beside curves they cannot be compared with)."""
+def _same_system_run(folder, system, option="--run"):
+    """The run of ``frb losses --run DIR`` (or of ``option``), refused if it was computed for another system than
+    ``system`` (its losses were drawn beside curves they cannot be compared with)."""
     run = RunupResult.load(folder)
     theirs = {k: v for k, v in run.meta.get("system", {}).items() if k != "name"}
     ours = {k: v for k, v in system.to_dict().items() if k != "name"}
     if theirs and theirs != ours:
         diff = ", ".join(k for k in ours if theirs.get(k) != ours[k])
-        raise ParameterError(f"--run {folder}: the run was computed for another system (they differ in {diff}): its "
-                             "recorded losses cannot be compared with these; give the run's system (--system, "
-                             "--outer-clearance, --film-model) or leave --run out")
+        raise ParameterError(f"{option} {folder}: the run was computed for another system (they differ in {diff}): "
+                             "its records cannot be compared with these results; give the run's system (--system, "
+                             f"--outer-clearance, --film-model) or leave {option} out")
     return run
 
 
@@ -1212,6 +1227,7 @@ def _sweep_params(items):
         if name.strip() in params:
             raise ParameterError(f"--param {item!r}: {name.strip()} is given twice; give all its values in one "
                                  f"--param {name.strip()}=V1,V2,...")
+        _distinct(f"--param {item!r}", values)
         params[name.strip()] = values
     return params
 

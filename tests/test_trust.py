@@ -241,6 +241,13 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
      ["--supply-temperature = '' is invalid"]),
     (["runup", "--speeds", "", "--duration", "0.01"], ["--speeds = '' is invalid"]),
     (["unbalance", "--locations", ",", "--speeds", "10000:20000:2"], ["--locations = ',' names no location"]),
+    # trust4: repeated values computed the same speed, supply, clearance or case twice (a diagram over 0 rpm)
+    (["campbell", "--speeds", "10000:10000:3"], ["--speeds = '10000:10000:3' repeats 10000 rpm"]),
+    (["unbalance", "--speeds", "10000,20000,10000"], ["repeats 10000 rpm: give distinct speeds"]),
+    (["losses", "--oil", "SAE 5W-30", "--supply-temperature", "363.15,363.15", "--speeds", "100000"],
+     ["--supply-temperature = '363.15,363.15' repeats 363.15 K"]),
+    (["compare", "--clearances", "36e-6,36e-6", "--duration", "0.01"], ["--clearances = '36e-6,36e-6' repeats"]),
+    (["sweep", "--param", "outer_clearance=36e-6,36e-6", "--serial"], ["repeats 3.6e-05: give distinct values"]),
     (["sweep", "--param", "outer_clearance=36e-6", "--methods", "", "--serial"], ["method = '' is unknown"]),
     # trust4: refused while computing, after the folder was made: it was left behind, empty
     (["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"],
@@ -686,4 +693,8 @@ def test_losses_refuses_a_run_of_another_system_to_overlay(tmp_path, capsys):
         err = capsys.readouterr().err
         assert f"--run {run}: the run was computed for another system (they differ in {differ})" in err, err
         assert not out.exists()
+    out = tmp_path / "bif"
+    assert main(["bifurcation", "--runs", str(run), "--outer-clearance", "46e-6", "--out", str(out)]) == 2
+    assert f"--runs {run}: the run was computed for another system" in capsys.readouterr().err
+    assert not out.exists()
     assert main(["losses", "--run", str(run), "--speeds", "20000:30000:3", "--out", str(tmp_path / "same")]) == 0
