@@ -422,11 +422,15 @@ def _parse_unbalance(items):
             if not 2 <= len(fields) <= 3:  # a 4th field was dropped without a word
                 raise ValueError
             disc, amount, *phase = fields
-            out.append(Unbalance(disc, float(amount), float(phase[0]) if phase else 0.0))
+            amount, phase = float(amount), float(phase[0]) if phase else 0.0
         except ValueError:
             raise ParameterError(f"--unbalance {it!r} is invalid: use DISC:AMOUNT[:PHASE] (2 or 3 fields, "
                                  f"{len(fields)} given) with AMOUNT in kg m and PHASE in rad, e.g. "
                                  "turbine_wheel:1e-6:0") from None
+        try:
+            out.append(Unbalance(disc, amount, phase))
+        except ParameterError as exc:
+            raise ParameterError(f"--unbalance {it!r}: {exc}") from None
     return out
 
 

@@ -34,6 +34,9 @@ def run_cli(capsys, *argv):
     # trust4: "" is the current folder: "cannot read the speed profile: Is a directory"
     (lambda: SpeedProfile.from_csv(""), "speed profile file = '' is invalid: give the path of a CSV file"),
     (lambda: SpeedProfile.from_csv("."), "speed profile file = '.' is a folder; expected a CSV file"),
+    # trust4: an infinite phase ended the run-up at t = 0 ("singular iteration matrix", exit 3)
+    (lambda: __import__("frbmodel.nonlinear.runup").nonlinear.runup.Unbalance("turbine_wheel", 1e-6, float("inf")),
+     "unbalance phase of turbine_wheel = inf rad is invalid"),
 ])
 def test_speed_profiles_refuse_bad_speeds_with_the_value_and_range(call, message):
     with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(".", r"\.")):
@@ -241,6 +244,8 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
      ["--supply-temperature = '' is invalid"]),
     (["runup", "--speeds", "", "--duration", "0.01"], ["--speeds = '' is invalid"]),
     (["unbalance", "--locations", ",", "--speeds", "10000:20000:2"], ["--locations = ',' names no location"]),
+    (["runup", "--unbalance", "turbine_wheel:1e-6:inf", "--duration", "0.01"],
+     ["--unbalance 'turbine_wheel:1e-6:inf': unbalance phase of turbine_wheel = inf rad is invalid"]),
     # trust4: repeated values computed the same speed, supply, clearance or case twice (a diagram over 0 rpm)
     (["campbell", "--speeds", "10000:10000:3"], ["--speeds = '10000:10000:3' repeats 10000 rpm"]),
     (["unbalance", "--speeds", "10000,20000,10000"], ["repeats 10000 rpm: give distinct speeds"]),

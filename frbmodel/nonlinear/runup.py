@@ -24,7 +24,15 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..core.errors import MAX_SPEED_RPM, ParameterError, RunupStopped, check_finite, check_positive, check_speed
+from ..core.errors import (
+    MAX_SPEED_RPM,
+    ParameterError,
+    RunupStopped,
+    check_finite,
+    check_positive,
+    check_real,
+    check_speed,
+)
 from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
 from ..core.units import RPM
@@ -650,6 +658,9 @@ class Unbalance:
     disc: str
     amount: float
     phase: float = 0.0
+
+    def __post_init__(self):  # (an infinite phase ended the run at t = 0: "singular iteration matrix", exit 3)
+        self.phase = check_real(f"unbalance phase of {self.disc}", self.phase, "rad")
 
 
 @dataclass
