@@ -703,3 +703,66 @@ def test_losses_refuses_a_run_of_another_system_to_overlay(tmp_path, capsys):
     assert f"--runs {run}: the run was computed for another system" in capsys.readouterr().err
     assert not out.exists()
     assert main(["losses", "--run", str(run), "--speeds", "20000:30000:3", "--out", str(tmp_path / "same")]) == 0
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"ds": 0.0}, "ds = 0.0 is invalid: valid range is finite and > 0"),
+    ({"ds": -1.0}, "ds = -1.0 is invalid"),
+    ({"ds": float("nan")}, "ds = nan is invalid"),
+    ({"ds": 5.0, "ds_max": 1.0}, "ds = 5 is invalid with ds_max = 1: valid range 0 < ds <= ds_max"),
+    ({"max_points": 0}, "max_points = 0 is invalid: valid range integer >= 1"),
+    ({"max_points": 2.5}, "max_points = 2.5 is invalid"),
+    ({"speeds_rpm": (3e3,)}, "speeds_rpm = (3000.0,) is invalid: give the speed range (START, END) in rpm"),
+    ({"speeds_rpm": (3e3, 3e3)}, "START and END must differ"),
+    ({"speeds_rpm": (1e3, 5e6)}, "speeds_rpm END = 5000000.0 rpm is invalid"),
+])
+def test_continuation_refuses_meaningless_steps_and_ranges_before_any_work(kw, message, monkeypatch):
+    """trust4: continuation(ds=0 / -1 / nan, ds > ds_max) returned a diagram; a range of one speed raised an unpacking
+    ValueError, (3e3, 3e3) returned an empty diagram. Now each is one ParameterError before the Hopf points are
+    searched (replaced here by a function that fails the test if it is called)."""
+    import frbmodel.cycles.continuation as cc
+
+    def searched(*args, **kwargs):
+        raise AssertionError("the Hopf points were searched before the arguments were checked")
+
+    monkeypatch.setattr(cc, "hopf_points", searched)
+    with pytest.raises(ParameterError) as exc:
+        cc.continuation(frb.turbocharger(), **{"speeds_rpm": (1e3, 3e3), **kw})
+    assert message in str(exc.value), str(exc.value)
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"tol": 0.0}, "tol = 0.0 is invalid"),
+    ({"tol": 1e3}, "tol = 1000.0 is invalid: valid range 0 < tol <= 0.001"),
+    ({"samples": 1}, "samples = 1 is invalid: valid range integer >= 16"),
+    ({"max_iter": 0}, "max_iter = 0 is invalid: valid range integer >= 1"),
+])
+def test_limit_cycle_checks_its_newton_options_before_the_settling_run(kw, message, monkeypatch):
+    """trust4: tol, samples and max_iter were first used after the settling run (seconds), which then failed with
+    an unrelated ConvergenceError; tol = 1e3 would accept any orbit. Now refused before the guess is made (replaced
+    by a function that fails the test if it is called)."""
+    import frbmodel.cycles.limitcycle as lcm
+
+    def settled(*args, **kwargs):
+        raise AssertionError("the guess was settled before the options were checked")
+
+    monkeypatch.setattr(lcm, "_initial_guess", settled)
+    with pytest.raises(ParameterError) as exc:
+        frb.limit_cycle(frb.turbocharger(), 3e4, **kw)
+    assert message in str(exc.value), str(exc.value)
+
+
+def test_hopf_points_refuses_a_degenerate_search_before_any_equilibrium(monkeypatch):
+    """trust4: hopf_points(tc, (3e3,)) was a TypeError of numpy, n_grid = 1 returned [] (one speed crosses nothing),
+    restabilizing = "no" was truthy. Now one ParameterError each, before any equilibrium is computed."""
+    import frbmodel.cycles.branch as br
+
+    def computed(*args, **kwargs):
+        raise AssertionError("an equilibrium was computed before the arguments were checked")
+
+    monkeypatch.setattr(br, "_unstable_pairs", computed)
+    for kw, message in (({"speeds_rpm": (3e3,)}, "speeds_rpm = (3000.0,) is invalid"),
+                        ({"n_grid": 1}, "n_grid = 1 is invalid: valid range integer >= 2"),
+                        ({"restabilizing": "no"}, "restabilizing = 'no' is a str; expected True or False")):
+        with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(")", r"\)")):
+            br.hopf_points(frb.turbocharger(), **{"speeds_rpm": (1e3, 3e3), **kw})
