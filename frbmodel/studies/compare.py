@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import check_system
+from ..core.errors import ParameterError, check_system
 from ..core.progress import counter_bar, note
 from ..linear.campbell import campbell
 from ..nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, RunupStopped, SpeedProfile, runup
@@ -217,6 +217,9 @@ def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), d
 
 
     check_no_oil(check_system(system), "frb compare (frbmodel.studies.compare)")
+    if len(speed_rpm) != 2 or speed_rpm[0] == speed_rpm[1]:  # (4 run-ups, then an empty table, exit 0)
+        raise ParameterError(f"speed_rpm = {tuple(speed_rpm)!r} is invalid: give (START, END) in rpm, START != END "
+                             "(the run-up's range and the Campbell diagram's)")
     node = node or system.rotor.discs[0].name
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -173,6 +173,9 @@ def check_options(analysis, options):
             a, b = options["speed_rpm"]
             check_speed("start speed", a)
             check_speed("end speed", b)
+            if a == b and analysis in ("hopf", "bifurcation"):  # (every case failed: exit 4)
+                raise ParameterError(f"{analysis} speed_rpm = ({a:g}, {b:g}) rpm is invalid: START and END must "
+                                     "differ (the search range)")
         if "duration" in options:
             check_positive("duration", options["duration"], "s")
     if analysis == "bifurcation":
