@@ -75,7 +75,7 @@ from .studies.sweep import (
     stability_map,
     write_index,
 )
-from .studies.thermal import onsets_vs_supply, runup_onsets_vs_supply
+from .studies.thermal import RUNUP_RATE_HZ, onsets_vs_supply, runup_onsets_vs_supply
 from .studies.warmup import kernels_ready, warmup, warmup_marker
 from .system.methods import METHODS, get_method
 from .system.oil import OIL, T_MIN_K, check_temperature
@@ -1023,6 +1023,10 @@ def _runup_ramp_from_args(args):
     if not 0.0 < lo < hi <= 1e6:
         raise ParameterError(f"--runup-speeds = {text!r} is invalid: valid range 0 < START < STOP <= 1e6 rpm")
     duration = 1.0 if args.runup_duration is None else args.runup_duration  # (bounded by NUMERIC_OPTIONS)
+    try:  # (before the thermal tables and the linear onsets: a 1e-9 s ramp was refused after them)
+        check_output_rate(RUNUP_RATE_HZ, duration)
+    except ParameterError as exc:
+        raise ParameterError(f"--runup-duration = {duration:g} s: {exc}") from None
     return lo, hi, duration
 
 
