@@ -255,6 +255,9 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     # trust4: refused by the first run-up, after the thermal tables and the linear onsets were computed and written
     (["losses", "--oil", "SAE 5W-30", "--supply-temperature", "363.15", "--speeds", "100000", "--onsets",
       "--runup-onsets", "--runup-duration", "1e-9"], ["--runup-duration = 1e-09 s: ", "records no sample"]),
+    (["compare", "--duration", "1e-9"], ["duration = 1e-09 s is invalid at output_rate_hz = 20000 Hz"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "runup", "--duration", "1e-9", "--serial"],
+     ["duration = 1e-09 s is invalid at output_rate_hz = 10000 Hz"]),
     # trust4: a range of one speed: every case failed (exit 4); four run-ups and an empty table (exit 0)
     (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "hopf", "--speeds", "5000:5000", "--serial"],
      ["hopf speed_rpm = (5000, 5000) rpm is invalid: START and END must differ"]),

@@ -37,7 +37,7 @@ from ..cosim.master import cosimulate, operating_point_overrides
 from ..cycles.continuation import check_starts, continuation, hopf_points
 from ..linear.campbell import campbell
 from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
-from ..nonlinear.runup import SpeedProfile, Unbalance, check_speed, runup
+from ..nonlinear.runup import SpeedProfile, Unbalance, check_output_rate, check_speed, runup
 from ..plots.figures import write_html
 from ..plots.studies import stability_chart_figure, stability_map_figures
 from ..signals.spectral import spectrogram
@@ -157,6 +157,8 @@ def check_options(analysis, options):
         raise ParameterError(f"runup profile = {options['profile']!r} is unknown; valid: {', '.join(RUNUP_PROFILES)}")
     if "output_rate_hz" in options:
         check_positive("runup output_rate_hz", options["output_rate_hz"], "Hz")
+    if analysis == "runup":  # (a run that records nothing failed every case)
+        check_output_rate(options.get("output_rate_hz", 10e3), options.get("duration", 2.0))
     if "oil" in options:
         _option_oil(options["oil"])
     if analysis == "campbell":
