@@ -654,9 +654,16 @@ def _finish_run(args, run, system, out, **figure_kw):
     """``runup.nc`` (the run as netCDF, :meth:`RunupResult.to_xarray`), composite figures (unless --no-figure or
     too few samples; ``system()`` gives the Turbocharger) and the closing line naming the output folder."""
     print(f"wrote {run.to_netcdf(out / 'runup.nc').resolve()} (netCDF: xarray.open_dataset)")
-    if not args.no_figure and run.time.size >= 64:
+    if not args.no_figure and run.time.size >= MIN_FIGURE_SAMPLES:
         write_composites(run, system(), out, **figure_kw)
+    elif not args.no_figure:  # (they were left out without a word)
+        print(f"no figures: {run.time.size} samples recorded, the spectrogram figures need at least "
+              f"{MIN_FIGURE_SAMPLES} (a longer --duration or a higher --rate)")
     print(f"results in {out.resolve()}")
+
+
+#: the fewest samples of a run whose composite figures are drawn (the spectrogram's segments)
+MIN_FIGURE_SAMPLES = 64
 
 
 #: results folders claimed by the running command (:mod:`frbmodel.core.manifest`), finished by :func:`main`

@@ -777,3 +777,11 @@ def test_hopf_points_refuses_a_degenerate_search_before_any_equilibrium(monkeypa
                         ({"restabilizing": "no"}, "restabilizing = 'no' is a str; expected True or False")):
         with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(")", r"\)")):
             br.hopf_points(frb.turbocharger(), **{"speeds_rpm": (1e3, 3e3), **kw})
+
+
+def test_a_run_too_short_for_figures_says_so(tmp_path, capsys):
+    """trust4: `frb runup --duration 1e-3` (21 samples) wrote no figure and said nothing about it. Now it says why
+    (still exit 0: the run's data are complete)."""
+    assert main(["runup", "--duration", "1e-3", "--out", str(tmp_path / "short")]) == 0
+    assert "no figures: 21 samples recorded, the spectrogram figures need at least 64" in capsys.readouterr().out
+    assert not list((tmp_path / "short").glob("composite_*"))
