@@ -319,6 +319,10 @@ def _unbalance_methods(text, kw):
     """Method letters of ``--method`` (one or a comma list) and the spring options each takes."""
 
     methods = [get_method(x) for x in text.split(",") if x.strip()] or [get_method(text)]
+    letters = [m.letter for m in methods]
+    twice = next((x for k, x in enumerate(letters) if x in letters[:k]), None)
+    if twice:  # (the same response computed and drawn twice)
+        raise ParameterError(f"--method {text} repeats method {twice}: give each method once")
     unused = [k for k in kw if not any(k in m.parameters for m in methods)]
     if unused:
         takers = ", ".join(m.letter for m in METHODS.values() if unused[0] in m.parameters)
@@ -1267,7 +1271,10 @@ def _sweep_cases(args):
                                  f"of --analysis {' / '.join(takers)}")
     if analysis == "campbell":
         speeds = parse_speeds(_given(args.speeds, "1000:250000:200"))
-        opts = {"methods": [m.strip().upper() for m in _given(args.methods, "J").split(",")],
+        methods = [m.strip().upper() for m in _given(args.methods, "J").split(",")]
+        if len(set(methods)) < len(methods):  # (every case computed a diagram twice)
+            raise ParameterError(f"--methods {args.methods} repeats a method: give each method once")
+        opts = {"methods": methods,
                 "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
     else:
         opts = {"speed_rpm": _speed_pair(_given(args.speeds, "1000:250000"))}

@@ -264,6 +264,8 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["compare", "--speeds", "20000:20000", "--duration", "0.01"],
      ["speed_rpm = (20000.0, 20000.0) is invalid", "START != END"]),
     (["sweep", "--param", "outer_clearance=36e-6,36e-6", "--serial"], ["repeats 3.6e-05: give distinct values"]),
+    (["unbalance", "--method", "J,j", "--speeds", "10000:20000:2"], ["--method J,J repeats method J"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--methods", "J,J", "--serial"], ["--methods J,J repeats a method"]),
     (["sweep", "--param", "outer_clearance=36e-6", "--methods", "", "--serial"], ["method = '' is unknown"]),
     # trust4: refused while computing, after the folder was made: it was left behind, empty
     (["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"],
