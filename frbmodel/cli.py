@@ -891,8 +891,9 @@ def _oil_from_args(args, system):
             raise ParameterError(f"{given[0]} needs an oil: give --oil NAME or an [oil] table in --system (without an "
                                  "oil the films keep their constant viscosities)")
     elif any(not get_method(x).needs_films for x in str(getattr(args, "method", "J")).split(",") if x.strip()):
-        raise ParameterError(f"--method {args.method} cannot be combined with an oil: methods A, B and E have linear "
-                             "springs without oil films; use film methods (C, D, F, G, I, J)")
+        source = f"--oil {args.oil!r}" if args.oil is not None else f"the [oil] table of --system {args.system}"
+        raise ParameterError(f"--method {args.method} cannot be combined with an oil ({source}): methods A, B and E "
+                             "have linear springs without oil films; use film methods (C, D, F, G, I, J)")
     elif getattr(args, "run", None):
         raise ParameterError("--run cannot be combined with an oil: a run-up's recorded losses are at the films' "
                              "constant viscosities; leave --oil (or the system's [oil]) out to overlay them")

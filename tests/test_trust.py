@@ -590,6 +590,9 @@ def test_commands_at_constant_viscosities_refuse_a_system_with_an_oil(tmp_path, 
         with pytest.raises(ParameterError, match="has an oil"):
             call()
     assert check_rotor_system(frb.turbocharger()).oil is None
+    # the oil of a system file refused with a spring method: the message said "an oil" without naming where it was
+    assert main(["equilibrium", "--system", str(path), "--method", "A"]) == 2
+    assert f"--method A cannot be combined with an oil (the [oil] table of --system {path})" in capsys.readouterr().err
 
 
 def test_study_options_an_analysis_does_not_take_are_refused():
