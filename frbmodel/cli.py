@@ -1788,7 +1788,7 @@ NUMERIC_OPTIONS = {
     "ky": ("N/m", (0.0, None)),
     "max_points": ("-", (2, None)),
     "mode_shapes": ("rpm", "speed"),
-    "n_speeds": ("-", (2, None)),
+    "n_speeds": ("-", (2, 10000)),  # (MAX_SPEED_COUNT: 1e8 speeds started a run of days)
     "outer_clearance": ("m", "the system's film checks (clearance / radius, roughness)"),
     "rate": ("Hz", "frbmodel.nonlinear.runup.check_output_rate (samples of the run)"),
     "revolutions": ("revolutions", (0.0, None)),

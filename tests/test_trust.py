@@ -287,6 +287,8 @@ def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, 
     (["campbell", "--speeds", "1000:inf:3"], ["--speeds = '1000:inf:3' contains inf rpm"]),
     (["campbell", "--speeds", "10000:250000:100000000"], ["has 100000000 speeds: valid range 1 ... 10000"]),
     (["campbell", "--mode-shapes", "999999999"], ["--mode-shapes = 999999999.0 rpm is invalid"]),
+    (["paper-figures", "--n-speeds", "100000000"],
+     ["--n-speeds = 100000000 is invalid: valid range >= 2 and <= 10000"]),
     # trust4: refused after the whole diagram was computed and written ("mode 0 is not present at 5000 rpm")
     (["campbell", "--mode-shapes", "5000", "--speeds", "10000:20000:2"],
      ["--mode-shapes = 5000 rpm is outside --speeds 10000:20000:2 (10000 ... 20000 rpm)"]),
