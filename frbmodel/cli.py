@@ -1793,14 +1793,14 @@ NUMERIC_OPTIONS = {
     "rate": ("Hz", "frbmodel.nonlinear.runup.check_output_rate (samples of the run)"),
     "revolutions": ("revolutions", (0.0, None)),
     "runup_duration": ("s", (0.0, None)),
-    "segments": ("-", (1, None)),
+    "segments": ("-", (1, 64)),  # (4 serve strongly unstable branches; 1e6 held a million states per orbit)
     "speed_rpm": ("rpm", "speed"),
     "step": ("s", (0.0, None)),
     "stop_time": ("s", (0.0, None)),
     "supply_pressure": ("Pa", "frbmodel.linear.thermal.check_supply_pressure"),
     "ring_heat_capacity": ("J/K", (0.0, None)),
     "supply_temperature": ("K", "frbmodel.system.oil.check_temperature (the oil's range)"),
-    "workers": ("-", (1, None)),
+    "workers": ("-", (1, 256)),  # (the LocalCluster's processes: 100000 would have been started)
 }
 
 
