@@ -663,6 +663,13 @@ def _thermal_model(**kw):
     (lambda: _thermal_model(centrifugal_feed="no"), "centrifugal_feed = 'no' is a str; expected True or False"),
     (lambda: _thermal_model(tolerance_K=1e9), "tolerance_K = 1000000000.0 K is invalid: valid range 0 < "
                                               "tolerance_K <= 0.001 K"),
+    # feed holes that do not fit the ring: a 1 m hole flooded the inner film at the supply temperature
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"],
+                                model=_thermal_model(feed_hole_diameter_m=1.0)),
+     "feed_hole_diameter_m = 1 m is invalid for the turbine bearing's ring: valid range < its wall thickness"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"],
+                                model=_thermal_model(feed_holes=40, feed_hole_diameter_m=1e-3)),
+     "feed_holes = 40 of 0.001 m do not fit around the turbine bearing's ring"),
     # OilSupply.from_dict of an incomplete table: KeyError / TypeError
     (lambda: frb.OilSupply.from_dict({"oil": {"name": "SAE 5W-30"}}), "oil_supply = {'oil': "),
     (lambda: frb.OilSupply.from_dict("x"), "oil_supply = 'x' is invalid: expected a table with the keys"),

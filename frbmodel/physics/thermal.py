@@ -22,7 +22,8 @@ import numpy as np
 
 from ..core.errors import ParameterError, check_real
 
-__all__ = ["ThermalModel", "bearing_flows", "film_temperatures", "heat_flows", "pressure_flow", "side_flow"]
+__all__ = ["ThermalModel", "bearing_flows", "check_feed_holes", "film_temperatures", "heat_flows", "pressure_flow",
+           "side_flow"]
 
 
 #: the loosest accepted convergence of the film temperatures [K] (ThermalModel.tolerance_K)
@@ -173,6 +174,20 @@ def pressure_flow(film, eps, pressure_Pa):
             / (3.0 * film.viscosity * film.length))
 
 
+def check_feed_holes(bearing, model, wall_m):
+    """Refuse feed holes that do not fit the ring of ``bearing``: a diameter not below its wall thickness
+    ``wall_m`` [m] (the holes' Poiseuille resistance assumes a tube longer than wide) or more holes than fit side by
+    side around the inner film (a 1 m hole was taken: the inner film flooded at the supply temperature)."""
+    d, n = model.feed_hole_diameter_m, model.feed_holes
+    if n > 0 and not d < wall_m:
+        raise ParameterError(f"thermal model feed_hole_diameter_m = {d:g} m is invalid for the {bearing.name} "
+                             f"bearing's ring: valid range < its wall thickness {wall_m:g} m (the holes' length)")
+    if n > 0 and n * d >= 2.0 * math.pi * bearing.inner.radius:
+        raise ParameterError(f"thermal model feed_holes = {n} of {d:g} m do not fit around the {bearing.name} "
+                             f"bearing's ring: valid range feed_holes x feed_hole_diameter_m < 2 pi R_I = "
+                             f"{2.0 * math.pi * bearing.inner.radius:g} m")
+
+
 def bearing_flows(bearing, eps_inner, eps_outer, rotor_speed, ring_speed, supply_pressure_Pa, density_kg_m3,
                   hole_viscosity_Pa_s, model):
     """Oil flows through the two films of one bearing at a static state.
@@ -206,6 +221,7 @@ def bearing_flows(bearing, eps_inner, eps_outer, rotor_speed, ring_speed, supply
     """
     inner, outer = bearing.inner, bearing.outer
     wall = outer.radius - inner.radius - inner.clearance
+    check_feed_holes(bearing, model, wall)
     p_feed = supply_pressure_Pa
     if model.centrifugal_feed:
         p_feed -= 0.5 * density_kg_m3 * ring_speed ** 2 * (outer.radius ** 2 - inner.radius ** 2)
