@@ -75,7 +75,7 @@ from .studies.sweep import (
     stability_map,
     write_index,
 )
-from .studies.thermal import onsets_vs_supply, runup_onsets_vs_supply
+from .studies.thermal import RUNUP_RATE_HZ, onsets_vs_supply, runup_onsets_vs_supply
 from .studies.warmup import kernels_ready, warmup, warmup_marker
 from .system.methods import METHODS, get_method
 from .system.oil import OIL, T_MIN_K, check_temperature
@@ -126,7 +126,25 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
         check_speed_count(name, n)  # before the grid is made (1e8 speeds: 800 MB)
         speeds = np.linspace(a, b, n)
     check_speeds_in_range(name, speeds)
+    if np.unique(speeds).size < speeds.size:  # (a diagram or table over repeated speeds: rows twice, a 0-wide grid)
+        twice = next(float(v) for v in speeds if np.count_nonzero(speeds == v) > 1)
+        raise ParameterError(f"{name} repeats {twice:g} rpm: give distinct speeds")
     return speeds
+
+
+def _distinct(name, values, unit=""):
+    """``values`` if no value repeats, else a ParameterError naming the first repeated one (the same case, curve or
+    table rows computed twice)."""
+    twice = next((v for k, v in enumerate(values) if v in values[:k]), None)
+    if twice is not None:
+        raise ParameterError(f"{name} repeats {twice:g}{' ' + unit if unit else ''}: give distinct values")
+    return values
+
+
+def _given(value, default):
+    """An option's value, or ``default`` when it was not given (an empty text is a value: it is checked and refused
+    where it is parsed, not replaced by the default)."""
+    return default if value is None else value
 
 
 def check_method_speeds(option, text, speeds, letters):
@@ -208,13 +226,18 @@ def cmd_campbell(args):
     if args.mode_shapes is not None and args.from_fmu:
         raise ParameterError("--mode-shapes needs the library model: it cannot be combined with --from-fmu")
     mode_rpm = args.mode_shapes  # (bounded by NUMERIC_OPTIONS, before any work)
+    if mode_rpm is not None and not speeds.min() <= mode_rpm <= speeds.max():  # (was refused after the diagram)
+        raise ParameterError(f"--mode-shapes = {mode_rpm:g} rpm is outside --speeds {args.speeds} "
+                             f"({speeds.min():g} ... {speeds.max():g} rpm): the shapes are the diagram's modes, "
+                             "give a speed inside its grid")
     if args.parameter_set is not None and not args.from_fmu:
         raise ParameterError(f"--parameter-set {args.parameter_set} applies only with --from-fmu (an SSP's parameter "
                              "set); without it the system is --system / --outer-clearance")
     if args.from_fmu:
-        args.parameter_set = args.parameter_set or "co36"
+        args.parameter_set = _given(args.parameter_set, "co36")
         _refuse_with_fmu(args, ("outer_clearance", "system", "film_model", "k", "kx", "ky", "oil",
                                 "supply_temperature", "supply_pressure"))
+        _check_ssp(args.from_fmu, args.parameter_set)  # (the user's SSP and set named, before the folder is made)
         out = writable_dir(args.out)
         cd = campbell_from_fmu(args.from_fmu, speeds, args.method, args.parameter_set, progress=True)
         tc, kw = None, {}
@@ -296,6 +319,10 @@ def _unbalance_methods(text, kw):
     """Method letters of ``--method`` (one or a comma list) and the spring options each takes."""
 
     methods = [get_method(x) for x in text.split(",") if x.strip()] or [get_method(text)]
+    letters = [m.letter for m in methods]
+    twice = next((x for k, x in enumerate(letters) if x in letters[:k]), None)
+    if twice:  # (the same response computed and drawn twice)
+        raise ParameterError(f"--method {text} repeats method {twice}: give each method once")
     unused = [k for k in kw if not any(k in m.parameters for m in methods)]
     if unused:
         takers = ", ".join(m.letter for m in METHODS.values() if unused[0] in m.parameters)
@@ -350,7 +377,7 @@ def cmd_equilibrium(args):
     supply = _oil_supply_from_args(args, tc)
     if supply is not None:
         tc = at_operating_point(tc, args.speed_rpm, supply, args.method)
-    out = writable_dir(args.out) if args.out else None
+    out = writable_dir(args.out) if args.out is not None else None
     eq = equilibrium(tc, args.method, args.speed_rpm)
     if supply is not None:
         print(f"thermal operating point: {_supply_text(supply)}; film viscosities [Pa s]: " + ", ".join(
@@ -380,8 +407,14 @@ def cmd_paper_figures(args):
 
 
 def _locations(args):
-    """The names of ``--locations NAME,NAME`` (None when not given)."""
-    return [x.strip() for x in args.locations.split(",") if x.strip()] if args.locations else None
+    """The names of ``--locations NAME,NAME`` (None when not given; a text that names none is refused)."""
+    if args.locations is None:
+        return None
+    names = [x.strip() for x in args.locations.split(",") if x.strip()]
+    if not names:  # (it drew the default locations)
+        raise ParameterError(f"--locations = {args.locations!r} names no location: give a comma list of names, e.g. "
+                             "turbine_wheel,compressor_wheel")
+    return names
 
 
 def _parse_unbalance(items):
@@ -393,18 +426,25 @@ def _parse_unbalance(items):
             if not 2 <= len(fields) <= 3:  # a 4th field was dropped without a word
                 raise ValueError
             disc, amount, *phase = fields
-            out.append(Unbalance(disc, float(amount), float(phase[0]) if phase else 0.0))
+            amount, phase = float(amount), float(phase[0]) if phase else 0.0
         except ValueError:
             raise ParameterError(f"--unbalance {it!r} is invalid: use DISC:AMOUNT[:PHASE] (2 or 3 fields, "
                                  f"{len(fields)} given) with AMOUNT in kg m and PHASE in rad, e.g. "
                                  "turbine_wheel:1e-6:0") from None
+        try:
+            out.append(Unbalance(disc, amount, phase))
+        except ParameterError as exc:
+            raise ParameterError(f"--unbalance {it!r}: {exc}") from None
     return out
 
 
 #: the named speed profiles of ``frb runup --profile`` (or a FILE.csv)
 PROFILES = ("ramp", "exponential", "constant", "up-down", "torque")
+#: default ``frb runup --speeds`` [rpm] (START:END; constant and torque profiles take its START)
+RUNUP_SPEEDS = "20000:250000"
 #: figure titles of the runs by :attr:`frbmodel.nonlinear.runup.SpeedProfile.direction` (else "run-up")
-RUN_TITLES = {"down": "run-down", "up-down": "run-up and run-down", "mixed": "run with rising and falling speed"}
+RUN_TITLES = {"constant": "constant-speed run", "down": "run-down", "up-down": "run-up and run-down",
+              "mixed": "run with rising and falling speed"}
 
 
 def _profile_arg(text):
@@ -417,25 +457,47 @@ def _profile_arg(text):
 def _profile(args):
 
     if args.profile.lower().endswith(".csv"):
+        given = [o for o, v in (("--speeds", args.speeds), ("--drive-torque", args.drive_torque)) if v is not None]
+        if given:  # (they were ignored: the table is the speed)
+            raise ParameterError(f"{given[0]} cannot be combined with --profile {args.profile}: the table "
+                                 "prescribes the speed at every time")
         prof = SpeedProfile.from_csv(args.profile)
         if args.duration is not None and args.duration > prof.t[-1]:
             raise ParameterError(f"--duration = {args.duration!r} s is invalid with --profile {args.profile}: valid "
                                  f"range up to the profile's last time, {prof.t[-1]:g} s")
         return prof
-    if args.profile != "torque" and args.drive_torque:
+    if args.profile != "torque" and args.drive_torque is not None:
         raise ParameterError(f"--drive-torque = {args.drive_torque!r} N m applies only with --profile torque (the "
                              f"--profile {args.profile} prescribes the speed)")
     duration = 1.0 if args.duration is None else args.duration
-    a, b = _speed_pair(args.speeds)
+    if args.profile in ("torque", "constant"):
+        a = _start_speed(_given(args.speeds, RUNUP_SPEEDS.split(":")[0]), args.profile)
+        if args.profile == "torque":
+            return SpeedProfile.torque(args.drive_torque or 0.0, a, duration)
+        return SpeedProfile.constant(a, duration)
+    a, b = _speed_pair(_given(args.speeds, RUNUP_SPEEDS))
     if args.profile == "ramp":
         return SpeedProfile.ramp(a, b, duration)
     if args.profile == "exponential":
         return SpeedProfile.exponential(a, b, duration)
-    if args.profile == "up-down":
-        return SpeedProfile.up_down(a, b, duration / 2)
-    if args.profile == "torque":
-        return SpeedProfile.torque(args.drive_torque, a, duration)
-    return SpeedProfile.constant(a, duration)
+    return SpeedProfile.up_down(a, b, duration / 2)
+
+
+def _start_speed(text, profile):
+    """The one speed [rpm] of ``--speeds`` for ``--profile constant`` (the speed held) or ``torque`` (the start
+    speed): START, or START:END with END = START; another END is refused (it was ignored)."""
+    fields = text.split(":")
+    if len(fields) == 1:
+        try:
+            return float(fields[0])
+        except ValueError:
+            raise ParameterError(f"--speeds = {text!r} is invalid: give the speed in rpm, e.g. 20000") from None
+    a, b = _speed_pair(text)
+    if a != b:
+        what = "holds one speed" if profile == "constant" else "starts at START and the drive torque sets the speed"
+        raise ParameterError(f"--speeds = {text!r} is invalid with --profile {profile}: the run {what}, so END "
+                             f"would be ignored; give --speeds {fields[0]}")
+    return a
 
 
 def _speed_pair(text):
@@ -499,13 +561,21 @@ def cmd_bifurcation(args):
 
     tc = load_from_args(args)
     lo, hi = sorted(check_speed(f"--speeds {name}", v) for name, v in zip(("START", "END"), _speed_pair(args.speeds)))
+    if args.hopf_only:  # (they were ignored: no branch is followed)
+        given = [f"--{n.replace('_', '-')}" for n in ("start", "max_points", "segments", "runs")
+                 if getattr(args, n) is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} cannot be combined with --hopf-only: "
+                                 f"{'it applies' if len(given) == 1 else 'they apply'} to the limit-cycle branches, "
+                                 "which --hopf-only does not follow")
     try:
-        start = [s if s == "hopf" else float(s) for s in (x.strip() for x in (args.start or "").split(","))]
+        text = "hopf" if args.start is None else args.start
+        start = [s if s == "hopf" else float(s) for s in (x.strip() for x in text.split(","))]
     except ValueError:
         raise ParameterError(f"--start = {args.start!r} is invalid: 'hopf' or a speed in rpm, or a comma-separated "
                              "list of them (e.g. 25000,60000)") from None
     start = check_starts(start, (lo, hi), "--start", "--speeds")
-    runs = _load_runs(args.runs)  # (before hours of continuation: a wrong folder is refused now)
+    runs = _load_runs(args.runs, tc)  # (before hours of continuation: a wrong folder is refused now)
     supply = _oil_supply_from_args(args, tc)
     out = writable_dir(args.out)
     hps = hopf_points(tc, (lo, hi), restabilizing=True, oil_supply=supply)
@@ -530,8 +600,8 @@ def cmd_bifurcation(args):
             fh.write(f"{p.speed_rpm:.6f},{1 / p.period:.6f},{p.turbine_radius_m * 1e6:.6f},{p.stable}\n")
 
     try:
-        bd = continuation(tc, (lo, hi), start, max_points=args.max_points, progress=True, on_point=stream,
-                          segments=args.segments, oil_supply=supply)
+        bd = continuation(tc, (lo, hi), start, max_points=40 if args.max_points is None else args.max_points,
+                          progress=True, on_point=stream, segments=args.segments or 1, oil_supply=supply)
         code = 0
     except KeyboardInterrupt as exc:
         code = 143 if isinstance(exc, Terminated) else 130
@@ -550,11 +620,12 @@ def cmd_bifurcation(args):
     return code
 
 
-def _load_runs(text):
+def _load_runs(text, system):
     """``[(folder, run-up result)]`` of ``--runs`` (comma-separated folders), loaded; a ParameterError names a
-    folder without one."""
+    folder without one, or with a run of another system than ``system`` (its envelope was drawn behind branches it
+    cannot be compared with)."""
 
-    return [(d, RunupResult.load(d)) for d in (text or "").split(",") if d]
+    return [(d, _same_system_run(d, system, "--runs")) for d in (text or "").split(",") if d]
 
 
 def _on_sigterm(signum, frame):
@@ -587,9 +658,16 @@ def _finish_run(args, run, system, out, **figure_kw):
     """``runup.nc`` (the run as netCDF, :meth:`RunupResult.to_xarray`), composite figures (unless --no-figure or
     too few samples; ``system()`` gives the Turbocharger) and the closing line naming the output folder."""
     print(f"wrote {run.to_netcdf(out / 'runup.nc').resolve()} (netCDF: xarray.open_dataset)")
-    if not args.no_figure and run.time.size >= 64:
+    if not args.no_figure and run.time.size >= MIN_FIGURE_SAMPLES:
         write_composites(run, system(), out, **figure_kw)
+    elif not args.no_figure:  # (they were left out without a word)
+        print(f"no figures: {run.time.size} samples recorded, the spectrogram figures need at least "
+              f"{MIN_FIGURE_SAMPLES} (a longer --duration or a higher --rate)")
     print(f"results in {out.resolve()}")
+
+
+#: the fewest samples of a run whose composite figures are drawn (the spectrogram's segments)
+MIN_FIGURE_SAMPLES = 64
 
 
 #: results folders claimed by the running command (:mod:`frbmodel.core.manifest`), finished by :func:`main`
@@ -629,7 +707,10 @@ def writable_dir(path, option="--out", claim=True):
     """
     import tempfile
 
+    if not str(path).strip():  # (Path("") is the current folder: the results went there)
+        raise ParameterError(f"{option} = {str(path)!r} is invalid: give a folder (e.g. {option} results/run)")
     p = Path(path)
+    created = next((q for q in [*reversed(p.absolute().parents), p.absolute()] if not q.exists()), None)
     try:
         p.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=p, prefix=".frb_write_check_"):
@@ -637,7 +718,7 @@ def writable_dir(path, option="--out", claim=True):
     except OSError as exc:
         raise ParameterError(f"{option} = {str(path)!r} is not a writable folder: {exc.strerror or exc}") from None
     if claim and not any(c.folder.resolve() == p.resolve() for c in _CLAIMS):
-        _CLAIMS.append(claim_folder(p, " ".join(_COMMAND)))
+        _CLAIMS.append(claim_folder(p, " ".join(_COMMAND), created))
     return p
 
 
@@ -645,7 +726,8 @@ def cmd_compare(args):
     """``frb compare``: run-ups vs method-J stability per outer clearance (figures and onset table)."""
 
     tc = load_from_args(args)
-    cl = [check_positive("--clearances", x, "m") for x in args.clearances.split(",")]
+    cl = _distinct(f"--clearances = {args.clearances!r}", [check_positive("--clearances", x, "m")
+                                                            for x in args.clearances.split(",")], "m")
     a, b = _speed_pair(args.speeds)
     writable_dir(args.out)  # (after every check: a refused option leaves no folder)
     table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out, progress=True,
@@ -659,8 +741,8 @@ def parse_orders(text: str) -> tuple:
 
     Parameters
     ----------
-    text : str
-        E.g. ``"0.5,1,2"``; ``"none"`` (or empty) for no order lines.
+    text : str or None
+        E.g. ``"0.5,1,2"``; ``"none"`` (or empty) for no order lines; None: the default ``"0.5,1"``.
 
     Returns
     -------
@@ -672,9 +754,32 @@ def parse_orders(text: str) -> tuple:
     >>> parse_orders("0.5,1,2"), parse_orders("none")
     ((0.5, 1.0, 2.0), ())
     """
+    if text is None:
+        text = DEFAULT_ORDERS
     if text.strip().lower() in ("", "none"):
         return ()
     return tuple(check_positive("--orders", x.strip()) for x in text.split(",") if x.strip())
+
+
+#: the default order lines of ``frb plot --orders`` (0.5X and 1X)
+DEFAULT_ORDERS = "0.5,1"
+#: the ``frb plot`` options that only one kind of results folder takes (the others are refused, not ignored)
+PLOT_OPTIONS = {"runup": ("xscale", "orbits", "orbit_times", "revolutions", "waterfall", "orders"),
+                "unbalance": ("locations",), "bifurcation": ("runs",)}
+PLOT_KINDS = {"runup": "a run-up folder (frb runup, frb cosim)", "unbalance": "an unbalance-response folder "
+              "(frb unbalance)", "bifurcation": "a bifurcation folder (frb bifurcation)"}
+
+
+def _plot_kind_options(args, out, kind):
+    """Refuse the ``frb plot`` options that the folder ``out`` of ``kind`` (a key of :data:`PLOT_OPTIONS`) has no
+    use for: each applies to one kind of folder only (they were ignored)."""
+    for other, names in PLOT_OPTIONS.items():
+        given = [f"--{n.replace('_', '-')}" for n in names if other != kind and getattr(args, n, None) not in
+                 (None, False)]
+        if given:
+            takers = ", ".join(f"--{n.replace('_', '-')}" for n in names)
+            raise ParameterError(f"{', '.join(given)} cannot apply to {out}, {PLOT_KINDS[kind]}: {takers} "
+                                 f"need{'s' if len(names) == 1 else ''} {PLOT_KINDS[other]}")
 
 
 def cmd_plot(args):
@@ -682,18 +787,21 @@ def cmd_plot(args):
     interrupted) or by frb unbalance."""
 
     out = Path(args.dir)
+    if out.is_file():  # (the figures are written into DIR: a file there was a traceback, "File exists")
+        raise ParameterError(f"DIR = {args.dir!r} is a file; give the results folder that holds it "
+                             f"(frb plot {str(out.parent)!r})")
     _CLAIMS.append(extend(out, " ".join(_COMMAND)))  # the figures it draws belong to the run whose folder it is
     orders = parse_orders(args.orders)
     if (out / "branch.nc").exists():
+        _plot_kind_options(args, out, "bifurcation")
         return replot_bifurcation(args, out)
     if out.is_dir() and not (out / "runup.csv").exists() and any(out.glob("unbalance_*.json")):
-        if args.orbits or args.orbit_times or args.waterfall:
-            raise ParameterError(f"{out}: an unbalance response; --orbits, --orbit-times and --waterfall need a "
-                                 "run-up folder")
+        _plot_kind_options(args, out, "unbalance")
         locations = _locations(args)
         print("wrote:\n  " + "\n  ".join(str(p) for p in replot_unbalance(out, locations)))
         print(f"results in {out.resolve()}")
         return
+    _plot_kind_options(args, out, "runup")
     run = RunupResult.load(out)
     if run.time.size < 64:
         raise ParameterError(f"{out}: {run.time.size} samples recorded; the figures need at least 64")
@@ -702,7 +810,7 @@ def cmd_plot(args):
     recorded = SpeedProfile(run.time, run.speed_rpm, np.zeros_like(run.time), "recorded speed")
     title = f"{RUN_TITLES.get(recorded.direction, 'run-up')} ({run.status})"
     windows = _orbit_windows(args, run)  # every option checked before the composites are redrawn
-    write_composites(run, system, out, xscale=args.xscale, title=title, orders=orders)
+    write_composites(run, system, out, xscale=args.xscale or "linear", title=title, orders=orders)
     write_orbits(windows, out, data=True)
     if args.waterfall:
         write_waterfalls(run, out, orders=orders)
@@ -715,8 +823,8 @@ def replot_bifurcation(args, out):
 
     bd = BifurcationDiagram.load(out)
     lo, hi = bd.meta.get("speed_range_rpm", [min(p.speed_rpm for p in bd.points), max(p.speed_rpm for p in bd.points)])
-    runs = _load_runs(getattr(args, "runs", None))
     system = system_from_meta(bd.meta, out / "branch.nc", "the Campbell lines")
+    runs = _load_runs(getattr(args, "runs", None), system)
     save_bifurcation_diagram(bd, system, out, (lo, hi), runs)
     print(f"results in {out.resolve()} (bifurcation.png/.html)")
     return 0
@@ -783,8 +891,9 @@ def _oil_from_args(args, system):
             raise ParameterError(f"{given[0]} needs an oil: give --oil NAME or an [oil] table in --system (without an "
                                  "oil the films keep their constant viscosities)")
     elif any(not get_method(x).needs_films for x in str(getattr(args, "method", "J")).split(",") if x.strip()):
-        raise ParameterError(f"--method {args.method} cannot be combined with an oil: methods A, B and E have linear "
-                             "springs without oil films; use film methods (C, D, F, G, I, J)")
+        source = f"--oil {args.oil!r}" if args.oil is not None else f"the [oil] table of --system {args.system}"
+        raise ParameterError(f"--method {args.method} cannot be combined with an oil ({source}): methods A, B and E "
+                             "have linear springs without oil films; use film methods (C, D, F, G, I, J)")
     elif getattr(args, "run", None):
         raise ParameterError("--run cannot be combined with an oil: a run-up's recorded losses are at the films' "
                              "constant viscosities; leave --oil (or the system's [oil]) out to overlay them")
@@ -835,13 +944,14 @@ def _supply_text(supply):
 def _supply_from_args(args, oil):
     """Supply temperatures [K] (each checked against the oil's range) and pressure [Pa] of ``frb losses``."""
 
-    text = args.supply_temperature or "333.15,363.15,393.15"
+    text = _given(args.supply_temperature, "333.15,363.15,393.15")
     try:
         values = [float(x) for x in text.split(",")]
     except ValueError:
         raise ParameterError(f"--supply-temperature = {text!r} is invalid: give a temperature [K] or a comma list "
                              "(e.g. 333.15,363.15)") from None
     temps = [check_temperature("--supply-temperature", v, T_MIN_K, oil.max_temperature_K) for v in values]
+    _distinct(f"--supply-temperature = {text!r}", temps, "K")
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
     return temps, check_supply_pressure("--supply-pressure", p_s)
 
@@ -866,7 +976,7 @@ def cmd_losses(args):
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
-    run = RunupResult.load(args.run) if args.run else None
+    run = _same_system_run(args.run, tc) if args.run is not None else None
     out = writable_dir(args.out)
     if oil is None:
         table = with_ring_speed_ratio(bearing_losses(tc, speeds, args.method))
@@ -891,6 +1001,20 @@ def cmd_losses(args):
     print(f"results in {out.resolve()}")
 
 
+def _same_system_run(folder, system, option="--run"):
+    """The run of ``frb losses --run DIR`` (or of ``option``), refused if it was computed for another system than
+    ``system`` (its losses were drawn beside curves they cannot be compared with)."""
+    run = RunupResult.load(folder)
+    theirs = {k: v for k, v in run.meta.get("system", {}).items() if k != "name"}
+    ours = {k: v for k, v in system.to_dict().items() if k != "name"}
+    if theirs and theirs != ours:
+        diff = ", ".join(k for k in ours if theirs.get(k) != ours[k])
+        raise ParameterError(f"{option} {folder}: the run was computed for another system (they differ in {diff}): "
+                             "its records cannot be compared with these results; give the run's system (--system, "
+                             f"--outer-clearance, --film-model) or leave {option} out")
+    return run
+
+
 def _runup_ramp_from_args(args):
     """``(start [rpm], end [rpm], time [s])`` of ``frb losses --runup-onsets`` (None without it); the flag needs
     ``--onsets``, the ramp options need the flag."""
@@ -902,7 +1026,7 @@ def _runup_ramp_from_args(args):
         return None
     if not args.onsets:
         raise ParameterError("--runup-onsets needs --onsets (the run-up onsets are drawn beside the linear ones)")
-    text = args.runup_speeds or "20000:250000"
+    text = _given(args.runup_speeds, "20000:250000")
     try:
         lo, hi = (float(x) for x in text.split(":"))
     except ValueError:
@@ -911,6 +1035,10 @@ def _runup_ramp_from_args(args):
     if not 0.0 < lo < hi <= 1e6:
         raise ParameterError(f"--runup-speeds = {text!r} is invalid: valid range 0 < START < STOP <= 1e6 rpm")
     duration = 1.0 if args.runup_duration is None else args.runup_duration  # (bounded by NUMERIC_OPTIONS)
+    try:  # (before the thermal tables and the linear onsets: a 1e-9 s ramp was refused after them)
+        check_output_rate(RUNUP_RATE_HZ, duration)
+    except ParameterError as exc:
+        raise ParameterError(f"--runup-duration = {duration:g} s: {exc}") from None
     return lo, hi, duration
 
 
@@ -985,7 +1113,7 @@ def cmd_cosim(args):
     profile, overrides = None, {}
     if args.profile is not None:
         given = [f"{o} {v}" for o, v in (("--speed-source", args.speed_source), ("--drive-torque", args.drive_torque))
-                 if v]
+                 if v is not None]
         if given:
             raise ParameterError(f"--profile {args.profile} and {' / '.join(given)} are mutually exclusive: the "
                                  "profile prescribes the rotor speed (the rotor FMU's speed_in)")
@@ -994,8 +1122,9 @@ def cmd_cosim(args):
         source = args.speed_source or "ramp"
         overrides = {"rotor": {"speed_source": ("String", source)}}
         if source == "torque":
-            overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque, "N m"))
-        elif args.drive_torque:
+            overrides["rotor"]["drive_torque"] = ("Real", check_finite("--drive-torque", args.drive_torque or 0.0,
+                                                                       "N m"))
+        elif args.drive_torque is not None:
             raise ParameterError("--drive-torque applies only with --speed-source torque")
     _check_ssp(args.ssp, args.parameter_set)
     out = writable_dir(args.out)
@@ -1050,7 +1179,7 @@ def _cosim_system(args):
     """``frb cosim`` of an SSP with the turbocharger FMU (e.g. build/engine_turbocharger.ssp): the fixed-step
     Jacobi master, the FMU's own record at 20 kHz, the composite figures."""
 
-    given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None)]
+    given = [opt for attr, opt in _SPLIT_ONLY if getattr(args, attr, None) not in (None, False)]
     if given:
         raise ParameterError(f"{' / '.join(given)} applies to the bearing + rotor split; {args.ssp} holds the "
                              "turbocharger FMU, which integrates itself with error control at any macro step (set its "
@@ -1085,7 +1214,7 @@ def cmd_linearize(args):
     """``frb linearize``: global state matrix from the FMUs at one operating point; prints its modes."""
 
     _check_ssp(args.ssp, args.parameter_set)  # (--speed-rpm is bounded by NUMERIC_OPTIONS)
-    out = writable_dir(args.out) if args.out else None
+    out = writable_dir(args.out) if args.out is not None else None
     A, tc = linearize(args.ssp, args.speed_rpm, args.method, args.parameter_set)
     md = modes_from_state(A, A.shape[0] // 2)
     print(f"global A from the FMUs: {A.shape[0]} states, method {args.method.upper()} operating point at "
@@ -1100,39 +1229,77 @@ def cmd_linearize(args):
         print(f"wrote {p.resolve()}")
 
 
+#: ``frb sweep`` options that only some analyses take (given for another, they were ignored)
+SWEEP_OPTIONS = {"methods": ("campbell",), "duration": ("runup", "cosim"), "max_points": ("bifurcation",),
+                 "ssp": ("cosim",)}
+
+
+def _sweep_params(items):
+    """``{name: [values]}`` of the repeatable ``--param NAME=V1,V2,...`` (SI); a name given twice is refused (the
+    second replaced the first)."""
+    params = {}
+    for item in items:
+        try:
+            name, vals = item.split("=", 1)
+            values = [float(v) for v in vals.split(",")]
+        except ValueError:
+            raise ParameterError(f"--param {item!r} is invalid: use NAME=V1,V2,... with SI values") from None
+        if name.strip() in params:
+            raise ParameterError(f"--param {item!r}: {name.strip()} is given twice; give all its values in one "
+                                 f"--param {name.strip()}=V1,V2,...")
+        _distinct(f"--param {item!r}", values)
+        params[name.strip()] = values
+    return params
+
+
+def _sweep_cases(args):
+    """The cases of ``frb sweep``: ``--example``, or the grid of ``--param`` with the analysis' options (an option
+    the analysis has no use for is refused, naming the analyses that take it)."""
+    options = ("param", "oil", "analysis", "methods", "speeds", "duration", "max_points", "ssp")
+    if args.example:
+        given = [f"--{n.replace('_', '-')}" for n in options if getattr(args, n) is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} cannot be combined with --example {args.example}: the built-in "
+                                 "study sets its own parameters and analyses (give --param NAME=V1,V2,... instead)")
+        return example_cases(args.example)
+    if not args.param:
+        raise ParameterError("frb sweep needs --param NAME=V1,V2,... (or --example outer-clearance)")
+    params = _sweep_params(args.param)
+    analysis = args.analysis or "campbell"
+    for name, takers in SWEEP_OPTIONS.items():
+        if getattr(args, name) is not None and analysis not in takers:
+            raise ParameterError(f"--{name.replace('_', '-')} cannot apply to --analysis {analysis}: it is an option "
+                                 f"of --analysis {' / '.join(takers)}")
+    if analysis == "campbell":
+        speeds = parse_speeds(_given(args.speeds, "1000:250000:200"))
+        methods = [m.strip().upper() for m in _given(args.methods, "J").split(",")]
+        if len(set(methods)) < len(methods):  # (every case computed a diagram twice)
+            raise ParameterError(f"--methods {args.methods} repeats a method: give each method once")
+        opts = {"methods": methods,
+                "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
+    else:
+        opts = {"speed_rpm": _speed_pair(_given(args.speeds, "1000:250000"))}
+        if analysis in ("runup", "cosim"):
+            opts["duration"] = 2.0 if args.duration is None else args.duration
+        if analysis == "bifurcation":
+            opts["max_points"] = 25 if args.max_points is None else args.max_points
+        if analysis == "cosim":
+            if not args.ssp:
+                raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
+            opts["ssp"] = str(Path(args.ssp).resolve())
+    if args.oil is not None:
+        opts["oil"] = args.oil
+    return grid(params, analysis, **opts)
+
+
 def cmd_sweep(args):
     """``frb sweep``: parameter study (on Dask or serial) and its stability map; exit code 4 if a case failed."""
 
-    if args.example:
-        cases = example_cases(args.example)
-    else:
-        if not args.param:
-            raise ParameterError("frb sweep needs --param NAME=V1,V2,... (or --example outer-clearance)")
-        params = {}
-        for item in args.param:
-            try:
-                name, vals = item.split("=", 1)
-                params[name.strip()] = [float(v) for v in vals.split(",")]
-            except ValueError:
-                raise ParameterError(f"--param {item!r} is invalid: use NAME=V1,V2,... with SI values") from None
-        opts = {}
-        if args.analysis == "campbell":
-            speeds = parse_speeds(args.speeds or "1000:250000:200")
-            opts = {"methods": [m.strip().upper() for m in args.methods.split(",")],
-                    "speeds_rpm": (float(speeds[0]), float(speeds[-1]), int(speeds.size))}
-        else:
-            lo, hi = _speed_pair(args.speeds or "1000:250000")
-            opts = {"speed_rpm": (lo, hi)} if args.analysis in ("hopf", "bifurcation") else \
-                {"speed_rpm": (lo, hi), "duration": args.duration}
-            if args.analysis == "bifurcation":
-                opts["max_points"] = args.max_points
-            if args.analysis == "cosim":
-                if not args.ssp:
-                    raise ParameterError("--analysis cosim needs --ssp build/turbocharger.ssp (frb build-fmus)")
-                opts["ssp"] = str(Path(args.ssp).resolve())
-        if args.oil is not None:
-            opts["oil"] = args.oil
-        cases = grid(params, args.analysis, **opts)
+    cases = _sweep_cases(args)
+    if args.workers is not None and (args.serial or args.scheduler):
+        raise ParameterError(f"--workers {args.workers} cannot be combined with "
+                             f"{'--serial' if args.serial else '--scheduler'}: it sets the processes of the "
+                             "LocalCluster frb sweep starts itself")
     scheduler = "serial" if args.serial else args.scheduler
     check_scheduler(scheduler)  # (before the folder is made: a wrong address leaves nothing behind)
     writable_dir(args.out, claim=False)  # (a study resumes in its folder: its index owns it)
@@ -1217,13 +1384,14 @@ def _add_bifurcation(sub):
     b = sub.add_parser("bifurcation", formatter_class=_Formatter,
                        help="Hopf points, limit-cycle branches vs speed (continuation), bifurcation diagram")
     b.add_argument("--speeds", default="1000:250000", metavar="RANGE", help="speed range [rpm]: START:END")
-    b.add_argument("--start", default="hopf",
-                   help="'hopf': a branch from each Hopf point in the range; or a speed [rpm]: the branch through "
-                        "the orbit the whirl settles on there (both directions); or a comma-separated list of "
-                        "these (e.g. 25000,60000)")
-    b.add_argument("--max-points", type=int, default=40, help="points per branch and direction at most")
-    b.add_argument("--segments", type=int, default=1,
-                   help="shooting segments per orbit (multiple shooting, e.g. 4, for strongly unstable branches)")
+    b.add_argument("--start", default=None,
+                   help="'hopf' (default): a branch from each Hopf point in the range; or a speed [rpm]: the branch "
+                        "through the orbit the whirl settles on there (both directions); or a comma-separated list "
+                        "of these (e.g. 25000,60000)")
+    b.add_argument("--max-points", type=int, default=None, help="points per branch and direction at most (default 40)")
+    b.add_argument("--segments", type=int, default=None,
+                   help="shooting segments per orbit (multiple shooting, e.g. 4, for strongly unstable branches; "
+                        "default 1)")
     b.add_argument("--runs", default=None, metavar="DIR[,DIR]",
                    help="run-up / run-down folders whose turbine-wheel orbit envelopes are drawn behind the branches "
                         "(and the first one's spectrogram behind the branch frequencies)")
@@ -1259,16 +1427,18 @@ def _add_runup(sub):
 
     r = sub.add_parser("runup", formatter_class=_Formatter,
                        help="nonlinear run-up (monolithic reference) + spectrogram composite figures")
-    r.add_argument("--speeds", default="20000:250000", metavar="RANGE",
-                   help="speed range [rpm]: START:END (up-down: START:TOP)")
+    r.add_argument("--speeds", default=None, metavar="RANGE",
+                   help=f"speed range [rpm]: START:END (up-down: START:TOP; constant: the speed, torque: the start "
+                        f"speed; default {RUNUP_SPEEDS})")
     r.add_argument("--duration", type=float, default=None,
                    help="simulated time [s] (default: 1; with a CSV profile its last time)")
     r.add_argument("--profile", type=_profile_arg, default="ramp", metavar="{" + ",".join(PROFILES) + "}|FILE.csv",
                    help="speed profile; 'up-down': START -> TOP -> START, half the duration each way; 'torque': the "
                         "spin is a state driven by --drive-torque and braked by the films (starts at START of "
                         "--speeds); FILE.csv: header 'time [s], speed [rpm]', one row per point from t = 0, the speed "
-                        "linear in between (--speeds unused)")
-    r.add_argument("--drive-torque", type=float, default=0.0, help="net drive torque about +z [N m] (--profile torque)")
+                        "linear in between (without --speeds)")
+    r.add_argument("--drive-torque", type=float, default=None,
+                   help="net drive torque about +z [N m] (--profile torque; default 0: the films brake the rotor)")
     r.add_argument("--unbalance", action="append", metavar="DISC:KGM[:RAD]",
                    help="unbalance of a wheel, e.g. turbine_wheel:1e-6:0 (repeatable)")
     r.add_argument("--rate", type=float, default=20e3, help="output sampling rate [Hz]")
@@ -1341,8 +1511,9 @@ def _add_cosim(sub):
                     help="rotor speed from a CSV table 'time [s], speed [rpm]' (linear in between) through the rotor "
                          "FMU's speed_in; excludes --speed-source and --drive-torque; the stop time defaults to the "
                          "table's last time")
-    cs.add_argument("--drive-torque", type=float, default=0.0,
-                    help="net drive torque about +z [N m] for --speed-source torque")
+    cs.add_argument("--drive-torque", type=float, default=None,
+                    help="net drive torque about +z [N m] for --speed-source torque (default 0: the bearings brake "
+                         "the rotor)")
     cs.add_argument("--adaptive", action="store_true",
                     help="error-controlled macro step: steps whose journal path defect exceeds --coupling-tol are "
                          "rolled back and retried shorter, quiet phases grow the step (up to 12.5 us); outputs at "
@@ -1385,16 +1556,18 @@ def _add_sweep(sub):
                     help="thermal model with this oil (SAE 0W-20, SAE 5W-30, SAE 10W-40, SAE 15W-40, ISO VG 46): "
                          "every case at its supply temperature (default 363.15 K) and pressure (3e5 Pa); campbell "
                          "(film methods), runup, hopf and bifurcation")
-    sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default="campbell",
-                    help="'hopf': the Hopf points of the full model (linear onsets) in --speeds START:END; two swept "
+    sw.add_argument("--analysis", choices=["campbell", "runup", "cosim", "hopf", "bifurcation"], default=None,
+                    help="'campbell' (default): the Campbell diagrams' onsets; 'hopf': the Hopf points of the full "
+                         "model (linear onsets) in --speeds START:END; two swept "
                          "parameters give a stability chart; 'bifurcation': the limit-cycle branches from those Hopf "
                          "points (each case's diagram in cases/<id>/, its bifurcation points in the map)")
-    sw.add_argument("--max-points", type=int, default=25, help="bifurcation: points per branch and direction")
-    sw.add_argument("--methods", default="J", help="Campbell methods, comma list")
+    sw.add_argument("--max-points", type=int, default=None,
+                    help="bifurcation: points per branch and direction (default 25)")
+    sw.add_argument("--methods", default=None, help="campbell: methods, comma list (default J)")
     sw.add_argument("--speeds", default=None, metavar="GRID|RANGE",
                     help="campbell: START:STOP:COUNT (default 1000:250000:200); the other analyses: START:END "
                          "(default 1000:250000) [rpm]")
-    sw.add_argument("--duration", type=float, default=2.0, help="run-up duration [s]")
+    sw.add_argument("--duration", type=float, default=None, help="runup, cosim: simulated time [s] (default 2)")
     sw.add_argument("--ssp", default=None, help="SSP for --analysis cosim")
     sw.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler (tcp://host:port)")
     sw.add_argument("--workers", type=int, default=None, help="LocalCluster worker processes (default: cores)")
@@ -1459,7 +1632,7 @@ def _add_plot(sub):
     pl.add_argument("dir", help="folder with runup.csv and runup.json, or with the unbalance_<M>.json/_dofs.csv files "
                                 "of frb unbalance (then the Bode, polar and film-orbit figures are redrawn), or with "
                                 "the branch.nc of frb bifurcation (then the diagram)")
-    pl.add_argument("--xscale", choices=["linear", "log"], default="linear", help="speed axis scale")
+    pl.add_argument("--xscale", choices=["linear", "log"], default=None, help="speed axis scale (default linear)")
     pl.add_argument("--orbits", metavar="SPEEDS", default=None,
                     help="also write orbits_<rpm>.png/.html/.csv/.nc at these speeds [rpm] (comma list or "
                          "start:stop:count; ± --revolutions about each): journal in ring, ring in housing (µm and ε), "
@@ -1471,9 +1644,9 @@ def _add_plot(sub):
                          "e.g. the settled end of a constant-speed run")
     pl.add_argument("--waterfall", action="store_true",
                     help="also write the 3-D waterfall waterfall_<disc>.png/.html (amplitude in µm, order lines)")
-    pl.add_argument("--orders", metavar="K", default="0.5,1",
-                    help="order lines k × rotor frequency drawn on the spectrograms and waterfalls (comma list, "
-                         "e.g. 0.5,1,2; 'none' for none)")
+    pl.add_argument("--orders", metavar="K", default=None,
+                    help=f"order lines k × rotor frequency drawn on the spectrograms and waterfalls (comma list, "
+                         f"e.g. 0.5,1,2; 'none' for none; default {DEFAULT_ORDERS})")
     pl.add_argument("--locations", default=None,
                     help="unbalance folders: locations drawn, comma list (default: the discs)")
     pl.add_argument("--runs", default=None, metavar="DIR[,DIR]",
@@ -1615,19 +1788,19 @@ NUMERIC_OPTIONS = {
     "ky": ("N/m", (0.0, None)),
     "max_points": ("-", (2, None)),
     "mode_shapes": ("rpm", "speed"),
-    "n_speeds": ("-", (2, None)),
+    "n_speeds": ("-", (2, 10000)),  # (MAX_SPEED_COUNT: 1e8 speeds started a run of days)
     "outer_clearance": ("m", "the system's film checks (clearance / radius, roughness)"),
     "rate": ("Hz", "frbmodel.nonlinear.runup.check_output_rate (samples of the run)"),
     "revolutions": ("revolutions", (0.0, None)),
     "runup_duration": ("s", (0.0, None)),
-    "segments": ("-", (1, None)),
+    "segments": ("-", (1, 64)),  # (4 serve strongly unstable branches; 1e6 held a million states per orbit)
     "speed_rpm": ("rpm", "speed"),
     "step": ("s", (0.0, None)),
     "stop_time": ("s", (0.0, None)),
     "supply_pressure": ("Pa", "frbmodel.linear.thermal.check_supply_pressure"),
     "ring_heat_capacity": ("J/K", (0.0, None)),
     "supply_temperature": ("K", "frbmodel.system.oil.check_temperature (the oil's range)"),
-    "workers": ("-", (1, None)),
+    "workers": ("-", (1, 256)),  # (the LocalCluster's processes: 100000 would have been started)
 }
 
 

@@ -134,6 +134,7 @@ def test_cli_bad_profile_exits_2_with_the_message(built, tmp_path, capsys, text,
                  "--out", str(tmp_path / "out"), *extra])
     err = capsys.readouterr().err
     assert code == 2 and message in err, err
+    assert not (tmp_path / "out").exists()  # (the stop time was refused after the folder was made: it stayed, empty)
 
 
 def test_building_and_cosimulating_leave_sys_path_as_it_was(built):

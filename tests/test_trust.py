@@ -31,6 +31,12 @@ def run_cli(capsys, *argv):
     (lambda: SpeedProfile.ramp(20e3, 1e9, 1.0), "end speed = 1000000000.0 rpm is invalid: valid range 0 < speed"),
     (lambda: SpeedProfile.constant(float("nan"), 1.0), "start speed = nan rpm is invalid"),
     (lambda: SpeedProfile.from_function(lambda t: 1e3 - 2e3 * t, 1.0), "speed = 0.0 rpm at t = 0.5 s"),
+    # trust4: "" is the current folder: "cannot read the speed profile: Is a directory"
+    (lambda: SpeedProfile.from_csv(""), "speed profile file = '' is invalid: give the path of a CSV file"),
+    (lambda: SpeedProfile.from_csv("."), "speed profile file = '.' is a folder; expected a CSV file"),
+    # trust4: an infinite phase ended the run-up at t = 0 ("singular iteration matrix", exit 3)
+    (lambda: __import__("frbmodel.nonlinear.runup").nonlinear.runup.Unbalance("turbine_wheel", 1e-6, float("inf")),
+     "unbalance phase of turbine_wheel = inf rad is invalid"),
 ])
 def test_speed_profiles_refuse_bad_speeds_with_the_value_and_range(call, message):
     with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(".", r"\.")):
@@ -208,6 +214,62 @@ def test_a_run_longer_than_its_speed_profile_is_refused():
     (["runup", "--profile", "torque", "--drive-torque", "1e9", "--integrator", "lsoda", "--duration", "0.01"],
      ["--drive-torque = 1e+09 N m is invalid: valid range |torque| <= 1.32e+04 N m"]),
     (["campbell", "--system", ""], ["--system = '' is invalid"]),
+    # trust4: options that were dropped without a word
+    (["runup", "--profile", "ramp", "--drive-torque", "0", "--duration", "0.01"],
+     ["--drive-torque = 0.0 N m applies only with --profile torque"]),
+    (["runup", "--profile", "constant", "--speeds", "20000:30000", "--duration", "0.01"],
+     ["--speeds = '20000:30000' is invalid with --profile constant", "END would be ignored", "give --speeds 20000"]),
+    (["runup", "--profile", "torque", "--speeds", "20000:30000", "--duration", "0.01"],
+     ["--speeds = '20000:30000' is invalid with --profile torque", "give --speeds 20000"]),
+    (["runup", "--profile", "torque", "--speeds", "fast", "--duration", "0.01"], ["--speeds = 'fast' is invalid"]),
+    (["bifurcation", "--hopf-only", "--speeds", "1000:5000", "--start", "3000", "--max-points", "3"],
+     ["--start, --max-points cannot be combined with --hopf-only"]),
+    (["bifurcation", "--hopf-only", "--speeds", "1000:5000", "--segments", "4"],
+     ["--segments cannot be combined with --hopf-only"]),
+    (["bifurcation", "--start", "", "--speeds", "1000:5000"], ["--start = '' is invalid"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "hopf", "--methods", "B", "--serial"],
+     ["--methods cannot apply to --analysis hopf: it is an option of --analysis campbell"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "hopf", "--duration", "5", "--serial"],
+     ["--duration cannot apply to --analysis hopf", "runup / cosim"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--ssp", "x.ssp", "--serial"],
+     ["--ssp cannot apply to --analysis campbell"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--param", "outer_clearance=40e-6", "--serial"],
+     ["outer_clearance is given twice"]),
+    (["sweep", "--example", "outer-clearance", "--oil", "SAE 5W-30", "--serial"],
+     ["--oil cannot be combined with --example outer-clearance"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--serial", "--workers", "2"],
+     ["--workers 2 cannot be combined with --serial"]),
+    # trust4: an empty value was replaced by the default
+    (["losses", "--oil", "SAE 5W-30", "--supply-temperature", "", "--speeds", "100000"],
+     ["--supply-temperature = '' is invalid"]),
+    (["runup", "--speeds", "", "--duration", "0.01"], ["--speeds = '' is invalid"]),
+    (["unbalance", "--locations", ",", "--speeds", "10000:20000:2"], ["--locations = ',' names no location"]),
+    (["runup", "--unbalance", "turbine_wheel:1e-6:inf", "--duration", "0.01"],
+     ["--unbalance 'turbine_wheel:1e-6:inf': unbalance phase of turbine_wheel = inf rad is invalid"]),
+    # trust4: repeated values computed the same speed, supply, clearance or case twice (a diagram over 0 rpm)
+    (["campbell", "--speeds", "10000:10000:3"], ["--speeds = '10000:10000:3' repeats 10000 rpm"]),
+    (["unbalance", "--speeds", "10000,20000,10000"], ["repeats 10000 rpm: give distinct speeds"]),
+    (["losses", "--oil", "SAE 5W-30", "--supply-temperature", "363.15,363.15", "--speeds", "100000"],
+     ["--supply-temperature = '363.15,363.15' repeats 363.15 K"]),
+    (["compare", "--clearances", "36e-6,36e-6", "--duration", "0.01"], ["--clearances = '36e-6,36e-6' repeats"]),
+    # trust4: refused by the first run-up, after the thermal tables and the linear onsets were computed and written
+    (["losses", "--oil", "SAE 5W-30", "--supply-temperature", "363.15", "--speeds", "100000", "--onsets",
+      "--runup-onsets", "--runup-duration", "1e-9"], ["--runup-duration = 1e-09 s: ", "records no sample"]),
+    (["compare", "--duration", "1e-9"], ["duration = 1e-09 s is invalid at output_rate_hz = 20000 Hz"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "runup", "--duration", "1e-9", "--serial"],
+     ["duration = 1e-09 s is invalid at output_rate_hz = 10000 Hz"]),
+    # trust4: a range of one speed: every case failed (exit 4); four run-ups and an empty table (exit 0)
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "hopf", "--speeds", "5000:5000", "--serial"],
+     ["hopf speed_rpm = (5000, 5000) rpm is invalid: START and END must differ"]),
+    (["compare", "--speeds", "20000:20000", "--duration", "0.01"],
+     ["speed_rpm = (20000.0, 20000.0) is invalid", "START != END"]),
+    (["sweep", "--param", "outer_clearance=36e-6,36e-6", "--serial"], ["repeats 3.6e-05: give distinct values"]),
+    (["unbalance", "--method", "J,j", "--speeds", "10000:20000:2"], ["--method J,J repeats method J"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--methods", "J,J", "--serial"], ["--methods J,J repeats a method"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--methods", "", "--serial"], ["method = '' is unknown"]),
+    # trust4: refused while computing, after the folder was made: it was left behind, empty
+    (["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"],
+     ["turbine inner film temperature at 10000 rpm", "beyond the oil's viscosity law"]),
 ])
 def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, words, tmp_path, capsys):
     """Issue #24 items 2-3: each case ran (exit 0) with a meaningless result or dropped the input; now exit 2 with
@@ -225,6 +287,14 @@ def test_inputs_that_were_accepted_and_meaningless_or_dropped_are_refused(argv, 
     (["campbell", "--speeds", "1000:inf:3"], ["--speeds = '1000:inf:3' contains inf rpm"]),
     (["campbell", "--speeds", "10000:250000:100000000"], ["has 100000000 speeds: valid range 1 ... 10000"]),
     (["campbell", "--mode-shapes", "999999999"], ["--mode-shapes = 999999999.0 rpm is invalid"]),
+    (["sweep", "--param", "outer_clearance=36e-6", "--workers", "100000"],
+     ["--workers = 100000 is invalid: valid range >= 1 and <= 256"]),
+    (["bifurcation", "--segments", "1000000"], ["--segments = 1000000 is invalid: valid range >= 1 and <= 64"]),
+    (["paper-figures", "--n-speeds", "100000000"],
+     ["--n-speeds = 100000000 is invalid: valid range >= 2 and <= 10000"]),
+    # trust4: refused after the whole diagram was computed and written ("mode 0 is not present at 5000 rpm")
+    (["campbell", "--mode-shapes", "5000", "--speeds", "10000:20000:2"],
+     ["--mode-shapes = 5000 rpm is outside --speeds 10000:20000:2 (10000 ... 20000 rpm)"]),
     (["unbalance", "--method", "B", "--k", "5e6"], ["sets a spring of methods A, E (method B takes --kx, --ky)"]),
     (["unbalance", "--method", "J", "--kx", "5e6"], ["sets a spring of method B (method J takes no spring)"]),
     (["sweep", "--param", "outer_clearance=40e-6,-1e-6"], ["study parameter outer_clearance = -1e-06 [m]",
@@ -442,3 +512,293 @@ def test_api_inputs_that_were_misread_or_ignored_are_refused():
     for bad in (-1.0, 0.0):
         with pytest.raises(ParameterError, match="segment_s = "):
             frb.spectrogram(run, "w", segment_s=bad)
+
+
+def test_runup_profile_options_that_were_ignored_are_refused_and_one_speed_profiles_take_one_speed(tmp_path, capsys):
+    """trust4: with --profile FILE.csv, --speeds and --drive-torque were ignored (the run followed the table); with
+    --profile constant (torque), --speeds START:END ran at (from) START and dropped END. Now the CSV cases are
+    refused with nothing written, and a one-speed profile takes --speeds START: the run holds exactly that speed."""
+    table = tmp_path / "p.csv"
+    table.write_text("time [s],speed [rpm]\n0,20000\n0.01,21000\n")
+    for extra, option in ((["--speeds", "50000:60000"], "--speeds"), (["--drive-torque", "0.05"], "--drive-torque")):
+        out = tmp_path / option.strip("-")
+        assert main(["runup", "--profile", str(table), *extra, "--no-figure", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"{option} cannot be combined with --profile {table}" in err and "Traceback" not in err, err
+        assert not out.exists()
+    out = tmp_path / "held"
+    assert main(["runup", "--profile", "constant", "--speeds", "25000", "--duration", "0.005", "--no-figure",
+                 "--out", str(out)]) == 0
+    assert "constant-speed run: constant 25000 rpm" in capsys.readouterr().out
+    np.testing.assert_array_equal(frb.RunupResult.load(out).speed_rpm, 25000.0)
+
+
+def test_plot_refuses_a_file_and_the_options_of_another_kind_of_folder(tmp_path, capsys):
+    """trust4: `frb plot DIR/runup.csv` (the file, not its folder) ended in a FileExistsError traceback; --locations
+    (unbalance folders) and --runs (bifurcation folders) on a run-up folder, --orders / --xscale on an unbalance
+    folder were ignored. Now each is one line, exit 2, with nothing added to the folder."""
+    run = tmp_path / "run"
+    assert main(["runup", "--duration", "0.005", "--no-figure", "--out", str(run)]) == 0
+    capsys.readouterr()
+    before = sorted(p.name for p in run.iterdir())
+    cases = [([str(run / "runup.csv")], f"DIR = '{run / 'runup.csv'}' is a file; give the results folder"),
+             ([str(run), "--locations", "turbine_wheel"], "--locations cannot apply to"),
+             ([str(run), "--runs", str(run)], "--runs needs a bifurcation folder")]
+    for argv, words in cases:
+        assert main(["plot", *argv]) == 2, argv
+        err = capsys.readouterr().err
+        assert words in err and "Traceback" not in err, err
+    assert sorted(p.name for p in run.iterdir()) == before
+    ub = tmp_path / "ub"
+    assert main(["unbalance", "--method", "A", "--speeds", "3000:30000:3", "--out", str(ub)]) == 0
+    capsys.readouterr()
+    assert main(["plot", str(ub), "--orders", "1", "--xscale", "log"]) == 2
+    assert "--xscale, --orders cannot apply to" in capsys.readouterr().err
+
+
+def test_a_refused_command_removes_the_folders_it_made_and_keeps_those_that_were_there(tmp_path, capsys):
+    """trust4: a command refused while computing (here a supply temperature at the oil's limit: the first film is
+    beyond it) left the --out folder it had made, empty, with its parents. Now it removes the folders it made; a
+    folder that was there stays, with its files."""
+    argv = ["campbell", "--oil", "SAE 5W-30", "--supply-temperature", "473.15", "--speeds", "10000"]
+    assert main([*argv, "--out", str(tmp_path / "a" / "b" / "c")]) == 2
+    assert "beyond the oil's viscosity law" in capsys.readouterr().err
+    assert not (tmp_path / "a").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    (kept / "note.txt").write_text("mine")
+    assert main([*argv, "--out", str(kept)]) == 2
+    assert sorted(p.name for p in kept.iterdir()) == ["note.txt"]
+
+
+def test_commands_at_constant_viscosities_refuse_a_system_with_an_oil(tmp_path, capsys):
+    """trust4: `frb compare`, `frb paper-figures` and `frb build-fmus --rotor-file` of a system file with an [oil]
+    table ran at the films' constant viscosities, the oil ignored without a word (and build-fmus left its folder).
+    Now each is refused before any folder is made; the library functions refuse it too."""
+    from frbmodel.cosim.fmu_system import check_rotor_system
+    from frbmodel.studies.compare import compare
+    from frbmodel.studies.paper import paper_figures
+
+    path = frb.turbocharger().save(tmp_path / "oily.toml")
+    path.write_text(path.read_text() + '\n[oil]\nname = "SAE 5W-30"\n')
+    assert frb.load_system(path).oil.name == "SAE 5W-30"
+    for argv in (["compare", "--system", str(path), "--duration", "0.01"], ["paper-figures", "--system", str(path)],
+                 ["build-fmus", "--rotor-file", str(path)]):
+        out = tmp_path / argv[0]
+        assert main([*argv, "--out", str(out)]) == 2, argv
+        err = capsys.readouterr().err
+        assert "has an oil (SAE 5W-30, its [oil] table)" in err and "would ignore it" in err, err
+        assert "Traceback" not in err and not out.exists()
+    tc = frb.load_system(path)
+    for call in (lambda: compare(tc, out_dir=tmp_path / "c"), lambda: paper_figures(tc, tmp_path / "p"),
+                 lambda: check_rotor_system(tc)):
+        with pytest.raises(ParameterError, match="has an oil"):
+            call()
+    assert check_rotor_system(frb.turbocharger()).oil is None
+    # the oil of a system file refused with a spring method: the message said "an oil" without naming where it was
+    assert main(["equilibrium", "--system", str(path), "--method", "A"]) == 2
+    assert f"--method A cannot be combined with an oil (the [oil] table of --system {path})" in capsys.readouterr().err
+
+
+def test_study_options_an_analysis_does_not_take_are_refused():
+    """trust4: grid() kept options its analysis never reads (a duration for Hopf points, methods for a run-up) and
+    ran a runup study with profile = 'constant' as a ramp. Now each is refused, naming the analysis' options."""
+    from frbmodel.studies.sweep import grid
+
+    for analysis, opts, words in (("hopf", {"duration": 1.0}, "sweep option duration = 1.0 does not apply to "
+                                                              "analysis 'hopf': its options are speed_rpm, oil"),
+                                  ("runup", {"methods": ["J"]}, "sweep option methods"),
+                                  ("runup", {"profile": "constant"}, "runup profile = 'constant' is unknown"),
+                                  ("runup", {"output_rate_hz": 0.0}, "runup output_rate_hz = 0.0 Hz is invalid")):
+        with pytest.raises(ParameterError, match=words.replace("(", r"\(")):
+            grid({"outer_clearance": [36e-6]}, analysis, **opts)
+    assert grid({"outer_clearance": [36e-6]}, "runup", profile="ramp", duration=0.1)[0].options["profile"] == "ramp"
+
+
+def test_campbell_from_fmu_names_an_unknown_parameter_set_of_the_users_ssp_first(built, tmp_path, capsys):
+    """trust4: `frb campbell --from-fmu X.ssp --parameter-set co99` built the linearization variant, made the folder
+    and then named a temporary SSP; `--parameter-set ''` fell back to co36. Now both are refused at once, naming
+    the user's SSP, with nothing written."""
+    for pset in ("co99", ""):
+        out = tmp_path / f"c{pset}"
+        assert main(["campbell", "--from-fmu", str(built / "turbocharger.ssp"), "--parameter-set", pset,
+                     "--speeds", "100000", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"parameter set = {pset!r} is not in SSP '{built / 'turbocharger.ssp'}'" in err, err
+        assert not out.exists()
+
+
+def _ring_lag(**kw):
+    from frbmodel.linear.thermal import ring_lag
+    from frbmodel.physics.thermal import ThermalModel
+
+    args = dict(system=frb.turbocharger(), time_s=[0.0, 1.0], speed_rpm=[2e4, 3e4],
+                oil_supply=frb.OilSupply(frb.OILS["SAE 5W-30"], model=ThermalModel(ring_heat_capacity_J_K=2.7)))
+    return ring_lag(**{**args, **kw})
+
+
+def _thermal_model(**kw):
+    from frbmodel.physics.thermal import ThermalModel
+
+    return ThermalModel(**kw)
+
+
+@pytest.mark.parametrize("call, message", [
+    # thermal_losses without an oil returned the constant-viscosity table and dropped the supply
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], None, 333.15), "supply_temperature_K needs an oil"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], None, supply_pressure_Pa=4e5),
+     "supply_pressure_Pa needs an oil"),
+    # an empty table (0 rows, 0 columns) for no speed or no supply temperature; text converted to numbers
+    (lambda: frb.thermal_losses(frb.turbocharger(), [], frb.OILS["SAE 5W-30"]), "speed_rpm = [] is invalid"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"], []),
+     "supply_temperature_K = [] is invalid"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), "1e5", frb.OILS["SAE 5W-30"]), "speed_rpm = '1e5' is invalid"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"], "333"),
+     "supply_temperature_K = '333' is invalid"),
+    # ThermalModel: a wall temperature of a path that is off had no effect; 'no' switched the centrifugal feed on;
+    # a tolerance of 1e9 K accepted any unconverged operating point
+    (lambda: _thermal_model(shaft_temperature_K=400.0), "shaft_temperature_K = 400.0 K has no effect with "
+                                                         "shaft_heat_transfer_W_m2K = 0"),
+    (lambda: _thermal_model(housing_temperature_K=400.0), "housing_temperature_K = 400.0 K has no effect"),
+    (lambda: _thermal_model(centrifugal_feed="no"), "centrifugal_feed = 'no' is a str; expected True or False"),
+    (lambda: _thermal_model(tolerance_K=1e9), "tolerance_K = 1000000000.0 K is invalid: valid range 0 < "
+                                              "tolerance_K <= 0.001 K"),
+    # feed holes that do not fit the ring: a 1 m hole flooded the inner film at the supply temperature
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"],
+                                model=_thermal_model(feed_hole_diameter_m=1.0)),
+     "feed_hole_diameter_m = 1 m is invalid for the turbine bearing's ring: valid range < its wall thickness"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"],
+                                model=_thermal_model(feed_holes=40, feed_hole_diameter_m=1e-3)),
+     "feed_holes = 40 of 0.001 m do not fit around the turbine bearing's ring"),
+    # OilSupply.from_dict of an incomplete table: KeyError / TypeError
+    (lambda: frb.OilSupply.from_dict({"oil": {"name": "SAE 5W-30"}}), "oil_supply = {'oil': "),
+    (lambda: frb.OilSupply.from_dict("x"), "oil_supply = 'x' is invalid: expected a table with the keys"),
+    # ring_lag: rtol 0 / -1 / 10 taken by LSODA (10 changed the temperatures), text times converted, a string system
+    # an AttributeError
+    (lambda: _ring_lag(rtol=0.0), "rtol = 0.0 is invalid"),
+    (lambda: _ring_lag(rtol=10.0), "rtol = 10.0 is invalid: valid range 1e-13 ... 1e-3"),
+    (lambda: _ring_lag(time_s=["0", "1"]), "time_s = ['0', '1'] is invalid"),
+    (lambda: _ring_lag(system="tc"), "system = 'tc' is a str; expected a Turbocharger"),
+    # a nan supply temperature was named without the temperatures' range
+    (lambda: frb.OilSupply(frb.OILS["SAE 5W-30"], float("nan")), "supply_temperature_K = nan K is invalid: valid "
+                                                                  "range 243.15 ... 473.15 K"),
+])
+def test_thermal_api_inputs_that_were_dropped_converted_or_accepted_are_refused(call, message):
+    """trust4: each call returned a result (or a traceback of another kind); now a ParameterError naming the
+    argument, its value and what is valid."""
+    with pytest.raises(ParameterError) as exc:
+        call()
+    assert message in str(exc.value), str(exc.value)
+
+
+def test_thermal_losses_defaults_are_the_documented_supply():
+    """Without supply arguments thermal_losses is at 363.15 K and 3e5 Pa (the defaults now None in the signature);
+    the two calls give the same table to the last bit."""
+    oil = frb.OILS["SAE 5W-30"]
+    a = frb.thermal_losses(frb.turbocharger(), [1e5], oil)
+    b = frb.thermal_losses(frb.turbocharger(), [1e5], oil, 363.15, 3e5)
+    assert (a["supply temperature [K]"] == 363.15).all() and (a["supply pressure [Pa]"] == 3e5).all()
+    assert a.drop(columns="iterations [-]").equals(b.drop(columns="iterations [-]"))
+
+
+@pytest.mark.parametrize("argv", [["campbell", "--speeds", "100000"], ["losses", "--speeds", "100000"],
+                                  ["equilibrium", "--speed-rpm", "50000"], ["build-fmus"]])
+def test_an_empty_out_is_refused_not_the_current_folder(argv, tmp_path, monkeypatch, capsys):
+    """trust4: `--out ""` is Path("") = the current folder: campbell and losses wrote their results (and a manifest
+    that a later run would clean) there, equilibrium dropped it. Now it is refused, and nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    assert main([*argv, "--out", ""]) == 2
+    err = capsys.readouterr().err
+    assert "--out = '' is invalid: give a folder" in err and "Traceback" not in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_losses_refuses_a_run_of_another_system_to_overlay(tmp_path, capsys):
+    """trust4: `frb losses --run DIR --outer-clearance 46e-6` drew the 36 um run's recorded losses beside the 46 um
+    curves, exit 0. Now a run of another system is refused before any folder is made; the run's own system works."""
+    run = tmp_path / "run"
+    assert main(["runup", "--duration", "0.005", "--no-figure", "--out", str(run)]) == 0
+    capsys.readouterr()
+    for extra, differ in ((["--outer-clearance", "46e-6"], "bearings"), (["--film-model", "short_corrected"],
+                                                                        "film_model")):
+        out = tmp_path / differ
+        assert main(["losses", "--run", str(run), *extra, "--speeds", "20000:30000:3", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"--run {run}: the run was computed for another system (they differ in {differ})" in err, err
+        assert not out.exists()
+    out = tmp_path / "bif"
+    assert main(["bifurcation", "--runs", str(run), "--outer-clearance", "46e-6", "--out", str(out)]) == 2
+    assert f"--runs {run}: the run was computed for another system" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(["losses", "--run", str(run), "--speeds", "20000:30000:3", "--out", str(tmp_path / "same")]) == 0
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"ds": 0.0}, "ds = 0.0 is invalid: valid range is finite and > 0"),
+    ({"ds": -1.0}, "ds = -1.0 is invalid"),
+    ({"ds": float("nan")}, "ds = nan is invalid"),
+    ({"ds": 5.0, "ds_max": 1.0}, "ds = 5 is invalid with ds_max = 1: valid range 0 < ds <= ds_max"),
+    ({"max_points": 0}, "max_points = 0 is invalid: valid range integer >= 1"),
+    ({"max_points": 2.5}, "max_points = 2.5 is invalid"),
+    ({"speeds_rpm": (3e3,)}, "speeds_rpm = (3000.0,) is invalid: give the speed range (START, END) in rpm"),
+    ({"speeds_rpm": (3e3, 3e3)}, "START and END must differ"),
+    ({"speeds_rpm": (1e3, 5e6)}, "speeds_rpm END = 5000000.0 rpm is invalid"),
+])
+def test_continuation_refuses_meaningless_steps_and_ranges_before_any_work(kw, message, monkeypatch):
+    """trust4: continuation(ds=0 / -1 / nan, ds > ds_max) returned a diagram; a range of one speed raised an unpacking
+    ValueError, (3e3, 3e3) returned an empty diagram. Now each is one ParameterError before the Hopf points are
+    searched (replaced here by a function that fails the test if it is called)."""
+    import frbmodel.cycles.continuation as cc
+
+    def searched(*args, **kwargs):
+        raise AssertionError("the Hopf points were searched before the arguments were checked")
+
+    monkeypatch.setattr(cc, "hopf_points", searched)
+    with pytest.raises(ParameterError) as exc:
+        cc.continuation(frb.turbocharger(), **{"speeds_rpm": (1e3, 3e3), **kw})
+    assert message in str(exc.value), str(exc.value)
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"tol": 0.0}, "tol = 0.0 is invalid"),
+    ({"tol": 1e3}, "tol = 1000.0 is invalid: valid range 0 < tol <= 0.001"),
+    ({"samples": 1}, "samples = 1 is invalid: valid range integer >= 16"),
+    ({"max_iter": 0}, "max_iter = 0 is invalid: valid range integer >= 1"),
+])
+def test_limit_cycle_checks_its_newton_options_before_the_settling_run(kw, message, monkeypatch):
+    """trust4: tol, samples and max_iter were first used after the settling run (seconds), which then failed with
+    an unrelated ConvergenceError; tol = 1e3 would accept any orbit. Now refused before the guess is made (replaced
+    by a function that fails the test if it is called)."""
+    import frbmodel.cycles.limitcycle as lcm
+
+    def settled(*args, **kwargs):
+        raise AssertionError("the guess was settled before the options were checked")
+
+    monkeypatch.setattr(lcm, "_initial_guess", settled)
+    with pytest.raises(ParameterError) as exc:
+        frb.limit_cycle(frb.turbocharger(), 3e4, **kw)
+    assert message in str(exc.value), str(exc.value)
+
+
+def test_hopf_points_refuses_a_degenerate_search_before_any_equilibrium(monkeypatch):
+    """trust4: hopf_points(tc, (3e3,)) was a TypeError of numpy, n_grid = 1 returned [] (one speed crosses nothing),
+    restabilizing = "no" was truthy. Now one ParameterError each, before any equilibrium is computed."""
+    import frbmodel.cycles.branch as br
+
+    def computed(*args, **kwargs):
+        raise AssertionError("an equilibrium was computed before the arguments were checked")
+
+    monkeypatch.setattr(br, "_unstable_pairs", computed)
+    for kw, message in (({"speeds_rpm": (3e3,)}, "speeds_rpm = (3000.0,) is invalid"),
+                        ({"n_grid": 1}, "n_grid = 1 is invalid: valid range integer >= 2"),
+                        ({"restabilizing": "no"}, "restabilizing = 'no' is a str; expected True or False")):
+        with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(")", r"\)")):
+            br.hopf_points(frb.turbocharger(), **{"speeds_rpm": (1e3, 3e3), **kw})
+
+
+def test_a_run_too_short_for_figures_says_so(tmp_path, capsys):
+    """trust4: `frb runup --duration 1e-3` (21 samples) wrote no figure and said nothing about it. Now it says why
+    (still exit 0: the run's data are complete)."""
+    assert main(["runup", "--duration", "1e-3", "--out", str(tmp_path / "short")]) == 0
+    assert "no figures: 21 samples recorded, the spectrogram figures need at least 64" in capsys.readouterr().out
+    assert not list((tmp_path / "short").glob("composite_*"))

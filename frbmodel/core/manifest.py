@@ -93,6 +93,9 @@ class Claim:
     removed: list = field(default_factory=list)
     #: an extension (``frb plot`` re-drawing a run's figures): the files it writes join the run's, nothing is removed
     extends: bool = False
+    #: the outermost folder the command created for it (None: the folder was there): a refused command that wrote
+    #: nothing removes the folders it made, as if it had not run
+    created: Path | None = None
 
     def _write(self, status, files, previous=None):
         doc = {"command": self.command, "status": status, "started_unix_s": self.started_unix_s,
@@ -120,9 +123,30 @@ class Claim:
                 (self.folder / MANIFEST).unlink(missing_ok=True)
             else:
                 (self.folder / MANIFEST).write_text(self.previous_text)
+            self._remove_created()
             return
         self.removed = remove_stale(self.folder, self.previous, keep=mine)
         self._write(status, mine)
+
+
+    def _remove_created(self):
+        """Remove the folders this command created (:attr:`created` and those below it on the way to
+        :attr:`folder`), where they are empty."""
+        if self.created is None:
+            return
+        for root, dirs, _ in os.walk(self.folder, topdown=False):  # (empty subfolders it made, e.g. build/fmus)
+            for d in dirs:
+                try:
+                    (Path(root) / d).rmdir()  # (only if empty)
+                except OSError:
+                    pass
+        top, p = Path(self.created).resolve(), self.folder.resolve()
+        chain = [p, *[q for q in p.parents if q == top or top in q.parents]]
+        for q in chain:
+            try:
+                q.rmdir()  # (only if empty)
+            except OSError:
+                return
 
 
 def extend(folder, command) -> Claim:
@@ -132,15 +156,16 @@ def extend(folder, command) -> Claim:
     return Claim(folder, command, time.time(), _files(folder) if folder.is_dir() else {}, extends=True)
 
 
-def claim(folder, command) -> Claim:
+def claim(folder, command, created=None) -> Claim:
     """Claim ``folder`` for ``command``: note what is there and what the last run listed, and write a manifest with
-    status ``running`` (the stale files are removed when the command ends, :meth:`Claim.finish`)."""
+    status ``running`` (the stale files are removed when the command ends, :meth:`Claim.finish`); ``created`` is the
+    outermost folder the command made for it (removed again if the command is refused before it writes anything)."""
     folder = Path(folder)
     try:
         text = (folder / MANIFEST).read_text()
     except OSError:
         text = None
-    c = Claim(folder, command, time.time(), _files(folder), _listed(_read(folder)), text)
+    c = Claim(folder, command, time.time(), _files(folder), _listed(_read(folder)), text, created=created)
     c._write("running", {}, c.previous)
     return c
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import frbmodel
 
-from .fmu_system import as_system, write_rotor_system
+from .fmu_system import as_system, check_rotor_system, write_rotor_system
 from .loader import install_loader
 from .sources import PACKAGE, PACKAGE_DATA, find_source  # noqa: F401  (re-exported)
 from .ssp import write_engine_ssp, write_ssp
@@ -86,6 +86,8 @@ def build_fmus(out_dir="build", src=None, progress=print, rotor_file=None, linea
     """
     src = find_source(src)  # before importing pythonfmu: a missing source is named even without the fmi extra
 
+    if rotor_file is not None:  # (read and checked before any folder is made)
+        rotor_file = check_rotor_system(rotor_file)
     out = Path(out_dir)
     (out / "fmus").mkdir(parents=True, exist_ok=True)
     paths = []

@@ -18,6 +18,7 @@ import zipfile
 from pathlib import Path
 
 from ..core.errors import ParameterError
+from ..system.oil import check_no_oil
 from ..system.parameters import Turbocharger, load_system
 from ..system.presets import turbocharger
 
@@ -75,9 +76,16 @@ def write_rotor_system(system, folder) -> Path:
     ParameterError
         The file cannot be read or holds an invalid system, or a name unusable in FMI variable names.
     """
-    tc = as_system(system)
+    return check_rotor_system(system).save(Path(folder) / RESOURCE)
+
+
+def check_rotor_system(system):
+    """The Turbocharger of ``system`` (or of a system file) if a rotor FMU can be built for it: names usable in FMI
+    variable names, and no oil (the bearing FMUs take theirs from the SSP parameter set; it would be ignored)."""
+    tc = check_no_oil(as_system(system), "the rotor FMU's system (the bearing FMUs take their oil from the SSP "
+                      "parameter set, parameter oil)")
     check_names(tc)
-    return tc.save(Path(folder) / RESOURCE)
+    return tc
 
 
 def rotor_system(resources=None):

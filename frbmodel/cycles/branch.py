@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.errors import ConvergenceError
+from ..core.errors import ConvergenceError, ParameterError
 from ..core.interrupt import deferred_signals
 from ..linear.thermal import at_operating_point, check_oil_supply
 from ..nonlinear.recorder import RunupSchema
-from ..nonlinear.runup import SpeedProfile, atol_vector, build_problem, initial_state
+from ..nonlinear.runup import SpeedProfile, atol_vector, build_problem, check_speed, initial_state
 from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
 from .shooting import ShootingSolution, monodromy, stable_multipliers
 
@@ -369,6 +369,18 @@ def _crossing_pair(lam_a, lam_b, count_a, count_b):
     return min(new, key=lambda x: np.min(np.abs(lam_a[(lam_a.real <= 0) & (lam_a.imag > 0)] - x)))
 
 
+def check_speed_range(speeds_rpm, name="speeds_rpm"):
+    """``(lo, hi)`` [rpm] of a speed range given as (START, END) in either order: two speeds in the model's range that
+    differ, else a :class:`ParameterError` (a range of one speed gave an unpacking error or an empty result)."""
+    pair = np.atleast_1d(np.asarray(speeds_rpm, dtype=object))
+    if pair.shape != (2,):
+        raise ParameterError(f"{name} = {speeds_rpm!r:.60} is invalid: give the speed range (START, END) in rpm")
+    lo, hi = sorted(check_speed(f"{name} {k}", v) for k, v in zip(("START", "END"), pair))
+    if not lo < hi:
+        raise ParameterError(f"{name} = {speeds_rpm!r} is invalid: START and END must differ (a range)")
+    return lo, hi
+
+
 def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, restabilizing=False, oil_supply=None):
     """Hopf points of the full model's equilibrium in a speed range: where the number of unstable complex pairs of
     its Jacobian rises (and, with ``restabilizing``, falls), refined by Brent's method on the real part of the
@@ -401,7 +413,13 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, res
     """
     supply = check_oil_supply(oil_supply)
     model = film_model or system.film_model
-    grid = np.geomspace(*sorted(speeds_rpm), n_grid)
+    lo, hi = check_speed_range(speeds_rpm)
+    if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 2:
+        raise ParameterError(f"n_grid = {n_grid!r} is invalid: valid range integer >= 2 (one speed finds no crossing)")
+    if not isinstance(restabilizing, (bool, np.bool_)):
+        raise ParameterError(f"restabilizing = {restabilizing!r} is a {type(restabilizing).__name__}; expected True "
+                             "or False")
+    grid = np.geomspace(lo, hi, n_grid)
     counts = [_unstable_pairs(system, s, model, supply) for s in grid]
     out = []
     for a, b, ca, cb in zip(grid[:-1], grid[1:], counts[:-1], counts[1:]):

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.errors import ParameterError
+from ..core.errors import ParameterError, check_positive
 from ..core.results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
 from ..linear.campbell import campbell
 from ..linear.thermal import check_oil_supply
@@ -33,6 +33,7 @@ from .branch import (
     BranchPoint,
     ContinuationProblem,
     HopfPoint,
+    check_speed_range,
     equilibrium_jacobian,
     follow_branch,
     hopf_branch,
@@ -246,7 +247,7 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     BifurcationDiagram
     """
     supply = check_oil_supply(oil_supply)
-    lo, hi = sorted(float(s) for s in speeds_rpm)
+    lo, hi = _check_steps(speeds_rpm, ds, ds_max, max_points)
     model = check_model(film_model or system.film_model)
     if int(segments) != segments or segments < 1:
         raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
@@ -266,6 +267,19 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
                                             segments, supply))
             origins.append(None)
     return _diagram(system, model, branches, origins, lo, hi, supply)
+
+
+def _check_steps(speeds_rpm, ds, ds_max, max_points):
+    """``(lo, hi)`` of a continuation's speed range (two speeds, lo < hi), with its steps checked: 0 < ds <= ds_max
+    finite and max_points an integer >= 1 (ds = 0, -1 or nan and a range of one speed were accepted: an empty or a
+    one-point diagram)."""
+    lo, hi = check_speed_range(speeds_rpm)
+    ds, ds_max = check_positive("ds", ds), check_positive("ds_max", ds_max)
+    if ds > ds_max:
+        raise ParameterError(f"ds = {ds:g} is invalid with ds_max = {ds_max:g}: valid range 0 < ds <= ds_max")
+    if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < 1:
+        raise ParameterError(f"max_points = {max_points!r} is invalid: valid range integer >= 1")
+    return lo, hi
 
 
 def _check_start_supply(starts, supply):

@@ -374,6 +374,7 @@ def limit_cycle(system, speed_rpm, guess=None, film_model=None, unbalance=(), se
     problem = build_problem(system, SpeedProfile.constant(speed_rpm, 1.0), model, unbalance)
     forced = any(u.amount > 0 for u in unbalance)
     _check_segments(segments, forced)
+    _check_newton(tol, samples, max_iter)
     z0, period, info, m0 = _initial_guess(system, problem, model, speed_rpm, guess, settle_s, forced)
     flow = ConstantSpeedFlow(problem, SHOOT_RTOL, SHOOT_ATOL_M)
     scale = atol_vector(problem, SCALE_M)[0][:-1]
@@ -450,6 +451,25 @@ def _check_segments(segments, forced):
         raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
     if forced and segments > 1:
         raise ParameterError(f"segments = {segments} is for autonomous orbits: with unbalance use segments = 1")
+
+
+#: the loosest Newton tolerance of :func:`limit_cycle` (scaled residual, displacements in µm: 1e-3 is 1 nm)
+MAX_TOL = 1e-3
+#: the fewest points per period of a limit cycle's orbit
+MIN_SAMPLES = 16
+
+
+def _check_newton(tol, samples, max_iter):
+    """Refuse, before the settling run, a Newton tolerance outside 0 < tol <= :data:`MAX_TOL`, fewer than
+    :data:`MIN_SAMPLES` orbit points or fewer than one Newton iteration (they were used only after seconds of
+    settling: tol = 1e3 would accept any orbit, samples = 1 draw it with two points)."""
+    tol = check_positive("tol", tol)
+    if tol > MAX_TOL:
+        raise ParameterError(f"tol = {tol!r} is invalid: valid range 0 < tol <= {MAX_TOL:g} (the scaled residual, "
+                             "displacements in µm; a looser one accepts an orbit that is not periodic)")
+    for name, v, low in (("samples", samples, MIN_SAMPLES), ("max_iter", max_iter, 1)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
+            raise ParameterError(f"{name} = {v!r} is invalid: valid range integer >= {low}")
 
 
 def _multiple(system, model, speed_rpm, z0, period, segments, forced, tol, max_iter):

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.errors import ConvergenceError, ParameterError, check_real, check_speed, check_system
+from ..core.errors import ConvergenceError, ParameterError, check_real, check_real_array, check_speed, check_system
 from ..core.units import RPM
 from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, films_at_ring_temperature, heat_flows
 from ..system.methods import get_method
@@ -96,6 +96,14 @@ class OilSupply:
     def from_dict(cls, d: dict) -> "OilSupply":
         """Inverse of :meth:`to_dict` (a result's ``meta["oil_supply"]``): the oil, supply temperature [K] and
         pressure [Pa], the model's coefficients."""
+        keys = ("oil", "supply_temperature_K", "supply_pressure_Pa", "model")
+        if not isinstance(d, dict) or set(d) != set(keys) or not isinstance(d["model"], dict):
+            raise ParameterError(f"oil_supply = {d!r:.80} is invalid: expected a table with the keys "
+                                 f"{', '.join(keys)} (OilSupply.to_dict; model a table of ThermalModel fields)")
+        unknown = [k for k in d["model"] if k not in ThermalModel.__dataclass_fields__]
+        if unknown:
+            raise ParameterError(f"oil_supply model: unknown key {unknown[0]!r}; valid keys: "
+                                 f"{', '.join(ThermalModel.__dataclass_fields__)}")
         return cls(Oil.from_dict(d["oil"], "oil_supply oil"), d["supply_temperature_K"], d["supply_pressure_Pa"],
                    ThermalModel(**d["model"]))
 
@@ -206,8 +214,8 @@ def _isothermal(system, speeds, method="J"):
     return with_ring_speed_ratio(bearing_losses(system, speeds, method))
 
 
-def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
-                   model=None, method="J"):
+def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=None, supply_pressure_Pa=None, model=None,
+                   method="J"):
     """Film and ring temperatures, viscosities, ring speed, power losses and oil flows of every bearing at the
     thermo-hydrodynamic operating point (the equilibrium of ``method`` at the films' temperatures).
 
@@ -219,12 +227,13 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
     oil : Oil, optional
         The lubricant; None: the system's ``oil``; if that is None too, the films keep their constant viscosities
         and the result is :func:`frbmodel.linear.losses.bearing_losses` (method J) with an ``RSR [-]`` column.
-    supply_temperature_K : float or sequence of float
-        Oil supply (inlet) temperature(s) [K], 243.15 ... the oil's upper limit (<= 473.15).
-    supply_pressure_Pa : float
-        Supply pressure above ambient [Pa], 0 ... 2e6.
+    supply_temperature_K : float or sequence of float, optional
+        Oil supply (inlet) temperature(s) [K], 243.15 ... the oil's upper limit (<= 473.15). Default 363.15.
+    supply_pressure_Pa : float, optional
+        Supply pressure above ambient [Pa], 0 ... 2e6. Default 3e5.
     model : ThermalModel, optional
-        Coefficients; default :class:`ThermalModel()`.
+        Coefficients; default :class:`ThermalModel()`. The supply and the model need an oil: without one they are
+        refused (they would have no effect).
     method : {"C", "D", "F", "G", "I", "J"}
         The equilibrium (ring speed, eccentricities) the films' friction powers and flows are evaluated at: J
         balances the ring torque (default; its RSR falls with speed as the inner film heats), F/G/C/D take the RSR
@@ -259,9 +268,14 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
 
     check_system(system)
     method = get_method(method).letter
-    speeds = [check_speed("speed_rpm", s) for s in np.atleast_1d(np.asarray(speed_rpm, dtype=float))]
+    speeds = [check_speed("speed_rpm", s) for s in _values("speed_rpm", speed_rpm, "rpm")]
     oil = system.oil if oil is None else oil
     if oil is None:
+        given = [n for n, v in (("supply_temperature_K", supply_temperature_K),
+                                ("supply_pressure_Pa", supply_pressure_Pa), ("model", model)) if v is not None]
+        if given:  # (they were ignored: the result was the constant-viscosity one)
+            raise ParameterError(f"{given[0]} needs an oil: give oil=frbmodel.OILS[name] or a system with an oil "
+                                 "(without one the films keep their constant viscosities)")
         return _isothermal(system, speeds, method)
     if not isinstance(oil, Oil):
         raise ParameterError(f"oil = {oil!r:.60} is a {type(oil).__name__}; expected an Oil (frbmodel.OILS[name])")
@@ -271,9 +285,11 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
     model = ThermalModel() if model is None else model
     if not isinstance(model, ThermalModel):
         raise ParameterError(f"model = {model!r:.60} is a {type(model).__name__}; expected a ThermalModel")
-    p_s = check_supply_pressure("supply_pressure_Pa", supply_pressure_Pa)
+    p_s = check_supply_pressure("supply_pressure_Pa", SUPPLY_PRESSURE_PA if supply_pressure_Pa is None
+                                else supply_pressure_Pa)
     temps = [check_temperature("supply_temperature_K", t, T_MIN_K, oil.max_temperature_K)
-             for t in np.atleast_1d(np.asarray(supply_temperature_K, dtype=float))]
+             for t in _values("supply_temperature_K", 363.15 if supply_temperature_K is None else
+                              supply_temperature_K, "K")]
     rows = []
     for t_s in temps:
         for rpm in speeds:
@@ -282,6 +298,15 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
                                      system.gravity, method=method)
                 rows.append(_row(rpm, t_s, p_s, oil, model, s))
     return pd.DataFrame(rows)
+
+
+def _values(name, value, unit):
+    """A number or a sequence of numbers as a non-empty 1-D float array (strings refused, not converted)."""
+    arr = np.atleast_1d(check_real_array(name, value, unit))
+    if arr.ndim != 1 or arr.size == 0:
+        raise ParameterError(f"{name} = {value!r:.60} is invalid: give one value [{unit}] or a non-empty sequence "
+                             "of them")
+    return arr
 
 
 def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", gravity=GRAVITY, method="J"):
@@ -357,7 +382,8 @@ def ring_lag(system, time_s, speed_rpm, oil_supply, rtol=1e-8):
     oil_supply : OilSupply
         Its ``model.ring_heat_capacity_J_K`` is m_R c_R [J/K] (required here).
     rtol : float
-        Relative tolerance of the ring-temperature integration (scipy's LSODA: stiff when m_R c_R is small).
+        Relative tolerance of the ring-temperature integration (scipy's LSODA: stiff when m_R c_R is small),
+        1e-13 ... 1e-3.
 
     Returns
     -------
@@ -372,11 +398,15 @@ def ring_lag(system, time_s, speed_rpm, oil_supply, rtol=1e-8):
     """
     from scipy.integrate import solve_ivp
 
+    check_system(system)
     supply = check_oil_supply(oil_supply)
     if supply is None or supply.model.ring_heat_capacity_J_K is None:
         raise ParameterError("ring_lag needs an OilSupply whose model has ring_heat_capacity_J_K [J/K]")
-    t = np.asarray(time_s, dtype=float)
-    w = np.array([check_speed("speed_rpm", v) for v in np.atleast_1d(speed_rpm)]) * RPM
+    rtol = check_real("rtol", rtol, "", minimum=0.0)
+    if not 1e-13 <= rtol <= 1e-3:  # (LSODA took 0 and -1 with a warning, and 10 changed the temperatures)
+        raise ParameterError(f"rtol = {rtol!r} is invalid: valid range 1e-13 ... 1e-3")
+    t = _values("time_s", time_s, "s")
+    w = np.array([check_speed("speed_rpm", v) for v in _values("speed_rpm", speed_rpm, "rpm")]) * RPM
     if t.shape != w.shape or t.size < 2 or not np.all(np.diff(t) > 0):
         raise ParameterError(f"time_s ({t.size} values) must increase and match speed_rpm ({w.size} values)")
     m, cap = supply.model, supply.model.ring_heat_capacity_J_K
@@ -410,15 +440,16 @@ def at_operating_point(system, speed_rpm, oil_supply, method="J"):
                           oil_supply.supply_pressure_Pa, oil_supply.model, method)
 
 
-def thermal_system(system, speed_rpm, oil=None, supply_temperature_K=363.15, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
-                   model=None, method="J"):
+def thermal_system(system, speed_rpm, oil=None, supply_temperature_K=None, supply_pressure_Pa=None, model=None,
+                   method="J"):
     """The Turbocharger with every film's viscosity at its temperature of the thermal operating point at one speed
     (:func:`thermal_losses`): what a Campbell diagram, a run-up or an FMU at that oil state uses.
 
     Parameters
     ----------
     system, oil, supply_temperature_K, supply_pressure_Pa, model, method
-        As :func:`thermal_losses` (one supply temperature [K]).
+        As :func:`thermal_losses` (one supply temperature [K]; default 363.15 K, 3e5 Pa; without an oil the supply
+        and the model are refused).
     speed_rpm : float
         Rotor speed [rpm].
 
@@ -434,8 +465,8 @@ def thermal_system(system, speed_rpm, oil=None, supply_temperature_K=363.15, sup
     >>> bool(tc.bearings[0].inner.viscosity < tc.bearings[0].outer.viscosity)   # the inner film runs hotter
     True
     """
-    table = thermal_losses(system, check_speed("speed_rpm", speed_rpm), oil, check_real(
-        "supply_temperature_K", supply_temperature_K, "K"), supply_pressure_Pa, model, method)
+    t_s = None if supply_temperature_K is None else check_real("supply_temperature_K", supply_temperature_K, "K")
+    table = thermal_losses(system, check_speed("speed_rpm", speed_rpm), oil, t_s, supply_pressure_Pa, model, method)
     if "inner viscosity [Pa s]" not in table:
         return system
     bearings = tuple(_with_viscosities(b, float(r["inner viscosity [Pa s]"]), float(r["outer viscosity [Pa s]"]))

@@ -22,7 +22,15 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..core.errors import MAX_SPEED_RPM, ParameterError, RunupStopped, check_finite, check_positive, check_speed
+from ..core.errors import (
+    MAX_SPEED_RPM,
+    ParameterError,
+    RunupStopped,
+    check_finite,
+    check_positive,
+    check_real,
+    check_speed,
+)
 from ..core.interrupt import deferred_signals
 from ..core.progress import simulation_bar
 from ..core.units import RPM
@@ -551,6 +559,10 @@ class SpeedProfile:
         ...         print(str(exc).replace(str(path), "bad.csv"))
         bad.csv, line 3: speed = -3.0 rpm is invalid: valid range is finite and > 0 rpm
         """
+        if not str(path).strip():  # (Path("") is the current folder: "cannot read the speed profile: Is a directory")
+            raise ParameterError(f"speed profile file = {str(path)!r} is invalid: give the path of a CSV file")
+        if Path(path).is_dir():
+            raise ParameterError(f"speed profile file = {str(path)!r} is a folder; expected a CSV file")
         path = Path(path)
         t, rpm, lines = _read_profile_csv(path)
         _check_knots(t, rpm, lambda i: f"{path}" + ("" if i is None else f", line {lines[i]}"))
@@ -644,6 +656,9 @@ class Unbalance:
     disc: str
     amount: float
     phase: float = 0.0
+
+    def __post_init__(self):  # (an infinite phase ended the run at t = 0: "singular iteration matrix", exit 3)
+        self.phase = check_real(f"unbalance phase of {self.disc}", self.phase, "rad")
 
 
 @dataclass

@@ -22,7 +22,12 @@ import numpy as np
 
 from ..core.errors import ParameterError, check_real
 
-__all__ = ["ThermalModel", "bearing_flows", "film_temperatures", "heat_flows", "pressure_flow", "side_flow"]
+__all__ = ["ThermalModel", "bearing_flows", "check_feed_holes", "film_temperatures", "heat_flows", "pressure_flow",
+           "side_flow"]
+
+
+#: the loosest accepted convergence of the film temperatures [K] (ThermalModel.tolerance_K)
+MAX_TOLERANCE_K = 1e-3
 
 
 @dataclass(frozen=True)
@@ -48,7 +53,8 @@ class ThermalModel:
         the Table 2 turbocharger (a hot turbine-side shaft heats the inner film; give both coefficient and temperature
         to model it).
     shaft_temperature_K, housing_temperature_K : float or None
-        Wall temperatures [K] of those paths; None = the supply temperature.
+        Wall temperatures [K] of those paths; None = the supply temperature (given, they need their path's
+        coefficient > 0).
     feed_holes : int
         Number of radial feed holes through the ring that feed the inner film. Default 4 (a typical count for
         automotive rings; not given in Table 2).
@@ -58,7 +64,7 @@ class ThermalModel:
         Subtract the centrifugal pressure ρ ω_FR² (R_O² − R_I²)/2 the spinning ring's holes build up against the
         inward flow. Default True.
     tolerance_K : float
-        Convergence of the film temperatures of the fixed point [K]. Default 1e-9.
+        Convergence of the film temperatures of the fixed point [K], 0 < tolerance_K <= 1e-3. Default 1e-9.
     max_evaluations : int
         Most evaluations (equilibrium + balance) of the fixed point per bearing and speed. Default 200.
     ring_heat_capacity_J_K : float or None
@@ -106,10 +112,21 @@ class ThermalModel:
             object.__setattr__(self, "ring_heat_capacity_J_K", check_real(
                 "thermal model ring_heat_capacity_J_K", self.ring_heat_capacity_J_K, "J/K", minimum=0.0,
                 inclusive=False))
-        for name in ("shaft_temperature_K", "housing_temperature_K"):
+        for name, h in (("shaft_temperature_K", "shaft_heat_transfer_W_m2K"),
+                        ("housing_temperature_K", "housing_heat_transfer_W_m2K")):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, check_real(f"thermal model {name}", getattr(self, name), "K",
                                                           minimum=0.0))
+                if getattr(self, h) == 0.0:  # (it was ignored: the path is off)
+                    raise ParameterError(f"thermal model {name} = {getattr(self, name)!r} K has no effect with {h} "
+                                         "= 0 (the path is off): give both, or leave the temperature out")
+        if self.tolerance_K > MAX_TOLERANCE_K:
+            raise ParameterError(f"thermal model tolerance_K = {self.tolerance_K!r} K is invalid: valid range "
+                                 f"0 < tolerance_K <= {MAX_TOLERANCE_K:g} K (a looser one accepts an operating point "
+                                 "whose film temperatures are not converged)")
+        if not isinstance(self.centrifugal_feed, (bool, np.bool_)):
+            raise ParameterError(f"thermal model centrifugal_feed = {self.centrifugal_feed!r} is a "
+                                 f"{type(self.centrifugal_feed).__name__}; expected True or False")
         for name, lo in (("feed_holes", 0), ("max_evaluations", 1)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
@@ -157,6 +174,20 @@ def pressure_flow(film, eps, pressure_Pa):
             / (3.0 * film.viscosity * film.length))
 
 
+def check_feed_holes(bearing, model, wall_m):
+    """Refuse feed holes that do not fit the ring of ``bearing``: a diameter not below its wall thickness
+    ``wall_m`` [m] (the holes' Poiseuille resistance assumes a tube longer than wide) or more holes than fit side by
+    side around the inner film (a 1 m hole was taken: the inner film flooded at the supply temperature)."""
+    d, n = model.feed_hole_diameter_m, model.feed_holes
+    if n > 0 and not d < wall_m:
+        raise ParameterError(f"thermal model feed_hole_diameter_m = {d:g} m is invalid for the {bearing.name} "
+                             f"bearing's ring: valid range < its wall thickness {wall_m:g} m (the holes' length)")
+    if n > 0 and n * d >= 2.0 * math.pi * bearing.inner.radius:
+        raise ParameterError(f"thermal model feed_holes = {n} of {d:g} m do not fit around the {bearing.name} "
+                             f"bearing's ring: valid range feed_holes x feed_hole_diameter_m < 2 pi R_I = "
+                             f"{2.0 * math.pi * bearing.inner.radius:g} m")
+
+
 def bearing_flows(bearing, eps_inner, eps_outer, rotor_speed, ring_speed, supply_pressure_Pa, density_kg_m3,
                   hole_viscosity_Pa_s, model):
     """Oil flows through the two films of one bearing at a static state.
@@ -190,6 +221,7 @@ def bearing_flows(bearing, eps_inner, eps_outer, rotor_speed, ring_speed, supply
     """
     inner, outer = bearing.inner, bearing.outer
     wall = outer.radius - inner.radius - inner.clearance
+    check_feed_holes(bearing, model, wall)
     p_feed = supply_pressure_Pa
     if model.centrifugal_feed:
         p_feed -= 0.5 * density_kg_m3 * ring_speed ** 2 * (outer.radius ** 2 - inner.radius ** 2)

@@ -14,12 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.errors import ParameterError, check_system
 from ..core.progress import counter_bar, note
 from ..linear.campbell import campbell
-from ..nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, RunupStopped, SpeedProfile, runup
+from ..nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, RunupStopped, SpeedProfile, check_output_rate, runup
 from ..plots.style import readable
 from ..signals.convergence import convergence_table
 from ..signals.spectral import spectrogram
+from ..system.oil import check_no_oil
 from ..system.presets import PAPER_OUTER_CLEARANCES
 
 
@@ -214,6 +216,13 @@ def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), d
     import pandas as pd
 
 
+    check_no_oil(check_system(system), "frb compare (frbmodel.studies.compare)")
+    if len(speed_rpm) != 2 or speed_rpm[0] == speed_rpm[1]:  # (4 run-ups, then an empty table, exit 0)
+        raise ParameterError(f"speed_rpm = {tuple(speed_rpm)!r} is invalid: give (START, END) in rpm, START != END "
+                             "(the run-up's range and the Campbell diagram's)")
+    if profile not in ("exponential", "ramp"):  # (anything else ran as a ramp)
+        raise ParameterError(f"profile = {profile!r} is unknown; valid: exponential, ramp")
+    check_output_rate((runup_kw or {}).get("output_rate_hz", 20e3), duration)  # (was refused after a diagram)
     node = node or system.rotor.discs[0].name
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

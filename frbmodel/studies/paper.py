@@ -7,11 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_system
+from ..core.errors import ParameterError, check_speed_count, check_system
 from ..core.progress import counter_bar, note
 from ..linear.campbell import campbell
 from ..linear.equilibrium import equilibrium
 from ..plots.figures import equilibrium_cost_figure, rsr_figure
+from ..system.oil import check_no_oil
 from ..system.presets import PAPER_SPEED_RANGE_RPM
 
 #: figure number -> (method, extra options)
@@ -85,9 +86,10 @@ def paper_figures(system, out_dir, n_speeds=100, progress: bool = False):
         The written files.
     """
 
-    check_system(system)
+    check_no_oil(check_system(system), "frb paper-figures (the paper's figures)")
     if isinstance(n_speeds, bool) or not isinstance(n_speeds, (int, np.integer)) or n_speeds < 2:
         raise ParameterError(f"n_speeds = {n_speeds!r} is invalid: expected an integer >= 2")
+    check_speed_count(f"n_speeds = {n_speeds}", n_speeds)  # (1e8 speeds started a run of days)
     if callable(progress):
         warnings.warn("progress callbacks are no longer called: pass progress=True for a progress bar (tqdm)",
                       DeprecationWarning, stacklevel=2)

@@ -37,7 +37,7 @@ from ..cosim.master import cosimulate, operating_point_overrides
 from ..cycles.continuation import check_starts, continuation, hopf_points
 from ..linear.campbell import campbell
 from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
-from ..nonlinear.runup import SpeedProfile, Unbalance, check_speed, runup
+from ..nonlinear.runup import SpeedProfile, Unbalance, check_output_rate, check_speed, runup
 from ..plots.figures import write_html
 from ..plots.studies import stability_chart_figure, stability_map_figures
 from ..signals.spectral import spectrogram
@@ -65,6 +65,14 @@ PARAMETERS = {
 #: the study parameters of the oil supply (not the system's: :func:`case_oil_supply`)
 SUPPLY_PARAMETERS = ("supply_temperature", "supply_pressure")
 ANALYSES = ("campbell", "runup", "cosim", "hopf", "bifurcation")
+#: the options each analysis takes (:func:`check_options` refuses the others: they were ignored)
+ANALYSIS_OPTIONS = {"campbell": ("methods", "speeds_rpm", "oil", "system"),
+                    "runup": ("speed_rpm", "duration", "profile", "output_rate_hz", "oil", "system"),
+                    "cosim": ("speed_rpm", "duration", "ssp", "parameter_set", "oil", "system"),
+                    "hopf": ("speed_rpm", "oil", "system"),
+                    "bifurcation": ("speed_rpm", "start", "max_points", "segments", "oil", "system")}
+#: the speed profiles of a runup study (option ``profile``)
+RUNUP_PROFILES = ("exponential", "ramp")
 #: seconds to wait for an existing Dask scheduler before giving up
 SCHEDULER_TIMEOUT_S = 5.0
 
@@ -140,6 +148,17 @@ def check_options(analysis, options):
     method = 'Q' is unknown; valid methods are A, B, C, D, E, F, G, I, J (the paper has no H)
     """
 
+    if analysis in ANALYSIS_OPTIONS:
+        unused = [k for k in options if k not in ANALYSIS_OPTIONS[analysis]]
+        if unused:
+            raise ParameterError(f"sweep option {unused[0]} = {options[unused[0]]!r:.60} does not apply to analysis "
+                                 f"{analysis!r}: its options are {', '.join(ANALYSIS_OPTIONS[analysis])}")
+    if options.get("profile", RUNUP_PROFILES[0]) not in RUNUP_PROFILES:
+        raise ParameterError(f"runup profile = {options['profile']!r} is unknown; valid: {', '.join(RUNUP_PROFILES)}")
+    if "output_rate_hz" in options:
+        check_positive("runup output_rate_hz", options["output_rate_hz"], "Hz")
+    if analysis == "runup":  # (a run that records nothing failed every case)
+        check_output_rate(options.get("output_rate_hz", 10e3), options.get("duration", 2.0))
     if "oil" in options:
         _option_oil(options["oil"])
     if analysis == "campbell":
@@ -156,6 +175,9 @@ def check_options(analysis, options):
             a, b = options["speed_rpm"]
             check_speed("start speed", a)
             check_speed("end speed", b)
+            if a == b and analysis in ("hopf", "bifurcation"):  # (every case failed: exit 4)
+                raise ParameterError(f"{analysis} speed_rpm = ({a:g}, {b:g}) rpm is invalid: START and END must "
+                                     "differ (the search range)")
         if "duration" in options:
             check_positive("duration", options["duration"], "s")
     if analysis == "bifurcation":

@@ -12,7 +12,7 @@ from ..core.errors import ParameterError, check_system
 from ..linear.campbell import campbell
 from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, thermal_losses
 from ..linear.whirl import film_names, film_onset_speeds
-from ..nonlinear.runup import runup
+from ..nonlinear.runup import check_output_rate, runup
 from ..signals.spectral import spectrogram
 
 __all__ = ["RUNUP_RAMP_RPM", "SUPPLY_TEMPERATURES_K", "onsets_vs_supply", "runup_onsets_vs_supply"]
@@ -123,6 +123,10 @@ def onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURES_K, s
     return pd.DataFrame(films), pd.DataFrame(modes, columns=cols)
 
 
+#: output rate of the run-ups of :func:`runup_onsets_vs_supply` [Hz] (frb.runup's default)
+RUNUP_RATE_HZ = 20e3
+
+
 def runup_onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURES_K,
                            supply_pressure_Pa=SUPPLY_PRESSURE_PA, model=None, speed_range_rpm=RUNUP_RAMP_RPM,
                            duration_s=1.0, location="turbine_wheel"):
@@ -164,9 +168,10 @@ def runup_onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURE
                              "temperatures [K]")
     supplies = [OilSupply(oil, t, supply_pressure_Pa, model) for t in temps]  # every value checked before any run
     lo, hi = (float(v) for v in speed_range_rpm)
+    check_output_rate(RUNUP_RATE_HZ, duration_s)  # (1e-9 s was refused by the first run, after the others' work)
     frames = []
     for sup in supplies:
-        run = runup(system, speed_rpm=(lo, hi), duration=duration_s, oil_supply=sup)
+        run = runup(system, speed_rpm=(lo, hi), duration=duration_s, oil_supply=sup, output_rate_hz=RUNUP_RATE_HZ)
         tab = spectrogram(run, location).components_table()
         tab = tab[tab["f/f_rot at first detection [-]"] < 1.0].copy()
         head = {"supply temperature [K]": sup.supply_temperature_K, "supply pressure [Pa]": sup.supply_pressure_Pa,

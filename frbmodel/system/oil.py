@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 
 from ..core.errors import ParameterError, check_real
 
-__all__ = ["OIL", "OILS", "Oil", "check_temperature", "oil_from_dict", "walther_coefficients"]
+__all__ = ["OIL", "OILS", "Oil", "check_no_oil", "check_temperature", "oil_from_dict", "walther_coefficients"]
 
 #: datasheet temperatures of the two viscosities [K] (40 °C and 100 °C, ASTM D445 / ISO 3104)
 T40_K, T100_K = 313.15, 373.15
@@ -72,11 +72,23 @@ def check_temperature(name, temperature_K, minimum_K=T_MIN_K, maximum_K=T_MAX_K)
     ...     print(exc)
     supply temperature = 90.0 K is invalid: valid range 243.15 ... 473.15 K (-30 ... 200 °C); temperatures are in K
     """
-    t = check_real(name, temperature_K, "K")
+    nonfinite = isinstance(temperature_K, float) and not math.isfinite(temperature_K)  # (given the range below)
+    t = temperature_K if nonfinite else check_real(name, temperature_K, "K")
     if not minimum_K <= t <= maximum_K:
         raise ParameterError(f"{name} = {t!r} K is invalid: valid range {minimum_K:g} ... {maximum_K:g} K "
                              f"({minimum_K - 273.15:.0f} ... {maximum_K - 273.15:.0f} °C); temperatures are in K")
     return t
+
+
+def check_no_oil(system, what):
+    """Refuse a ``system`` with an oil (a system file's ``[oil]`` table) where ``what`` runs at the films' constant
+    viscosities: the oil would be ignored without a word."""
+    oil = getattr(system, "oil", None)
+    if oil is not None:
+        raise ParameterError(f"system {getattr(system, 'name', '')!r} has an oil ({oil.name}, its [oil] table): {what} "
+                             "runs at the films' constant viscosities and would ignore it; remove the [oil] table "
+                             "(campbell, equilibrium, unbalance, runup, bifurcation, losses and sweep take an oil)")
+    return system
 
 
 @dataclass(frozen=True)
