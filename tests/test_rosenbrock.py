@@ -1,6 +1,5 @@
 """The compiled Rosenbrock integrator (frbmodel.nonlinear.rosenbrock): linear algebra, Jacobian, and accuracy against
-the
-matrix exponential of a linear model."""
+the matrix exponential of a linear model."""
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -20,6 +19,20 @@ from frbmodel.nonlinear.runup import (
     typical_sizes,
 )
 
+
+def _spring_rotor_generator(tc, k_s, speed, n_r):
+    """The generator of the linear rotor on springs k_s [N/m] at the bearings, at constant speed [rpm], with gravity
+    as an extra constant state: d/dt (q, q̇, 1) = aug (q, q̇, 1) (its matrix exponential is the exact flow)."""
+    M, K, G = tc.rotor.M, tc.rotor.K.copy(), tc.rotor.G
+    for b in tc.bearings:
+        K[4 * b.node, 4 * b.node] += k_s
+        K[4 * b.node + 1, 4 * b.node + 1] += k_s
+    aug = np.zeros((2 * n_r + 1, 2 * n_r + 1))
+    aug[:n_r, n_r:2 * n_r] = np.eye(n_r)
+    aug[n_r:2 * n_r, :n_r] = -np.linalg.solve(M, K)
+    aug[n_r:2 * n_r, n_r:2 * n_r] = -speed * RPM * np.linalg.solve(M, G)
+    aug[n_r:2 * n_r, -1] = np.linalg.solve(M, tc.rotor.gravity_load(tc.gravity))
+    return aug
 
 def test_lu_solves_like_lapack():
     """Partial-pivoting LU of a random, badly scaled 43 x 43 matrix: the solution equals numpy's (LAPACK) to
@@ -95,15 +108,7 @@ def test_linear_model_equals_matrix_exponential(modal):
         y0, t, 1e-7, 1e-8, atol, typical_sizes(p, FD_TYPICAL_M),
         film_columns(n_r, p.args[3], False, False), 10**7, 1.0, p.args, basis)
     assert status == 0 and k == t.size
-    M, K, G = tc.rotor.M, tc.rotor.K.copy(), tc.rotor.G
-    for b in tc.bearings:
-        K[4 * b.node, 4 * b.node] += k_s
-        K[4 * b.node + 1, 4 * b.node + 1] += k_s
-    aug = np.zeros((2 * n_r + 1, 2 * n_r + 1))
-    aug[:n_r, n_r:2 * n_r] = np.eye(n_r)
-    aug[n_r:2 * n_r, :n_r] = -np.linalg.solve(M, K)
-    aug[n_r:2 * n_r, n_r:2 * n_r] = -speed * RPM * np.linalg.solve(M, G)
-    aug[n_r:2 * n_r, -1] = np.linalg.solve(M, tc.rotor.gravity_load(tc.gravity))
+    aug = _spring_rotor_generator(tc, k_s, speed, n_r)
     exact = np.array([(expm(aug * s) @ np.append(y0[:2 * n_r], 1.0))[:2 * n_r] for s in t])
     j = 4 * tc.bearings[0].node
     size = np.ptp(exact[:, j])
@@ -250,15 +255,7 @@ def test_fixed_steps_converge_at_the_method_order_to_the_matrix_exponential(meth
     k_s, speed = 1e6, 30e3
     p = build_problem(tc, SpeedProfile.constant(speed, 0.01), tc.film_model, linear_springs=k_s)
     y0, n_r = initial_state(p), p.n_rotor
-    M, K, G = tc.rotor.M, tc.rotor.K.copy(), tc.rotor.G
-    for b in tc.bearings:
-        K[4 * b.node, 4 * b.node] += k_s
-        K[4 * b.node + 1, 4 * b.node + 1] += k_s
-    aug = np.zeros((2 * n_r + 1, 2 * n_r + 1))
-    aug[:n_r, n_r:2 * n_r] = np.eye(n_r)
-    aug[n_r:2 * n_r, :n_r] = -np.linalg.solve(M, K)
-    aug[n_r:2 * n_r, n_r:2 * n_r] = -speed * RPM * np.linalg.solve(M, G)
-    aug[n_r:2 * n_r, -1] = np.linalg.solve(M, tc.rotor.gravity_load(tc.gravity))
+    aug = _spring_rotor_generator(tc, k_s, speed, n_r)
     err_end, err_dense = [], []
     for h in (8e-7, 4e-7):
         t = np.array([0.0, 0.3 * h, 4e-5])
