@@ -266,6 +266,9 @@ def main():
 
             build_fmus(build, ROOT, progress=lambda m: None)
         fmu = build / "fmus" / "FloatingRingTurbocharger.fmu"
+        if not fmu.is_file():
+            p.error(f"--build {args.build}: no fmus/FloatingRingTurbocharger.fmu there (run frb build-fmus --out "
+                    f"{args.build}, or leave --build out to build them here)")
         speed(fmu, tmp, args.repeats)
         accuracy(fmu, tmp)
         if not args.skip_onsets:
