@@ -456,11 +456,27 @@ class FrbSlaveMixin:
         return state
 
     def _set_fmu_state(self, state):
+        """Restore a state of :meth:`_get_fmu_state`. An instance without a component (after fmi2Reset, or a new
+        one) builds it from the state's parameters first: it would step nothing and read 0 otherwise. A state that
+        cannot be restored is refused (fmi2Error) and leaves the instance as it was."""
+        comp = state.get("_component")
+        if comp is not None and self._comp is None:
+            old = self._values, self._input_values.copy()
+            self._values, self._input_values[:] = dict(state["_values"]), state["_input_values"]
+            try:
+                self._check_parameters()
+                self._initialize()
+            except Exception as exc:  # noqa: BLE001
+                self._values, self._input_values[:], self._comp = old[0], old[1], None
+                self._refuse(f"fmi2SetFMUstate refused: the state's component cannot be rebuilt: {exc}")
+                return
         self._values = dict(state["_values"])
         self._input_values[:] = state["_input_values"]
         self._mode, self._failure = state["_mode"], state.get("_failure", "")
-        if self._comp is not None and state.get("_component") is not None:
-            self._set_component_state(state["_component"])
+        if self._comp is not None and comp is not None:
+            self._set_component_state(comp)
+        elif comp is None and self._mode in (INSTANTIATED, INITIALIZATION):
+            self._comp = None  # a state taken before the component existed: it is built at initialization again
         self._changed()
 
     # FMU state serialization (fmi2SerializeFMUstate): the state above as JSON, arrays tagged so they come back as

@@ -430,3 +430,26 @@ def test_non_finite_rotor_inputs_discard_the_step_and_the_rotor_recovers(built, 
         assert np.isfinite(value).all()
     np.testing.assert_array_equal(run(a, 3, 5), run(b, 3, 5))
     judge(a, b)
+
+
+# ---------------------------------------------------------------------------------------------------- FMU state
+def test_a_state_restored_after_reset_steps_on_from_that_state(built, tmp_path):
+    """fmi2SetFMUstate after fmi2Reset (pythonfmu makes a new slave, without its component): the state's component
+    is rebuilt from its parameters and the instance steps on exactly as before the reset (it read 0 with fmi2OK and
+    the next doStep was fmi2Fatal: 'NoneType' object has no attribute 'state')."""
+    h = _bearing(built, "reset_state", tmp_path)
+    h.start({"outer.clearance": 40e-6})
+    outs = ["force.x", "force.y", "ring.x", "ring.y", "ring.speed"]
+    h.set("setReal", JOURNAL, _journal_inputs(0))
+    h(OK, "doStep", 0.0, 1e-5)
+    state, _ = h(OK, "getFMUstate")
+    h.set("setReal", JOURNAL, _journal_inputs(1))
+    h(OK, "doStep", 1e-5, 1e-5)
+    after = h.real(outs)
+    h(OK, "reset")
+    h(OK, "setFMUstate", state)
+    h.set("setReal", JOURNAL, _journal_inputs(1))
+    h(OK, "doStep", 1e-5, 1e-5)
+    np.testing.assert_array_equal(h.real(outs), after)
+    h(OK, "freeFMUstate", state)
+    judge(h)
