@@ -56,7 +56,11 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
                         ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
             self._input(f"journal.{q}", f"{d} [{u}]", unit=u)
-        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s", low=0.0)
+        from frbmodel.core.errors import MAX_SPEED_RPM
+        from frbmodel.core.units import rpm_to_rad_s
+
+        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s", low=0.0,
+                    high=rpm_to_rad_s(MAX_SPEED_RPM))
         for name, unit, desc, start, low in SUPPLY_IN:
             self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low)
         self._journal_idx = np.array([self._input_pos[f"journal.{q}"] for q in ("x", "y", "vx", "vy")])

@@ -64,11 +64,13 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         self._bearings = [b.name for b in self._built_for.bearings]
         self._discs = [d.name for d in self._built_for.rotor.discs]
         self._parameters()
+        from frbmodel.core.errors import MAX_SPEED_RPM
         from frbmodel.core.units import rpm_to_rad_s
 
         for name, unit, desc, low in INPUTS:
             start = rpm_to_rad_s(20e3) if name == "speed_in" else INPUT_STARTS.get(name, 0.0)
-            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low)
+            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low,
+                        high=rpm_to_rad_s(MAX_SPEED_RPM) if name == "speed_in" else math.inf)
         self._in_idx = np.array([self._input_pos[n] for n, *_ in INPUTS])
         self._outputs()
 
@@ -218,8 +220,8 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         else:
             for name, value in (("oil_supply_temperature", t_s), ("oil_supply_pressure", p_s)):
                 if value != INPUT_STARTS[name]:
-                    raise ValueError(f"{name} = {value!r} needs the thermal model: set the parameter oil (the films "
-                                     "have constant viscosities); leave the input at its start value "
+                    raise ValueError(f"{name} = {float(value)!r} needs the thermal model: set the parameter oil (the "
+                                     "films have constant viscosities); leave the input at its start value "
                                      f"{INPUT_STARTS[name]!r} otherwise")
         self._comp.step(step_size, speed_in=float(w), drive_torque=float(tq), housing_acc=(float(ax), float(ay)),
                         t=current_time, **supply)

@@ -90,11 +90,13 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def _inputs(self):
         """Speed and drive torque; per bearing: force, end-of-step force and path acceleration, reference journal
         state, Jacobian, film torque."""
+        from frbmodel.core.errors import MAX_SPEED_RPM
         from frbmodel.core.units import rpm_to_rad_s
         from frbmodel.system.presets import RUNUP_SPEED_RPM
 
         self._input("speed_in", "rotor speed [rad/s] (speed_source = input; its value at the end of initialization "
-                    "is the speed before the first step)", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), unit="rad/s")
+                    "is the speed before the first step)", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), unit="rad/s",
+                    low=0.0, high=rpm_to_rad_s(MAX_SPEED_RPM))
         self._input("drive_torque", "net external torque on the rotor about +z [N m], e.g. turbine minus compressor "
                     "(speed_source = torque)", unit="N.m")
         for b in self._bearings:

@@ -55,6 +55,8 @@ class FrbSlaveMixin:
         self._values = {}  # parameter name -> value
         self._input_values = np.zeros(0)  # Real input values, in the order of registration
         self._input_pos = {}  # input name -> position in self._input_values
+        self._input_low, self._input_high = np.zeros(0), np.zeros(0)  # declared range (min/max) of each Real input
+        self._violation = (None, None)  # (self._gen, bad input names) of the last range check (_out_of_range)
         self._mode = INSTANTIATED
         self._failure = ""  # why the instance is in the error state (repeated when a later call is refused)
         self._last_discard = ""  # why the last doStep was discarded ("" after a successful one)
@@ -123,6 +125,7 @@ class FrbSlaveMixin:
         self._ranges[name] = (low, high)
         k = self._input_values.size
         self._input_values = np.append(self._input_values, float(start))
+        self._input_low, self._input_high = np.append(self._input_low, low), np.append(self._input_high, high)
         self._input_pos[name] = k
         var = Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous, description=desc,
                    getter=lambda k=k: float(self._input_values[k]), setter=lambda v, n=name: self._set_input(n, v))
@@ -257,7 +260,7 @@ class FrbSlaveMixin:
 
     # ------------------------------------------------------------------ get
     def get_real(self, vrs):
-        if self._comp is not None and self._mode in (STEP, TERMINATED):
+        if self._comp is not None and self._mode in (STEP, TERMINATED) and not self._out_of_range():
             try:  # fast paths while every value is finite (otherwise the guarded path reports)
                 out = self._get_blocks(vrs)
                 if out is None:  # raw getters, one per variable
@@ -339,6 +342,10 @@ class FrbSlaveMixin:
                 self._comp = None
                 self._discard(f"output {name} cannot be evaluated in initialization mode: {exc}")
                 return failed
+        bad = self._range_message(name)
+        if bad:
+            self._discard(f"output {name} cannot be evaluated at the current inputs: {bad}")
+            return failed
         try:
             value = cast(fn())
         except Exception as exc:  # noqa: BLE001
@@ -347,6 +354,31 @@ class FrbSlaveMixin:
         if cast is float and not math.isfinite(value):
             self._discard(f"output {name} = {value} is not finite at the current inputs")
         return value
+
+    def _out_of_range(self):
+        """Names of the Real inputs whose finite value is outside their declared range (min/max of the model
+        description), checked once per change; non-finite values are left to the slaves' own checks."""
+        if self._violation[0] != self._gen:
+            x = self._input_values
+            with np.errstate(invalid="ignore"):
+                bad = np.isfinite(x) & ((x < self._input_low) | (x > self._input_high))
+            names = [n for n, k in self._input_pos.items() if bad[k]] if bad.any() else []
+            self._violation = (self._gen, names)
+        return self._violation[1]
+
+    def _range_message(self, output=None):
+        """Why the inputs are out of range (those ``output`` depends on; all for a doStep), or ''."""
+        names = self._out_of_range()
+        if names and output is not None:
+            deps = (self._init_deps if self._mode == INITIALIZATION else self._deps).get(output)
+            names = names if deps is None else [n for n in names if n in deps]
+        msgs = []
+        for n in names:
+            k, u = self._input_pos[n], self._units.get(n, "")
+            u = "" if u in ("", "1") else f" {u}"
+            msgs.append(f"input {n} = {float(self._input_values[k])!r}{u} is invalid: valid range "
+                        f"[{self._input_low[k]:g}, {self._input_high[k]:g}]{u}")
+        return "; ".join(msgs)
 
     # ------------------------------------------------------------------ state machine
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
@@ -416,6 +448,9 @@ class FrbSlaveMixin:
             return False
         saved = self._component_state()
         try:
+            bad = self._range_message()
+            if bad:
+                raise ValueError(bad)
             self._advance(current_time, step_size)
         except Exception as exc:  # noqa: BLE001
             self._set_component_state(saved)

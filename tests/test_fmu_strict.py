@@ -453,3 +453,28 @@ def test_a_state_restored_after_reset_steps_on_from_that_state(built, tmp_path):
     np.testing.assert_array_equal(h.real(outs), after)
     h(OK, "freeFMUstate", state)
     judge(h)
+
+
+@pytest.mark.parametrize("speed", [-5000.0, 1e9])
+def test_an_input_outside_its_declared_range_discards_the_step_and_its_outputs(built, tmp_path, speed):
+    """The bearing's rotor_speed below its declared min 0 (a rotor running backwards) or above 1e6 rpm: the outputs
+    that depend on it and the doStep are fmi2Discard naming the input, its value and its range (they were fmi2OK:
+    the films computed at -47746 rpm, or 9.8e11 W of friction power at 9.5e9 rpm); valid again, the bearing steps
+    on as a twin that never saw it. The example engine's rotor_speed likewise."""
+    a, b = _bearing(built, "range_a", tmp_path), _bearing(built, "range_b", tmp_path)
+    a.start()
+    b.start()
+    np.testing.assert_array_equal(_run_bearing(a, 0, 2), _run_bearing(b, 0, 2))
+    a.set("setReal", ["rotor_speed"], [speed])
+    _, msg = a(DISCARD, "getReal", [a.vr["force.x"], a.vr["power_loss"]])
+    assert f"input rotor_speed = {speed!r} rad/s is invalid: valid range [0, 104720] rad/s" in msg
+    _, msg = a(DISCARD, "doStep", 2e-5, 1e-5)
+    assert "discarded" in msg and f"rotor_speed = {speed!r} rad/s is invalid" in msg
+    a(OK, "getReal", [a.vr["ring.x"]])  # a state: it does not depend on the input
+    np.testing.assert_array_equal(_run_bearing(a, 2, 2), _run_bearing(b, 2, 2))
+    e = Host(built / "fmus" / "EngineTorque.fmu", "range_engine", tmp_path)
+    e.start()
+    e.set("setReal", ["rotor_speed"], [speed])
+    _, msg = e(DISCARD, "getReal", [e.vr["drive_torque"]])
+    assert f"input rotor_speed = {speed!r} rad/s is invalid" in msg
+    judge(a, b, e)
