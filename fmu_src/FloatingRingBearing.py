@@ -91,8 +91,10 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                     **positive)
         self._param("ring.x0", 0.0, "initial ring centre x [m]", unit="m")
         self._param("ring.y0", 0.0, "initial ring centre y [m]", unit="m")
-        self._param("ring.speed0", 0.0, "initial ring speed [rad/s]", unit="rad/s")
-        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2", low=0.0)
+        top = 1e6 * math.pi / 30.0  # 1e6 rpm, frbmodel's speed bound (frbmodel.core.errors.MAX_SPEED_RPM)
+        self._param("ring.speed0", 0.0, "initial ring speed [rad/s]", unit="rad/s", low=-top, high=top)
+        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2", low=0.0,
+                    high=1e3)
         self._param("substep", BEARING_SUBSTEP, "ring integration substep [s] (2-stage SDIRK, second order)",
                     unit="s", low=1e-9, high=1e-3)
         self._param("contact_eps", CONTACT_EPS, "eccentricity ratio treated as wall contact (Discard above) [-]",
@@ -276,6 +278,10 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
             if c >= 0.1 * r:
                 raise ValueError(f"{f}.clearance = {c!r} m is invalid for {f}.radius = {r!r} m: valid range "
                                  f"(0, {0.1 * r:g}) m (the thin-film theory needs clearance < 0.1 radius)")
+        x0, y0, c = v["ring.x0"], v["ring.y0"], v["outer.clearance"]
+        if not math.hypot(x0, y0) < c:
+            raise ValueError(f"ring.x0, ring.y0 = ({x0!r}, {y0!r}) m is invalid: valid range sqrt(x0^2 + y0^2) < "
+                             f"outer.clearance = {c!r} m (the ring inside its outer film)")
         bore = v["inner.radius"] + v["inner.clearance"]
         if bore >= v["outer.radius"]:
             raise ValueError(f"inner.radius + inner.clearance = {bore:g} m (the ring's bore) is invalid: valid range "

@@ -248,8 +248,19 @@ def test_fixed_parameter_set_after_initialization_is_refused(built, tmp_path):
     ("bearing", "setReal", "substep", 0.0, ["0.0 s", "valid range [1e-09, 0.001] s"]),
     ("bearing", "setString", "film_model", "long", ["'long'", "valid values 'short', 'short_corrected'"]),
     ("bearing", "setReal", "inner.radius", 8e-3, ["0.008", "valid range < outer.radius = 0.008 m"]),  # ring bore
-    ("rotor", "setReal", "speed_start", -1.0, ["-1.0 rad/s", "valid range [0, inf) rad/s"]),
-    ("rotor", "setReal", "turbine_wheel.unbalance", math.inf, ["inf kg.m", "valid range [0, inf) kg.m"]),
+    ("rotor", "setReal", "speed_start", -1.0, ["-1.0 rad/s", "valid range [0, 104720] rad/s"]),
+    # bounds the rotor FMU lacked (each started and stepped: 95 Mrpm after one step, 10 kg m, 1e9 m/s2) and the
+    # bearing FMU's initial ring state outside its film
+    ("rotor", "setReal", "speed_end", 1e12, ["1000000000000.0 rad/s", "valid range [0, 104720] rad/s"]),
+    ("rotor", "setReal", "ramp_time", 1e12, ["valid range (0, 10000] s"]),
+    ("rotor", "setReal", "turbine_wheel.unbalance", 10.0, ["10.0 kg.m", "valid range [0, 0.001] kg.m"]),
+    ("rotor", "setReal", "turbine_wheel.unbalance_phase", 1e300, ["1e+300 rad", "valid range [-100, 100] rad"]),
+    ("rotor", "setReal", "gravity", 1e9, ["1000000000.0 m/s2", "valid range [0, 1000] m/s2"]),
+    ("rotor", "setReal", "turbine_bearing.journal_x0", 1.0, ["(1.0, 0.0) m", "< inner + outer clearance = 7e-05 m"]),
+    ("bearing", "setReal", "ring.x0", 1.0, ["(1.0, 0.0) m", "< outer.clearance = 3.6e-05 m"]),
+    ("bearing", "setReal", "ring.speed0", 1e12, ["valid range [-104720, 104720] rad/s"]),
+    ("bearing", "setReal", "gravity", 1e9, ["valid range [0, 1000] m/s2"]),
+    ("rotor", "setReal", "turbine_wheel.unbalance", math.inf, ["inf kg.m", "valid range [0, 0.001] kg.m"]),
 ])
 def test_invalid_parameters_are_an_error_naming_quantity_value_and_range(built, tmp_path, fmu, setter, name, value,
                                                                          words):
