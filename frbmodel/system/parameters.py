@@ -25,7 +25,10 @@ import numpy as np
 from ..core.errors import ParameterError, check_positive
 from .films import Film, check_film_thickness, check_model
 from .oil import Oil, oil_from_dict
-from .rotor import GRAVITY, Disc, Rotor, ShaftElement
+from .rotor import GRAVITY, Disc, Rotor, ShaftElement, check_names
+
+#: the largest gravitational acceleration a system takes [m/s²] (100 g; the FMUs' parameter gravity has the same)
+MAX_GRAVITY = 1e3
 
 # ------------------------------------------------------------------ the schema of a system file
 REAL, INTEGER, STRING = "real number", "integer", "string"
@@ -295,6 +298,10 @@ class Turbocharger:
         if len(self.bearings) != 2:
             raise ParameterError(f"number of bearings = {len(self.bearings)} is invalid: exactly 2 are supported")
         object.__setattr__(self, "gravity", check_positive("gravity", self.gravity, "m/s^2", allow_zero=True))
+        if self.gravity > MAX_GRAVITY:
+            raise ParameterError(f"gravity = {self.gravity!r} m/s^2 is invalid: valid range 0 ... {MAX_GRAVITY:g} "
+                                 "m/s^2 (100 g)")
+        check_names("bearing", [b.name for b in self.bearings])
         check_model(self.film_model)
         nodes = [b.node for b in self.bearings]
         for b in self.bearings:
@@ -378,6 +385,10 @@ class Turbocharger:
             its place (``bearings[0].outer.clearance``).
         """
         check_section(d, SYSTEM)
+        if not d.get("units", "SI").lstrip().upper().startswith("SI"):
+            raise ParameterError(f"units = {d['units']!r} is invalid: a system file is in SI units (m, kg, s, Pa, "
+                                 "Pa s, kg m^2), whatever this note says; give every value in SI and leave units out "
+                                 "or write units = \"SI\"")
         r = d["rotor"]
         shaft = [_build(f"rotor.shaft[{i}]", ShaftElement, **e) for i, e in enumerate(r["shaft"])]
         discs = [_build(f"rotor.discs[{i}]", Disc, **x) for i, x in enumerate(r.get("discs", []))]
