@@ -78,6 +78,17 @@ def _checked_profile(profile):
     return profile
 
 
+def check_whole_steps(stop_time, step_size):
+    """Raise :class:`ParameterError` unless ``stop_time`` is a whole number of fixed macro steps ``step_size`` [s]
+    (to 1e-9 of a step): the run takes round(T / H) steps, so it ended short of or beyond the stop time it reported."""
+    n = stop_time / step_size
+    if abs(n - round(n)) > 1e-6:
+        lo, hi = math.floor(n) * step_size, math.ceil(n) * step_size
+        raise ParameterError(f"stop time = {stop_time!r} s is not a whole number of macro steps of {step_size!r} s "
+                             f"({n:.6g} steps): the run would end at {round(n) * step_size:.9g} s; valid: a multiple "
+                             f"of the step, e.g. {lo:.9g} or {hi:.9g} s (or --adaptive)")
+
+
 def _profile_stop_time(profile, stop_time):
     """The stop time [s] of a profile-driven run: the profile's last time by default; later is an error."""
     end = float(profile.t[-1])
@@ -183,6 +194,8 @@ class Master(FmuHost):
             self.adaptive = bool(adaptive)
             if self.adaptive:
                 self._configure_adaptive(tolerance, min_step, max_step, unvalidated_step)
+            else:
+                check_whole_steps(self.stop_time, self.step_size)
         except BaseException:
             self.ssp.close()
             raise
