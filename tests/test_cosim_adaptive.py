@@ -126,6 +126,11 @@ def test_cli_adaptive_with_a_profile(built, tmp_path, capsys):
     # trust5: 333.33 steps of 3 us ran 333 of them and reported the stop time 1 ms (it ended at 0.999 ms)
     (["--step", "3e-6"], "stop time = 0.001 s is not a whole number of macro steps of 3e-06 s (333.333 steps): the "
                          "run would end at 0.000999 s; valid: a multiple of the step, e.g. 0.000999 or 0.001002 s"),
+    # trust5: a folder with one sample and exit 3 (the rotor FMU discarded the first step); a MemoryError traceback
+    (["--speed-source", "torque", "--drive-torque", "1e9"], "drive torque = 1e+09 N m is invalid: valid range "
+                                                            "|torque| <= 1.32e+04 N m"),
+    (["--stop-time", "1e4"], "stop time = 10000 s is invalid at output_rate_hz = 20000 Hz: 2e+08 samples, valid "
+                             "range <= 1e+07 samples (stop time <= 500 s)"),
 ])
 def test_cli_bad_adaptive_options_exit_2(built, tmp_path, capsys, args, message):
     code = main(["cosim", str(built / "turbocharger.ssp"), "--stop-time", "0.001", "--no-figure",

@@ -30,6 +30,8 @@ from ..core.progress import simulation_bar
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
 from ..linear.equilibrium import equilibrium
 from ..nonlinear.recorder import Recorder, RunupResult, RunupSchema
+from ..nonlinear.runup import MAX_SAMPLES, check_drive_torque_value
+from ..physics.dynamics import rotor_polar_inertia
 from ..physics.film import Film
 from ..system.parameters import load_system
 from ..system.presets import turbocharger
@@ -220,6 +222,9 @@ class Master(FmuHost):
                                  "Use --unvalidated-step (unvalidated_step=True) to run it anyway")
         self.rollback, self.max_halvings, self.trace = bool(rollback), int(max_halvings), trace
         self.system = system_from_parameters(self.params, self._rotor_system())
+        torque = self.params.get("rotor", {}).get("drive_torque")
+        if torque is not None:  # (the rotor FMU would discard the first step: a folder with one sample, exit 3)
+            check_drive_torque_value("drive torque", torque[1], rotor_polar_inertia(self.system.rotor))
         self.fmi_time_s = 0.0
         self.fmi_calls = {}  # {function: [calls, wall time [s]]} over all FMU instances, collected at close()
         self.rejected_steps = 0
@@ -675,6 +680,11 @@ class Master(FmuHost):
         :class:`RunupResult` (``meta``: wall time, time inside FMI calls, steps taken and rejected); raises
         :class:`CosimStopped` (with ``.result``) when an FMU fails."""
         H, T = self.step_size, self.stop_time
+        rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
+        if T * rate > MAX_SAMPLES:  # (the recorder holds them in memory: 2e8 samples asked for 39 GB)
+            raise ParameterError(f"stop time = {T:g} s is invalid at output_rate_hz = {rate:g} Hz: {T * rate:.3g} "
+                                 f"samples, valid range <= {MAX_SAMPLES:.0e} samples (stop time <= "
+                                 f"{MAX_SAMPLES / rate:g} s)")
         every = max(1, int(round(1.0 / (H * output_rate_hz))))
         n_steps = int(round(T / H))
         t_wall = time.perf_counter()
