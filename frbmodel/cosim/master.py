@@ -287,6 +287,7 @@ class Master(FmuHost):
             raise ParameterError(f"{self.ssp_path}: the {BEARING_FMU} components {found} do not match the rotor "
                                  f"system's bearings {names}")
         self.bearings = [self.fmus[n] for n in names]
+        self._check_fed_inputs()
         self._plan_exchange()
         self.schema = RunupSchema.from_system(self.system)
         self._rec_rotor = self.rotor.vr(["rotor_speed"] + [f"{n}_bearing.journal.{q}" for n in names for q in "xy"] +
@@ -303,6 +304,22 @@ class Master(FmuHost):
         if self.adaptive:
             self._plan_defect()
         return self
+
+    def _check_fed_inputs(self):
+        """Refuse an SSP that connects an output whose value depends directly on an input that no connection feeds
+        (e.g. a bearing's force without its journal.x connection: the input kept its start value, the parameter
+        set's initial journal position, and the run 'finished' with that journal fixed there)."""
+        fed = {(e_el, e_c) for _, _, e_el, e_c in self.ssp.connections}
+        read = {(s_el, s_c) for s_el, s_c, _, _ in self.ssp.connections}
+        for f in self.fmus.values():
+            for out in f.md.outputs:
+                if (f.name, out.variable.name) not in read:
+                    continue
+                for d in out.dependencies or ():
+                    if d.causality == "input" and (f.name, d.name) not in fed:
+                        raise ParameterError(f"{self.ssp_path}: the connected output {f.name}.{out.variable.name} "
+                                             f"depends on the input {f.name}.{d.name}, which no connection feeds (it "
+                                             "would keep its initial value over the whole run); connect it")
 
     def _plan_exchange(self):
         """Group the SSP connections into two phases (rotor -> bearings, then bearings -> rotor, so that the
@@ -689,11 +706,15 @@ class Master(FmuHost):
         n_steps = int(round(T / H))
         t_wall = time.perf_counter()
         status, message = "finished", ""
+        if not self.fmus:  # before the recorder writes anything: a refused SSP leaves no result files
+            try:
+                self.setup()
+            except BaseException:
+                self.close()
+                raise
         with Recorder(RunupSchema.from_system(self.system), n_steps // every + 2, out_dir,
                       self.meta(1.0 / (H * every))) as rec:
             try:
-                if not self.fmus:
-                    self.setup()
                 self.initialize()
                 rec.append(self.sample(0.0))
                 with deferred_signals() as signals, simulation_bar(T, "cosim", progress) as bar:
