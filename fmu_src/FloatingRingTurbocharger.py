@@ -208,7 +208,11 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
             supply_temperature_K=self._in("oil_supply_temperature"), supply_pressure_Pa=self._in("oil_supply_pressure"))
         comp.warm_up()
         if v["record_folder"]:
-            comp.record(v["record_folder"], {"fmu_instance": self.instance_name})
+            try:
+                comp.record(v["record_folder"], {"fmu_instance": self.instance_name})
+            except OSError as exc:  # (the message was "[Errno 2] No such file or directory: '/proc/x'" alone)
+                raise ValueError(f"record_folder = {v['record_folder']!r} cannot be written: "
+                                 f"{exc.strerror or exc}") from None
         self._comp = comp
         self._changed()
 

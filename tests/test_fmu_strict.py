@@ -489,3 +489,15 @@ def test_an_input_outside_its_declared_range_discards_the_step_and_its_outputs(b
     _, msg = e(DISCARD, "getReal", [e.vr["drive_torque"]])
     assert f"input rotor_speed = {speed!r} rad/s is invalid" in msg
     judge(a, b, e)
+
+
+def test_an_unwritable_record_folder_is_named(built, tmp_path):
+    """The turbocharger FMU's record_folder where nothing can be written: fmi2Error naming the parameter (the message
+    was "[Errno 2] No such file or directory: '/proc/x'" alone)."""
+    h = Host(built / "fmus" / "FloatingRingTurbocharger.fmu", "record", tmp_path)
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    h.set("setString", ["record_folder"], ["/proc/x"])
+    _, msg = h(ERROR, "exitInitializationMode")
+    assert "record_folder = '/proc/x' cannot be written: No such file or directory" in msg, msg
+    judge(h)
