@@ -455,8 +455,10 @@ class FrbSlaveMixin:
         except Exception as exc:  # noqa: BLE001
             self._set_component_state(saved)
             self._changed()
+            at = getattr(self._comp, "t", None)  # the component's own time where it has one (a skipped step)
+            at = current_time if not isinstance(at, float) else at
             self._last_discard = (f"doStep from t = {current_time:.6g} s by {step_size:.3g} s discarded, the state "
-                                  f"stays at t = {current_time:.6g} s: {self._step_context()}{exc}")
+                                  f"stays at t = {at:.6g} s: {self._step_context()}{exc}")
             self._discard(self._last_discard)
             return False
         self._last_discard = ""

@@ -501,3 +501,14 @@ def test_an_unwritable_record_folder_is_named(built, tmp_path):
     _, msg = h(ERROR, "exitInitializationMode")
     assert "record_folder = '/proc/x' cannot be written: No such file or directory" in msg, msg
     judge(h)
+
+
+def test_a_skipped_step_is_discarded_naming_the_time_the_state_is_at(built, tmp_path):
+    """doStep from t = 5 s of a turbocharger FMU at t = 0: Discard, and the message says the state stays at 0 s (it
+    said 'stays at t = 5 s', where it never was)."""
+    h = Host(built / "fmus" / "FloatingRingTurbocharger.fmu", "skip", tmp_path)
+    h.start()
+    _, msg = h(DISCARD, "doStep", 5.0, 1e-5)
+    assert "doStep from t = 5 s by 1e-05 s discarded, the state stays at t = 0 s" in msg, msg
+    h(OK, "doStep", 0.0, 1e-5)
+    judge(h)
