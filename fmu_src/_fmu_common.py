@@ -431,7 +431,10 @@ class FrbSlaveMixin:
             if not (math.isfinite(x) and (x > low if low_open else x >= low) and x <= high):
                 rng = f"{'(' if low_open else '['}{low:g}, {high:g}{']' if math.isfinite(high) else ')'}"
                 u = "" if unit == "1" else f" {unit}"
-                bad.append(f"{name} = {v!r}{u} is invalid: valid range {rng}{u}")
+                if not (math.isfinite(low) or math.isfinite(high)):  # (it read "valid range [-inf, inf) m")
+                    bad.append(f"{name} = {v!r}{u} is invalid: it must be a finite real number")
+                else:
+                    bad.append(f"{name} = {v!r}{u} is invalid: valid range {rng}{u}")
         if bad:
             raise ValueError("; ".join(bad))
 

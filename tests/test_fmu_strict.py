@@ -260,6 +260,7 @@ def test_fixed_parameter_set_after_initialization_is_refused(built, tmp_path):
     ("bearing", "setReal", "ring.x0", 1.0, ["(1.0, 0.0) m", "< outer.clearance = 3.6e-05 m"]),
     ("bearing", "setReal", "ring.speed0", 1e12, ["valid range [-104720, 104720] rad/s"]),
     ("bearing", "setReal", "gravity", 1e9, ["valid range [0, 1000] m/s2"]),
+    ("bearing", "setReal", "ring.y0", math.nan, ["ring.y0 = nan m is invalid: it must be a finite real number"]),
     ("rotor", "setReal", "turbine_wheel.unbalance", math.inf, ["inf kg.m", "valid range [0, 0.001] kg.m"]),
 ])
 def test_invalid_parameters_are_an_error_naming_quantity_value_and_range(built, tmp_path, fmu, setter, name, value,
