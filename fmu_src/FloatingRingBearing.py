@@ -10,11 +10,12 @@ from pythonfmu import DefaultExperiment, Fmi2Slave
 
 #: the journal inputs (x, y, vx, vy) and the rotor speed: every output of the communication point depends on them
 JOURNAL_IN = ("journal.x", "journal.y", "journal.vx", "journal.vy")
-#: the oil supply inputs (thermal model, parameter oil): (name, unit, description, start, low)
+#: the oil supply inputs (thermal model, parameter oil): (name, unit, description, start, low, high) (the bounds:
+#: frbmodel.system.oil.T_MIN_K, T_MAX_K, frbmodel.linear.thermal.MAX_SUPPLY_PRESSURE_PA)
 SUPPLY_IN = (("oil_supply_temperature", "K", "oil supply temperature (thermal model: parameter oil; a change "
-              "recomputes the thermal table, ~0.2 s)", 363.15, 243.15),
+              "recomputes the thermal table, ~0.2 s)", 363.15, 243.15, 473.15),
              ("oil_supply_pressure", "Pa", "oil supply pressure above ambient (thermal model: parameter oil)", 3e5,
-              0.0))
+              0.0, 2e6))
 #: speeds of the thermal table over thermal.speed_min ... thermal.speed_max (as the turbocharger FMU's)
 THERMAL_TABLE_SPEEDS = 49
 
@@ -61,8 +62,8 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
         self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s", low=0.0,
                     high=rpm_to_rad_s(MAX_SPEED_RPM))
-        for name, unit, desc, start, low in SUPPLY_IN:
-            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low)
+        for name, unit, desc, start, low, high in SUPPLY_IN:
+            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low, high=high)
         self._journal_idx = np.array([self._input_pos[f"journal.{q}"] for q in ("x", "y", "vx", "vy")])
         self._speed_idx = self._input_pos["rotor_speed"]
         self._outputs()
@@ -289,7 +290,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     def _advance(self, current_time, step_size):
         if not self._values["oil"]:
-            for (name, _, _, start, _), value in zip(SUPPLY_IN, self._supply_inputs()):
+            for (name, _, _, start, *_), value in zip(SUPPLY_IN, self._supply_inputs()):
                 if value != start:
                     raise ValueError(f"{name} = {value!r} needs the thermal model: set the parameter oil (the films "
                                      f"have constant viscosities); leave the input at its start value {start!r} "

@@ -33,6 +33,8 @@ INPUTS = (("speed_in", "rad/s", "rotor speed held over the step (speed_source = 
            "parameter oil)", 0.0))
 #: start values of the inputs that do not start at 0 (speed_in: the default start speed, set in __init__)
 INPUT_STARTS = {"oil_supply_temperature": 363.15, "oil_supply_pressure": 3e5}
+#: upper bounds of the supply inputs (frbmodel.system.oil.T_MAX_K, frbmodel.linear.thermal.MAX_SUPPLY_PRESSURE_PA)
+INPUT_HIGHS = {"oil_supply_temperature": 473.15, "oil_supply_pressure": 2e6}
 
 
 class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
@@ -70,7 +72,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         for name, unit, desc, low in INPUTS:
             start = rpm_to_rad_s(20e3) if name == "speed_in" else INPUT_STARTS.get(name, 0.0)
             self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low,
-                        high=rpm_to_rad_s(MAX_SPEED_RPM) if name == "speed_in" else math.inf)
+                        high=INPUT_HIGHS.get(name, math.inf) if name != "speed_in" else rpm_to_rad_s(MAX_SPEED_RPM))
         self._in_idx = np.array([self._input_pos[n] for n, *_ in INPUTS])
         self._outputs()
 

@@ -376,8 +376,9 @@ class FrbSlaveMixin:
         for n in names:
             k, u = self._input_pos[n], self._units.get(n, "")
             u = "" if u in ("", "1") else f" {u}"
+            lo, hi = self._input_low[k], self._input_high[k]
             msgs.append(f"input {n} = {float(self._input_values[k])!r}{u} is invalid: valid range "
-                        f"[{self._input_low[k]:g}, {self._input_high[k]:g}]{u}")
+                        f"{'[' if math.isfinite(lo) else '('}{lo:g}, {hi:g}{']' if math.isfinite(hi) else ')'}{u}")
         return "; ".join(msgs)
 
     # ------------------------------------------------------------------ state machine

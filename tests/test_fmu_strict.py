@@ -513,3 +513,18 @@ def test_a_skipped_step_is_discarded_naming_the_time_the_state_is_at(built, tmp_
     assert "doStep from t = 5 s by 1e-05 s discarded, the state stays at t = 0 s" in msg, msg
     h(OK, "doStep", 0.0, 1e-5)
     judge(h)
+
+
+def test_supply_inputs_declare_the_thermal_models_range(built, tmp_path):
+    """The oil supply inputs' max is the thermal model's (473.15 K, 2e6 Pa; it was none, so 1e4 K was declared
+    valid), and a value beyond it discards the step naming that range."""
+    h = _bearing(built, "supply", tmp_path)
+    v = {x.name: x for x in h.md.modelVariables}
+    assert (v["oil_supply_temperature"].min, v["oil_supply_temperature"].max) == ("243.15", "473.15")
+    assert float(v["oil_supply_pressure"].max) == 2e6
+    h.start(strings={"oil": "SAE 5W-30"})
+    h.set("setReal", JOURNAL, _journal_inputs(0))
+    h.set("setReal", ["oil_supply_temperature"], [1e4])
+    _, msg = h(DISCARD, "doStep", 0.0, 1e-5)
+    assert "input oil_supply_temperature = 10000.0 K is invalid: valid range [243.15, 473.15] K" in msg, msg
+    judge(h)
