@@ -307,3 +307,15 @@ def test_api_refuses_speeds_above_the_model_limit():
     with pytest.raises(frb.ParameterError, match=r"valid range 0 < speed <= 1e\+06 rpm"):
         frb.equilibrium(tc, "J", 2e6)
     assert frb.equilibrium(tc, "J", 250e3).bearings[0].ring_speed > 0  # the verified range still works
+
+
+def test_a_key_given_twice_in_a_json_system_file_is_refused(tmp_path):
+    """trust5: json keeps the last of two equal keys without a word ({"gravity": 9.81, "gravity": 0.0} ran without
+    gravity); TOML refuses a repeated key itself."""
+    path = frb.turbocharger().save(tmp_path / "tc.json")
+    text = path.read_text()
+    assert '"gravity": 9.81' in text
+    path.write_text(text.replace('"gravity": 9.81', '"gravity": 9.81, "gravity": 0.0', 1))
+    with pytest.raises(frb.ParameterError, match=r"system file '.*tc.json': key 'gravity' is given twice in one "
+                                                 r"table \(values 9.81 and 0.0\); give it once"):
+        frb.load_system(path)

@@ -500,13 +500,27 @@ def load_system(path) -> Turbocharger:
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError(f"system file = {str(path)!r} cannot be read: {exc}") from None
     try:
-        d = json.loads(text) if suffix == ".json" else tomllib.loads(text)
+        d = json.loads(text, object_pairs_hook=_unique_keys) if suffix == ".json" else tomllib.loads(text)
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
         raise _syntax_error(path, text, exc) from None
+    except ParameterError as exc:
+        raise ParameterError(f"system file {str(path)!r}: {exc}") from None
     try:
         return Turbocharger.from_dict(d)
     except ParameterError as exc:
         raise ParameterError(f"system file {str(path)!r}: {exc}") from None
+
+
+def _unique_keys(pairs) -> dict:
+    """A JSON object as a dict, or a ParameterError for a key given twice (json keeps the last one silently; TOML
+    refuses a repeated key itself)."""
+    d = {}
+    for k, v in pairs:
+        if k in d:
+            raise ParameterError(f"key {k!r} is given twice in one table (values {d[k]!r:.40} and {v!r:.40}); give "
+                                 "it once")
+        d[k] = v
+    return d
 
 
 def _syntax_error(path, text, exc) -> ParameterError:
