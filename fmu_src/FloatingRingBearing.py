@@ -112,9 +112,9 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._param("static_load", float(tc.bearing_loads[0]), "static load of the bearing [N] (downward; the thermal "
                     "operating points are the method-J equilibria under it; thermal model only)", unit="N", low=0.0)
         self._param("thermal.speed_min", rpm_to_rad_s(10e3), "lowest rotor speed of the thermal table [rad/s] (held "
-                    "below)", unit="rad/s", **positive)
+                    "below)", unit="rad/s", high=top, **positive)
         self._param("thermal.speed_max", rpm_to_rad_s(250e3), "highest rotor speed of the thermal table [rad/s] "
-                    "(held above)", unit="rad/s", **positive)
+                    "(held above)", unit="rad/s", high=top, **positive)
 
     def _outputs(self):
         """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units). Those
@@ -256,8 +256,13 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         if not lo < hi:
             raise ValueError(f"thermal.speed_min = {lo!r} rad/s is invalid: valid range < thermal.speed_max = {hi!r} "
                              "rad/s")
-        comp.use_oil(OilSupply(OILS[v["oil"]], *self._supply_inputs()), float(v["static_load"]),
-                     np.linspace(lo, hi, THERMAL_TABLE_SPEEDS))
+        try:
+            comp.use_oil(OilSupply(OILS[v["oil"]], *self._supply_inputs()), float(v["static_load"]),
+                         np.linspace(lo, hi, THERMAL_TABLE_SPEEDS))
+        except Exception as exc:  # noqa: BLE001  (the library's message named none of these parameters)
+            raise ValueError(f"the thermal table for oil = {v['oil']!r}, static_load = {v['static_load']!r} N, "
+                             f"thermal.speed_min ... speed_max = {lo:g} ... {hi:g} rad/s cannot be made: "
+                             f"{exc}") from None
 
     def _warm_up(self, j, w):
         """Load (or compile) the compiled kernels of the exchange and the ring step now, in initialization, not in

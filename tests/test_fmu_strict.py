@@ -528,3 +528,21 @@ def test_supply_inputs_declare_the_thermal_models_range(built, tmp_path):
     _, msg = h(DISCARD, "doStep", 0.0, 1e-5)
     assert "input oil_supply_temperature = 10000.0 K is invalid: valid range [243.15, 473.15] K" in msg, msg
     judge(h)
+
+
+@pytest.mark.parametrize("name, value, words", [
+    ("thermal.speed_max", 1e12, "thermal.speed_max = 1000000000000.0 rad/s is invalid: valid range (0, 104720] rad/s"),
+    ("static_load", 1e9, "the thermal table for oil = 'SAE 5W-30', static_load = 1000000000.0 N, "
+                         "thermal.speed_min ... speed_max = 1047.2 ... 26179.9 rad/s cannot be made: "),
+])
+def test_thermal_parameters_a_table_cannot_be_made_for_are_named(built, tmp_path, name, value, words):
+    """trust5: the bearing FMU's thermal table refused 1e12 rad/s as 'speed_rpm = np.float64(1.99e11) rpm', and a
+    static load it finds no equilibrium for by the ring-speed root search alone, naming neither parameter."""
+    h = _bearing(built, "thermal_params", tmp_path)
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    h.set("setString", ["oil"], ["SAE 5W-30"])
+    h.set("setReal", [name], [value])
+    _, msg = h(ERROR, "exitInitializationMode")
+    assert words in msg, msg
+    judge(h)
