@@ -80,15 +80,15 @@ def _checked_profile(profile):
     return profile
 
 
-def check_whole_steps(stop_time, step_size):
+def check_whole_steps(stop_time, step_size, what="stop time"):
     """Raise :class:`ParameterError` unless ``stop_time`` is a whole number of fixed macro steps ``step_size`` [s]
     (to 1e-9 of a step): the run takes round(T / H) steps, so it ended short of or beyond the stop time it reported."""
     n = stop_time / step_size
     if abs(n - round(n)) > 1e-6:
         lo, hi = math.floor(n) * step_size, math.ceil(n) * step_size
-        raise ParameterError(f"stop time = {stop_time!r} s is not a whole number of macro steps of {step_size!r} s "
+        raise ParameterError(f"{what} = {stop_time!r} s is not a whole number of macro steps of {step_size!r} s "
                              f"({n:.6g} steps): the run would end at {round(n) * step_size:.9g} s; valid: a multiple "
-                             f"of the step, e.g. {lo:.9g} or {hi:.9g} s (or --adaptive)")
+                             f"of the step as --stop-time, e.g. {lo:.9g} or {hi:.9g} s (or --adaptive)")
 
 
 def _profile_stop_time(profile, stop_time):
@@ -188,6 +188,7 @@ class Master(FmuHost):
         self.fmus, self._tmp = {}, None
         self.profile = _checked_profile(profile)
         self.ssp = read_ssp(ssp)
+        what = "stop time" if stop_time is not None or profile is None else "stop time (the speed profile's last time)"
         try:
             if self.profile is not None:
                 stop_time = _profile_stop_time(self.profile, stop_time)
@@ -197,7 +198,7 @@ class Master(FmuHost):
             if self.adaptive:
                 self._configure_adaptive(tolerance, min_step, max_step, unvalidated_step)
             else:
-                check_whole_steps(self.stop_time, self.step_size)
+                check_whole_steps(self.stop_time, self.step_size, what)
         except BaseException:
             self.ssp.close()
             raise
