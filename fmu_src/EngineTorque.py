@@ -23,6 +23,9 @@ import math
 from _fmu_common import FrbSlaveMixin
 from pythonfmu import DefaultExperiment, Fmi2Slave
 
+#: the rotor speed bound of frbmodel (frbmodel.core.errors.MAX_SPEED_RPM = 1e6 rpm) [rad/s]
+MAX_SPEED_RAD_S = 1e6 * math.pi / 30.0
+
 
 class EngineTorque(FrbSlaveMixin, Fmi2Slave):
     """Exhaust-turbine torque minus compressor load torque for the turbocharger FMU (see the module description)."""
@@ -45,7 +48,8 @@ class EngineTorque(FrbSlaveMixin, Fmi2Slave):
                     unit="1", low=0.0, high=1.0)
         self._param("firing_frequency", 100.0, "firing frequency of the engine, f_fire [Hz]", unit="Hz", low=0.0,
                     high=1e4)
-        self._input("rotor_speed", "turbocharger rotor speed w [rad/s]", 2094.3951023931954, unit="rad/s", low=0.0)
+        self._input("rotor_speed", "turbocharger rotor speed w [rad/s]", 2094.3951023931954, unit="rad/s", low=0.0,
+                    high=MAX_SPEED_RAD_S)
         for k, (name, desc) in enumerate((("drive_torque", "net torque on the rotor, turbine minus compressor [N m]"),
                                           ("turbine_torque", "exhaust-turbine torque [N m]"),
                                           ("compressor_torque", "compressor load torque [N m]"))):

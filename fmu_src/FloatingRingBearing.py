@@ -10,11 +10,12 @@ from pythonfmu import DefaultExperiment, Fmi2Slave
 
 #: the journal inputs (x, y, vx, vy) and the rotor speed: every output of the communication point depends on them
 JOURNAL_IN = ("journal.x", "journal.y", "journal.vx", "journal.vy")
-#: the oil supply inputs (thermal model, parameter oil): (name, unit, description, start, low)
+#: the oil supply inputs (thermal model, parameter oil): (name, unit, description, start, low, high) (the bounds:
+#: frbmodel.system.oil.T_MIN_K, T_MAX_K, frbmodel.linear.thermal.MAX_SUPPLY_PRESSURE_PA)
 SUPPLY_IN = (("oil_supply_temperature", "K", "oil supply temperature (thermal model: parameter oil; a change "
-              "recomputes the thermal table, ~0.2 s)", 363.15, 243.15),
+              "recomputes the thermal table, ~0.2 s)", 363.15, 243.15, 473.15),
              ("oil_supply_pressure", "Pa", "oil supply pressure above ambient (thermal model: parameter oil)", 3e5,
-              0.0))
+              0.0, 2e6))
 #: speeds of the thermal table over thermal.speed_min ... thermal.speed_max (as the turbocharger FMU's)
 THERMAL_TABLE_SPEEDS = 49
 
@@ -56,9 +57,13 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         for q, u, d in (("x", "m", "journal centre x"), ("y", "m", "journal centre y"),
                         ("vx", "m/s", "journal velocity x"), ("vy", "m/s", "journal velocity y")):
             self._input(f"journal.{q}", f"{d} [{u}]", unit=u)
-        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s", low=0.0)
-        for name, unit, desc, start, low in SUPPLY_IN:
-            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low)
+        from frbmodel.core.errors import MAX_SPEED_RPM
+        from frbmodel.core.units import rpm_to_rad_s
+
+        self._input("rotor_speed", "rotor spin speed [rad/s]", 1000.0, unit="rad/s", low=0.0,
+                    high=rpm_to_rad_s(MAX_SPEED_RPM))
+        for name, unit, desc, start, low, high in SUPPLY_IN:
+            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low, high=high)
         self._journal_idx = np.array([self._input_pos[f"journal.{q}"] for q in ("x", "y", "vx", "vy")])
         self._speed_idx = self._input_pos["rotor_speed"]
         self._outputs()
@@ -87,8 +92,10 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
                     **positive)
         self._param("ring.x0", 0.0, "initial ring centre x [m]", unit="m")
         self._param("ring.y0", 0.0, "initial ring centre y [m]", unit="m")
-        self._param("ring.speed0", 0.0, "initial ring speed [rad/s]", unit="rad/s")
-        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2", low=0.0)
+        top = 1e6 * math.pi / 30.0  # 1e6 rpm, frbmodel's speed bound (frbmodel.core.errors.MAX_SPEED_RPM)
+        self._param("ring.speed0", 0.0, "initial ring speed [rad/s]", unit="rad/s", low=-top, high=top)
+        self._param("gravity", tc.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2", low=0.0,
+                    high=1e3)
         self._param("substep", BEARING_SUBSTEP, "ring integration substep [s] (2-stage SDIRK, second order)",
                     unit="s", low=1e-9, high=1e-3)
         self._param("contact_eps", CONTACT_EPS, "eccentricity ratio treated as wall contact (Discard above) [-]",
@@ -105,9 +112,9 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         self._param("static_load", float(tc.bearing_loads[0]), "static load of the bearing [N] (downward; the thermal "
                     "operating points are the method-J equilibria under it; thermal model only)", unit="N", low=0.0)
         self._param("thermal.speed_min", rpm_to_rad_s(10e3), "lowest rotor speed of the thermal table [rad/s] (held "
-                    "below)", unit="rad/s", **positive)
+                    "below)", unit="rad/s", high=top, **positive)
         self._param("thermal.speed_max", rpm_to_rad_s(250e3), "highest rotor speed of the thermal table [rad/s] "
-                    "(held above)", unit="rad/s", **positive)
+                    "(held above)", unit="rad/s", high=top, **positive)
 
     def _outputs(self):
         """Force, interface Jacobian, staggered-coupling values, ring state, eccentricities (all with units). Those
@@ -249,8 +256,13 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
         if not lo < hi:
             raise ValueError(f"thermal.speed_min = {lo!r} rad/s is invalid: valid range < thermal.speed_max = {hi!r} "
                              "rad/s")
-        comp.use_oil(OilSupply(OILS[v["oil"]], *self._supply_inputs()), float(v["static_load"]),
-                     np.linspace(lo, hi, THERMAL_TABLE_SPEEDS))
+        try:
+            comp.use_oil(OilSupply(OILS[v["oil"]], *self._supply_inputs()), float(v["static_load"]),
+                         np.linspace(lo, hi, THERMAL_TABLE_SPEEDS))
+        except Exception as exc:  # noqa: BLE001  (the library's message named none of these parameters)
+            raise ValueError(f"the thermal table for oil = {v['oil']!r}, static_load = {v['static_load']!r} N, "
+                             f"thermal.speed_min ... speed_max = {lo:g} ... {hi:g} rad/s cannot be made: "
+                             f"{exc}") from None
 
     def _warm_up(self, j, w):
         """Load (or compile) the compiled kernels of the exchange and the ring step now, in initialization, not in
@@ -272,6 +284,10 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
             if c >= 0.1 * r:
                 raise ValueError(f"{f}.clearance = {c!r} m is invalid for {f}.radius = {r!r} m: valid range "
                                  f"(0, {0.1 * r:g}) m (the thin-film theory needs clearance < 0.1 radius)")
+        x0, y0, c = v["ring.x0"], v["ring.y0"], v["outer.clearance"]
+        if not math.hypot(x0, y0) < c:
+            raise ValueError(f"ring.x0, ring.y0 = ({x0!r}, {y0!r}) m is invalid: valid range sqrt(x0^2 + y0^2) < "
+                             f"outer.clearance = {c!r} m (the ring inside its outer film)")
         bore = v["inner.radius"] + v["inner.clearance"]
         if bore >= v["outer.radius"]:
             raise ValueError(f"inner.radius + inner.clearance = {bore:g} m (the ring's bore) is invalid: valid range "
@@ -279,7 +295,7 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     def _advance(self, current_time, step_size):
         if not self._values["oil"]:
-            for (name, _, _, start, _), value in zip(SUPPLY_IN, self._supply_inputs()):
+            for (name, _, _, start, *_), value in zip(SUPPLY_IN, self._supply_inputs()):
                 if value != start:
                     raise ValueError(f"{name} = {value!r} needs the thermal model: set the parameter oil (the films "
                                      f"have constant viscosities); leave the input at its start value {start!r} "

@@ -33,6 +33,8 @@ INPUTS = (("speed_in", "rad/s", "rotor speed held over the step (speed_source = 
            "parameter oil)", 0.0))
 #: start values of the inputs that do not start at 0 (speed_in: the default start speed, set in __init__)
 INPUT_STARTS = {"oil_supply_temperature": 363.15, "oil_supply_pressure": 3e5}
+#: upper bounds of the supply inputs (frbmodel.system.oil.T_MAX_K, frbmodel.linear.thermal.MAX_SUPPLY_PRESSURE_PA)
+INPUT_HIGHS = {"oil_supply_temperature": 473.15, "oil_supply_pressure": 2e6}
 
 
 class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
@@ -64,11 +66,13 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         self._bearings = [b.name for b in self._built_for.bearings]
         self._discs = [d.name for d in self._built_for.rotor.discs]
         self._parameters()
+        from frbmodel.core.errors import MAX_SPEED_RPM
         from frbmodel.core.units import rpm_to_rad_s
 
         for name, unit, desc, low in INPUTS:
             start = rpm_to_rad_s(20e3) if name == "speed_in" else INPUT_STARTS.get(name, 0.0)
-            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low)
+            self._input(name, f"{desc} [{unit}]", start, unit=unit, low=low,
+                        high=INPUT_HIGHS.get(name, math.inf) if name != "speed_in" else rpm_to_rad_s(MAX_SPEED_RPM))
         self._in_idx = np.array([self._input_pos[n] for n, *_ in INPUTS])
         self._outputs()
 
@@ -206,7 +210,11 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
             supply_temperature_K=self._in("oil_supply_temperature"), supply_pressure_Pa=self._in("oil_supply_pressure"))
         comp.warm_up()
         if v["record_folder"]:
-            comp.record(v["record_folder"], {"fmu_instance": self.instance_name})
+            try:
+                comp.record(v["record_folder"], {"fmu_instance": self.instance_name})
+            except OSError as exc:  # (the message was "[Errno 2] No such file or directory: '/proc/x'" alone)
+                raise ValueError(f"record_folder = {v['record_folder']!r} cannot be written: "
+                                 f"{exc.strerror or exc}") from None
         self._comp = comp
         self._changed()
 
@@ -218,8 +226,8 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         else:
             for name, value in (("oil_supply_temperature", t_s), ("oil_supply_pressure", p_s)):
                 if value != INPUT_STARTS[name]:
-                    raise ValueError(f"{name} = {value!r} needs the thermal model: set the parameter oil (the films "
-                                     "have constant viscosities); leave the input at its start value "
+                    raise ValueError(f"{name} = {float(value)!r} needs the thermal model: set the parameter oil (the "
+                                     "films have constant viscosities); leave the input at its start value "
                                      f"{INPUT_STARTS[name]!r} otherwise")
         self._comp.step(step_size, speed_in=float(w), drive_torque=float(tq), housing_acc=(float(ax), float(ay)),
                         t=current_time, **supply)

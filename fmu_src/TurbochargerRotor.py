@@ -60,6 +60,7 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def _parameters(self):
         """Parameters (all ``fixed``) with units and valid ranges; defaults: the built-in system and the default
         run-up of frbmodel.system.presets."""
+        from frbmodel.core.errors import MAX_SPEED_RPM
         from frbmodel.core.units import rpm_to_rad_s
         from frbmodel.nonlinear.components import ROTOR_SUBSTEP, SPEED_SOURCES
         from frbmodel.system.presets import RUNUP_DURATION, RUNUP_SPEED_RPM
@@ -70,19 +71,23 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
         self._param("speed_source", "ramp", "where the rotor speed comes from: ramp (speed_start -> speed_end in "
                     "ramp_time) | input (the input speed_in) | torque (the spin is a state driven by the inputs "
                     "drive_torque and <bearing>_bearing.torque, from speed_start)", "str", choices=SPEED_SOURCES)
+        top = rpm_to_rad_s(MAX_SPEED_RPM)  # the bounds of the turbocharger FMU's parameters of the same name
         self._param("speed_start", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), "rotor speed at t = 0 [rad/s] (ramp and torque "
-                    "modes)", unit="rad/s", low=0.0)
+                    "modes)", unit="rad/s", low=0.0, high=top)
         self._param("speed_end", rpm_to_rad_s(RUNUP_SPEED_RPM[1]), "rotor speed after the ramp [rad/s]",
-                    unit="rad/s", low=0.0)
-        self._param("ramp_time", RUNUP_DURATION, "duration of the linear speed ramp [s]", unit="s", low=0.0)
+                    unit="rad/s", low=0.0, high=top)
+        self._param("ramp_time", RUNUP_DURATION, "duration of the linear speed ramp [s]", unit="s", low=0.0,
+                    high=1e4, low_open=True)
         for w in self._discs:
-            self._param(f"{w}.unbalance", 0.0, f"{w} unbalance (mass x eccentricity) [kg m]", unit="kg.m", low=0.0)
-            self._param(f"{w}.unbalance_phase", 0.0, f"{w} unbalance phase from +x [rad]", unit="rad")
+            self._param(f"{w}.unbalance", 0.0, f"{w} unbalance (mass x eccentricity) [kg m]", unit="kg.m", low=0.0,
+                        high=1e-3)
+            self._param(f"{w}.unbalance_phase", 0.0, f"{w} unbalance phase from +x [rad]", unit="rad", low=-100.0,
+                        high=100.0)
         for b in self._bearings:
             self._param(f"{b}.journal_x0", 0.0, f"initial journal centre x at the {b} [m]", unit="m")
             self._param(f"{b}.journal_y0", 0.0, f"initial journal centre y at the {b} [m]", unit="m")
         self._param("gravity", self._built_for.gravity, "gravitational acceleration along -y [m/s2]", unit="m/s2",
-                    low=0.0)
+                    low=0.0, high=1e3)
         self._param("substep", ROTOR_SUBSTEP, "trapezoidal substep [s]", unit="s", low=1e-9, high=1e-3)
         self._param("force_interpolation", False, "interpolate the bearing force between force and force_end over the "
                     "step (staggered masters that step the bearings first); false for Jacobi masters", "bool")
@@ -90,11 +95,13 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
     def _inputs(self):
         """Speed and drive torque; per bearing: force, end-of-step force and path acceleration, reference journal
         state, Jacobian, film torque."""
+        from frbmodel.core.errors import MAX_SPEED_RPM
         from frbmodel.core.units import rpm_to_rad_s
         from frbmodel.system.presets import RUNUP_SPEED_RPM
 
         self._input("speed_in", "rotor speed [rad/s] (speed_source = input; its value at the end of initialization "
-                    "is the speed before the first step)", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), unit="rad/s")
+                    "is the speed before the first step)", rpm_to_rad_s(RUNUP_SPEED_RPM[0]), unit="rad/s",
+                    low=0.0, high=rpm_to_rad_s(MAX_SPEED_RPM))
         self._input("drive_torque", "net external torque on the rotor about +z [N m], e.g. turbine minus compressor "
                     "(speed_source = torque)", unit="N.m")
         for b in self._bearings:
@@ -196,6 +203,12 @@ class TurbochargerRotor(FrbSlaveMixin, Fmi2Slave):
                              "'input' (it is the rotor speed before the first step): it must be finite")
         comp = RotorComponent(tc, speed, unb, float(v["substep"]), speed_source=source, initial_speed=w0)
         journals = [(float(v[f"{b}.journal_x0"]), float(v[f"{b}.journal_y0"])) for b in self._bearings]
+        for name, (x0, y0), b in zip(self._bearings, journals, tc.bearings):
+            room = b.inner.clearance + b.outer.clearance
+            if not math.hypot(x0, y0) < room:
+                raise ValueError(f"{name}.journal_x0, journal_y0 = ({x0!r}, {y0!r}) m is invalid: valid range "
+                                 f"sqrt(x0^2 + y0^2) < inner + outer clearance = {room:g} m (the journal inside its "
+                                 "bearing)")
         comp.y[:comp.n] = tc.rotor.static_deflection([b.node for b in tc.bearings], journals, tc.gravity)
         n = comp.n
         journals = [[i, k, n + i, n + k] for i, k in comp.jdofs]  # x, y, vx, vy of each journal in the state y

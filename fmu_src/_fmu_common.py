@@ -55,6 +55,8 @@ class FrbSlaveMixin:
         self._values = {}  # parameter name -> value
         self._input_values = np.zeros(0)  # Real input values, in the order of registration
         self._input_pos = {}  # input name -> position in self._input_values
+        self._input_low, self._input_high = np.zeros(0), np.zeros(0)  # declared range (min/max) of each Real input
+        self._violation = (None, None)  # (self._gen, bad input names) of the last range check (_out_of_range)
         self._mode = INSTANTIATED
         self._failure = ""  # why the instance is in the error state (repeated when a later call is refused)
         self._last_discard = ""  # why the last doStep was discarded ("" after a successful one)
@@ -123,6 +125,7 @@ class FrbSlaveMixin:
         self._ranges[name] = (low, high)
         k = self._input_values.size
         self._input_values = np.append(self._input_values, float(start))
+        self._input_low, self._input_high = np.append(self._input_low, low), np.append(self._input_high, high)
         self._input_pos[name] = k
         var = Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous, description=desc,
                    getter=lambda k=k: float(self._input_values[k]), setter=lambda v, n=name: self._set_input(n, v))
@@ -257,7 +260,7 @@ class FrbSlaveMixin:
 
     # ------------------------------------------------------------------ get
     def get_real(self, vrs):
-        if self._comp is not None and self._mode in (STEP, TERMINATED):
+        if self._comp is not None and self._mode in (STEP, TERMINATED) and not self._out_of_range():
             try:  # fast paths while every value is finite (otherwise the guarded path reports)
                 out = self._get_blocks(vrs)
                 if out is None:  # raw getters, one per variable
@@ -339,6 +342,10 @@ class FrbSlaveMixin:
                 self._comp = None
                 self._discard(f"output {name} cannot be evaluated in initialization mode: {exc}")
                 return failed
+        bad = self._range_message(name)
+        if bad:
+            self._discard(f"output {name} cannot be evaluated at the current inputs: {bad}")
+            return failed
         try:
             value = cast(fn())
         except Exception as exc:  # noqa: BLE001
@@ -347,6 +354,32 @@ class FrbSlaveMixin:
         if cast is float and not math.isfinite(value):
             self._discard(f"output {name} = {value} is not finite at the current inputs")
         return value
+
+    def _out_of_range(self):
+        """Names of the Real inputs whose finite value is outside their declared range (min/max of the model
+        description), checked once per change; non-finite values are left to the slaves' own checks."""
+        if self._violation[0] != self._gen:
+            x = self._input_values
+            with np.errstate(invalid="ignore"):
+                bad = np.isfinite(x) & ((x < self._input_low) | (x > self._input_high))
+            names = [n for n, k in self._input_pos.items() if bad[k]] if bad.any() else []
+            self._violation = (self._gen, names)
+        return self._violation[1]
+
+    def _range_message(self, output=None):
+        """Why the inputs are out of range (those ``output`` depends on; all for a doStep), or ''."""
+        names = self._out_of_range()
+        if names and output is not None:
+            deps = (self._init_deps if self._mode == INITIALIZATION else self._deps).get(output)
+            names = names if deps is None else [n for n in names if n in deps]
+        msgs = []
+        for n in names:
+            k, u = self._input_pos[n], self._units.get(n, "")
+            u = "" if u in ("", "1") else f" {u}"
+            lo, hi = self._input_low[k], self._input_high[k]
+            msgs.append(f"input {n} = {float(self._input_values[k])!r}{u} is invalid: valid range "
+                        f"{'[' if math.isfinite(lo) else '('}{lo:g}, {hi:g}{']' if math.isfinite(hi) else ')'}{u}")
+        return "; ".join(msgs)
 
     # ------------------------------------------------------------------ state machine
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
@@ -399,7 +432,10 @@ class FrbSlaveMixin:
             if not (math.isfinite(x) and (x > low if low_open else x >= low) and x <= high):
                 rng = f"{'(' if low_open else '['}{low:g}, {high:g}{']' if math.isfinite(high) else ')'}"
                 u = "" if unit == "1" else f" {unit}"
-                bad.append(f"{name} = {v!r}{u} is invalid: valid range {rng}{u}")
+                if not (math.isfinite(low) or math.isfinite(high)):  # (it read "valid range [-inf, inf) m")
+                    bad.append(f"{name} = {v!r}{u} is invalid: it must be a finite real number")
+                else:
+                    bad.append(f"{name} = {v!r}{u} is invalid: valid range {rng}{u}")
         if bad:
             raise ValueError("; ".join(bad))
 
@@ -416,12 +452,17 @@ class FrbSlaveMixin:
             return False
         saved = self._component_state()
         try:
+            bad = self._range_message()
+            if bad:
+                raise ValueError(bad)
             self._advance(current_time, step_size)
         except Exception as exc:  # noqa: BLE001
             self._set_component_state(saved)
             self._changed()
+            at = getattr(self._comp, "t", None)  # the component's own time where it has one (a skipped step)
+            at = current_time if not isinstance(at, float) else at
             self._last_discard = (f"doStep from t = {current_time:.6g} s by {step_size:.3g} s discarded, the state "
-                                  f"stays at t = {current_time:.6g} s: {self._step_context()}{exc}")
+                                  f"stays at t = {at:.6g} s: {self._step_context()}{exc}")
             self._discard(self._last_discard)
             return False
         self._last_discard = ""
@@ -456,11 +497,27 @@ class FrbSlaveMixin:
         return state
 
     def _set_fmu_state(self, state):
+        """Restore a state of :meth:`_get_fmu_state`. An instance without a component (after fmi2Reset, or a new
+        one) builds it from the state's parameters first: it would step nothing and read 0 otherwise. A state that
+        cannot be restored is refused (fmi2Error) and leaves the instance as it was."""
+        comp = state.get("_component")
+        if comp is not None and self._comp is None:
+            old = self._values, self._input_values.copy()
+            self._values, self._input_values[:] = dict(state["_values"]), state["_input_values"]
+            try:
+                self._check_parameters()
+                self._initialize()
+            except Exception as exc:  # noqa: BLE001
+                self._values, self._input_values[:], self._comp = old[0], old[1], None
+                self._refuse(f"fmi2SetFMUstate refused: the state's component cannot be rebuilt: {exc}")
+                return
         self._values = dict(state["_values"])
         self._input_values[:] = state["_input_values"]
         self._mode, self._failure = state["_mode"], state.get("_failure", "")
-        if self._comp is not None and state.get("_component") is not None:
-            self._set_component_state(state["_component"])
+        if self._comp is not None and comp is not None:
+            self._set_component_state(comp)
+        elif comp is None and self._mode in (INSTANTIATED, INITIALIZATION):
+            self._comp = None  # a state taken before the component existed: it is built at initialization again
         self._changed()
 
     # FMU state serialization (fmi2SerializeFMUstate): the state above as JSON, arrays tagged so they come back as

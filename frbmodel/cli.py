@@ -661,8 +661,9 @@ def _finish_run(args, run, system, out, **figure_kw):
     if not args.no_figure and run.time.size >= MIN_FIGURE_SAMPLES:
         write_composites(run, system(), out, **figure_kw)
     elif not args.no_figure:  # (they were left out without a word)
+        longer = "a longer --duration or a higher --rate" if hasattr(args, "duration") else "a longer --stop-time"
         print(f"no figures: {run.time.size} samples recorded, the spectrogram figures need at least "
-              f"{MIN_FIGURE_SAMPLES} (a longer --duration or a higher --rate)")
+              f"{MIN_FIGURE_SAMPLES} ({longer})")
     print(f"results in {out.resolve()}")
 
 

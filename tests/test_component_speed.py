@@ -318,6 +318,7 @@ def test_slave_fast_paths_read_what_the_per_variable_paths_read():
             for i in "xy":
                 values[inputs.index(vr[f"{n}_bearing.stiffness.{i}{i}"])] = 1e6
                 values[inputs.index(vr[f"{n}_bearing.damping.{i}{i}"])] = 1e2
+        values[inputs.index(vr["speed_in"])] = abs(values[inputs.index(vr["speed_in"])])  # its range: >= 0
         rot.set_real(inputs, values)
         assert [rot.vars[v].getter() for v in inputs] == values  # the array assignment stored every value
         assert rot.do_step(k * 1e-5, 1e-5)

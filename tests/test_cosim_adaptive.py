@@ -123,9 +123,38 @@ def test_cli_adaptive_with_a_profile(built, tmp_path, capsys):
 @pytest.mark.parametrize("args, message", [
     (["--coupling-tol", "1e-4"], "--coupling-tol 0.0001 applies only with --adaptive"),
     (["--adaptive", "--coupling-tol", "-1"], "--coupling-tol = -1.0 is invalid"),
+    # trust5: 333.33 steps of 3 us ran 333 of them and reported the stop time 1 ms (it ended at 0.999 ms)
+    (["--step", "3e-6"], "stop time = 0.001 s is not a whole number of macro steps of 3e-06 s (333.333 steps): the "
+                         "run would end at 0.000999 s; valid: a multiple of the step as --stop-time, e.g. 0.000999 "
+                         "or 0.001002 s"),
+    # trust5: a folder with one sample and exit 3 (the rotor FMU discarded the first step); a MemoryError traceback
+    (["--speed-source", "torque", "--drive-torque", "1e9"], "drive torque = 1e+09 N m is invalid: valid range "
+                                                            "|torque| <= 1.32e+04 N m"),
+    (["--stop-time", "1e4"], "stop time = 10000 s is invalid at output_rate_hz = 20000 Hz: 2e+08 samples, valid "
+                             "range <= 1e+07 samples (stop time <= 500 s)"),
 ])
 def test_cli_bad_adaptive_options_exit_2(built, tmp_path, capsys, args, message):
     code = main(["cosim", str(built / "turbocharger.ssp"), "--stop-time", "0.001", "--no-figure",
                  "--out", str(tmp_path / "out"), *args])
     err = capsys.readouterr().err
     assert code == 2 and message in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_cosim_too_short_for_figures_names_its_own_option(built, tmp_path, capsys):
+    """trust5: the hint named frb runup's --duration and --rate, which frb cosim does not have."""
+    assert main(["cosim", str(built / "turbocharger.ssp"), "--stop-time", "0.0001", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "the spectrogram figures need at least 64 (a longer --stop-time)" in out and "--duration" not in out
+
+
+def test_cli_profile_ending_between_macro_steps_names_the_profile(built, tmp_path, capsys):
+    """trust5: the stop time defaults to a profile's last time; one between two macro steps is named as such."""
+    csv = tmp_path / "odd.csv"
+    csv.write_text("time [s], speed [rpm]\n0, 20000\n0.0012345, 20100\n")
+    out = tmp_path / "out"
+    assert main(["cosim", str(built / "turbocharger.ssp"), "--profile", str(csv), "--no-figure", "--out",
+                 str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "stop time (the speed profile's last time) = 0.0012345 s is not a whole number of macro steps" in err
+    assert "as --stop-time, e.g. 0.00123 or 0.00124 s" in err and not out.exists()

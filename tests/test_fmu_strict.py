@@ -248,8 +248,20 @@ def test_fixed_parameter_set_after_initialization_is_refused(built, tmp_path):
     ("bearing", "setReal", "substep", 0.0, ["0.0 s", "valid range [1e-09, 0.001] s"]),
     ("bearing", "setString", "film_model", "long", ["'long'", "valid values 'short', 'short_corrected'"]),
     ("bearing", "setReal", "inner.radius", 8e-3, ["0.008", "valid range < outer.radius = 0.008 m"]),  # ring bore
-    ("rotor", "setReal", "speed_start", -1.0, ["-1.0 rad/s", "valid range [0, inf) rad/s"]),
-    ("rotor", "setReal", "turbine_wheel.unbalance", math.inf, ["inf kg.m", "valid range [0, inf) kg.m"]),
+    ("rotor", "setReal", "speed_start", -1.0, ["-1.0 rad/s", "valid range [0, 104720] rad/s"]),
+    # bounds the rotor FMU lacked (each started and stepped: 95 Mrpm after one step, 10 kg m, 1e9 m/s2) and the
+    # bearing FMU's initial ring state outside its film
+    ("rotor", "setReal", "speed_end", 1e12, ["1000000000000.0 rad/s", "valid range [0, 104720] rad/s"]),
+    ("rotor", "setReal", "ramp_time", 1e12, ["valid range (0, 10000] s"]),
+    ("rotor", "setReal", "turbine_wheel.unbalance", 10.0, ["10.0 kg.m", "valid range [0, 0.001] kg.m"]),
+    ("rotor", "setReal", "turbine_wheel.unbalance_phase", 1e300, ["1e+300 rad", "valid range [-100, 100] rad"]),
+    ("rotor", "setReal", "gravity", 1e9, ["1000000000.0 m/s2", "valid range [0, 1000] m/s2"]),
+    ("rotor", "setReal", "turbine_bearing.journal_x0", 1.0, ["(1.0, 0.0) m", "< inner + outer clearance = 7e-05 m"]),
+    ("bearing", "setReal", "ring.x0", 1.0, ["(1.0, 0.0) m", "< outer.clearance = 3.6e-05 m"]),
+    ("bearing", "setReal", "ring.speed0", 1e12, ["valid range [-104720, 104720] rad/s"]),
+    ("bearing", "setReal", "gravity", 1e9, ["valid range [0, 1000] m/s2"]),
+    ("bearing", "setReal", "ring.y0", math.nan, ["ring.y0 = nan m is invalid: it must be a finite real number"]),
+    ("rotor", "setReal", "turbine_wheel.unbalance", math.inf, ["inf kg.m", "valid range [0, 0.001] kg.m"]),
 ])
 def test_invalid_parameters_are_an_error_naming_quantity_value_and_range(built, tmp_path, fmu, setter, name, value,
                                                                          words):
@@ -430,3 +442,107 @@ def test_non_finite_rotor_inputs_discard_the_step_and_the_rotor_recovers(built, 
         assert np.isfinite(value).all()
     np.testing.assert_array_equal(run(a, 3, 5), run(b, 3, 5))
     judge(a, b)
+
+
+# ---------------------------------------------------------------------------------------------------- FMU state
+def test_a_state_restored_after_reset_steps_on_from_that_state(built, tmp_path):
+    """fmi2SetFMUstate after fmi2Reset (pythonfmu makes a new slave, without its component): the state's component
+    is rebuilt from its parameters and the instance steps on exactly as before the reset (it read 0 with fmi2OK and
+    the next doStep was fmi2Fatal: 'NoneType' object has no attribute 'state')."""
+    h = _bearing(built, "reset_state", tmp_path)
+    h.start({"outer.clearance": 40e-6})
+    outs = ["force.x", "force.y", "ring.x", "ring.y", "ring.speed"]
+    h.set("setReal", JOURNAL, _journal_inputs(0))
+    h(OK, "doStep", 0.0, 1e-5)
+    state, _ = h(OK, "getFMUstate")
+    h.set("setReal", JOURNAL, _journal_inputs(1))
+    h(OK, "doStep", 1e-5, 1e-5)
+    after = h.real(outs)
+    h(OK, "reset")
+    h(OK, "setFMUstate", state)
+    h.set("setReal", JOURNAL, _journal_inputs(1))
+    h(OK, "doStep", 1e-5, 1e-5)
+    np.testing.assert_array_equal(h.real(outs), after)
+    h(OK, "freeFMUstate", state)
+    judge(h)
+
+
+@pytest.mark.parametrize("speed", [-5000.0, 1e9])
+def test_an_input_outside_its_declared_range_discards_the_step_and_its_outputs(built, tmp_path, speed):
+    """The bearing's rotor_speed below its declared min 0 (a rotor running backwards) or above 1e6 rpm: the outputs
+    that depend on it and the doStep are fmi2Discard naming the input, its value and its range (they were fmi2OK:
+    the films computed at -47746 rpm, or 9.8e11 W of friction power at 9.5e9 rpm); valid again, the bearing steps
+    on as a twin that never saw it. The example engine's rotor_speed likewise."""
+    a, b = _bearing(built, "range_a", tmp_path), _bearing(built, "range_b", tmp_path)
+    a.start()
+    b.start()
+    np.testing.assert_array_equal(_run_bearing(a, 0, 2), _run_bearing(b, 0, 2))
+    a.set("setReal", ["rotor_speed"], [speed])
+    _, msg = a(DISCARD, "getReal", [a.vr["force.x"], a.vr["power_loss"]])
+    assert f"input rotor_speed = {speed!r} rad/s is invalid: valid range [0, 104720] rad/s" in msg
+    _, msg = a(DISCARD, "doStep", 2e-5, 1e-5)
+    assert "discarded" in msg and f"rotor_speed = {speed!r} rad/s is invalid" in msg
+    a(OK, "getReal", [a.vr["ring.x"]])  # a state: it does not depend on the input
+    np.testing.assert_array_equal(_run_bearing(a, 2, 2), _run_bearing(b, 2, 2))
+    e = Host(built / "fmus" / "EngineTorque.fmu", "range_engine", tmp_path)
+    e.start()
+    e.set("setReal", ["rotor_speed"], [speed])
+    _, msg = e(DISCARD, "getReal", [e.vr["drive_torque"]])
+    assert f"input rotor_speed = {speed!r} rad/s is invalid" in msg
+    judge(a, b, e)
+
+
+def test_an_unwritable_record_folder_is_named(built, tmp_path):
+    """The turbocharger FMU's record_folder where nothing can be written: fmi2Error naming the parameter (the message
+    was "[Errno 2] No such file or directory: '/proc/x'" alone)."""
+    h = Host(built / "fmus" / "FloatingRingTurbocharger.fmu", "record", tmp_path)
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    h.set("setString", ["record_folder"], ["/proc/x"])
+    _, msg = h(ERROR, "exitInitializationMode")
+    assert "record_folder = '/proc/x' cannot be written: No such file or directory" in msg, msg
+    judge(h)
+
+
+def test_a_skipped_step_is_discarded_naming_the_time_the_state_is_at(built, tmp_path):
+    """doStep from t = 5 s of a turbocharger FMU at t = 0: Discard, and the message says the state stays at 0 s (it
+    said 'stays at t = 5 s', where it never was)."""
+    h = Host(built / "fmus" / "FloatingRingTurbocharger.fmu", "skip", tmp_path)
+    h.start()
+    _, msg = h(DISCARD, "doStep", 5.0, 1e-5)
+    assert "doStep from t = 5 s by 1e-05 s discarded, the state stays at t = 0 s" in msg, msg
+    h(OK, "doStep", 0.0, 1e-5)
+    judge(h)
+
+
+def test_supply_inputs_declare_the_thermal_models_range(built, tmp_path):
+    """The oil supply inputs' max is the thermal model's (473.15 K, 2e6 Pa; it was none, so 1e4 K was declared
+    valid), and a value beyond it discards the step naming that range."""
+    h = _bearing(built, "supply", tmp_path)
+    v = {x.name: x for x in h.md.modelVariables}
+    assert (v["oil_supply_temperature"].min, v["oil_supply_temperature"].max) == ("243.15", "473.15")
+    assert float(v["oil_supply_pressure"].max) == 2e6
+    h.start(strings={"oil": "SAE 5W-30"})
+    h.set("setReal", JOURNAL, _journal_inputs(0))
+    h.set("setReal", ["oil_supply_temperature"], [1e4])
+    _, msg = h(DISCARD, "doStep", 0.0, 1e-5)
+    assert "input oil_supply_temperature = 10000.0 K is invalid: valid range [243.15, 473.15] K" in msg, msg
+    judge(h)
+
+
+@pytest.mark.parametrize("name, value, words", [
+    ("thermal.speed_max", 1e12, "thermal.speed_max = 1000000000000.0 rad/s is invalid: valid range (0, 104720] rad/s"),
+    ("static_load", 1e9, "the thermal table for oil = 'SAE 5W-30', static_load = 1000000000.0 N, "
+                         "thermal.speed_min ... speed_max = 1047.2 ... 26179.9 rad/s cannot be made: "),
+])
+def test_thermal_parameters_a_table_cannot_be_made_for_are_named(built, tmp_path, name, value, words):
+    """trust5: the bearing FMU's thermal table refused 1e12 rad/s as 'speed_rpm = np.float64(1.99e11) rpm', and a
+    static load it finds no equilibrium for by the ring-speed root search alone, naming neither parameter."""
+    h = _bearing(built, "thermal_params", tmp_path)
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    h.set("setString", ["oil"], ["SAE 5W-30"])
+    h.set("setReal", [name], [value])
+    _, msg = h(ERROR, "exitInitializationMode")
+    assert words in msg, msg
+    judge(h)

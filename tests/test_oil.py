@@ -123,12 +123,16 @@ def test_oil_table_by_name_or_numbers_and_round_trip(tmp_path):
     text = (tmp_path / "tc.toml").read_text().split("[oil]")[0] + '[oil]\nname = "SAE 0W-20"\n'
     (tmp_path / "named.toml").write_text(text)
     assert frb.load_system(tmp_path / "named.toml").oil is OILS["SAE 0W-20"]
+    assert oil_from_dict(OILS["SAE 5W-30"].to_dict()) == OILS["SAE 5W-30"]  # a named oil's own numbers: accepted
 
 
 @pytest.mark.parametrize("table, message", [
     ({"name": "SAE 99W-99"}, "oil: oil name = 'SAE 99W-99' is unknown; known oils: SAE 0W-20"),
     ({"nu40_m2_s": 46e-6}, "oil: lacks nu100_m2_s, density15_kg_m3"),
     ({"nu40": 46e-6}, "unknown key 'nu40' in oil"),
+    # trust5: a known oil's name over other numbers was accepted, and its results labelled with that name
+    ({"name": "SAE 5W-30", "nu40_m2_s": 60e-6, "nu100_m2_s": 11e-6, "density15_kg_m3": 852.0},
+     r"name = 'SAE 5W-30' is a known oil, but the table gives nu40_m2_s = 6e-05 \(not 6.4e-05\)"),
 ])
 def test_bad_oil_tables_are_refused(table, message):
     with pytest.raises(ParameterError, match=message):

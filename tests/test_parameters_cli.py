@@ -174,6 +174,20 @@ BAD_FILES = [
      "bearings[1].outer: film clearance = -3.6e-05 m is invalid: valid range is a finite real number > 0 m"),
     ("shaft value out of range", ("length = 0.039", "length = 0.0", 0),
      "rotor.shaft[1]: shaft element length = 0.0 m is invalid"),
+    # trust5: accepted before (repeated names collided in unbalances, results and FMU variables; a units note of
+    # "mm" was read as SI; gravity 1e9 ran where the FMUs refuse 1e3)
+    ("repeated disc name", ('name = "compressor_wheel"', 'name = "turbine_wheel"', 0),
+     "disc names = ['turbine_wheel', 'turbine_wheel'] are invalid: 'turbine_wheel' is used more than once"),
+    ("repeated bearing name", ('name = "compressor"', 'name = "turbine"', 0),
+     "bearing names = ['turbine', 'turbine'] are invalid: 'turbine' is used more than once"),
+    ("empty disc name", ('name = "compressor_wheel"', 'name = ""', 0),
+     "disc name = '' is invalid: give each disc a non-empty name"),
+    ("empty bearing name", ('name = "turbine"', 'name = " "', 0),
+     "bearing name = ' ' is invalid: give each bearing a non-empty name"),
+    ("units other than SI", ('units = "SI: m, kg, s, Pa, Pa s, kg m^2"', 'units = "mm"', 0),
+     "units = 'mm' is invalid: a system file is in SI units"),
+    ("gravity above 100 g", ("gravity = 9.81", "gravity = 1e9", 0),
+     "gravity = 1000000000.0 m/s^2 is invalid: valid range 0 ... 1000 m/s^2"),
 ]
 
 
@@ -293,3 +307,15 @@ def test_api_refuses_speeds_above_the_model_limit():
     with pytest.raises(frb.ParameterError, match=r"valid range 0 < speed <= 1e\+06 rpm"):
         frb.equilibrium(tc, "J", 2e6)
     assert frb.equilibrium(tc, "J", 250e3).bearings[0].ring_speed > 0  # the verified range still works
+
+
+def test_a_key_given_twice_in_a_json_system_file_is_refused(tmp_path):
+    """trust5: json keeps the last of two equal keys without a word ({"gravity": 9.81, "gravity": 0.0} ran without
+    gravity); TOML refuses a repeated key itself."""
+    path = frb.turbocharger().save(tmp_path / "tc.json")
+    text = path.read_text()
+    assert '"gravity": 9.81' in text
+    path.write_text(text.replace('"gravity": 9.81', '"gravity": 9.81, "gravity": 0.0', 1))
+    with pytest.raises(frb.ParameterError, match=r"system file '.*tc.json': key 'gravity' is given twice in one "
+                                                 r"table \(values 9.81 and 0.0\); give it once"):
+        frb.load_system(path)

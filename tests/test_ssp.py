@@ -210,3 +210,32 @@ def test_a_master_that_fails_or_is_dropped_leaves_no_extraction(tmp_path, own_tm
     del m
     gc.collect()
     assert not root.exists() and _leftovers(own_tmp) == []
+
+
+# ----------------------------------------------------------------- broken connections (trust5)
+JX = '<ssd:Connection startElement="rotor" startConnector="turbine_bearing.journal.x" endElement="turbine" ' \
+     'endConnector="journal.x" />'
+
+
+@pytest.mark.parametrize("new, message", [
+    ("", "the connected output turbine.force.x depends on the input turbine.journal.x, which no connection feeds "
+         "(it would keep its initial value over the whole run); connect it"),
+    (JX.replace('endConnector="journal.x"', 'endConnector="journal.y"'),
+     "the input turbine.journal.y is the end of 2 connections (from rotor.turbine_bearing.journal.x, "
+     "rotor.turbine_bearing.journal.y); an input takes one connection"),
+], ids=["dropped", "fed twice"])
+def test_cosim_refuses_an_ssp_with_an_unfed_or_doubly_fed_input(built, tmp_path, capsys, new, message):
+    """A dropped journal.x connection (the turbine bearing's journal stayed at its initial x) or journal.x wired to
+    journal.y (journal.y fed twice, journal.x by nothing): both ran and 'finished'. Now exit 2 before the folder."""
+    from frbmodel.cli import main
+
+    d = tmp_path / "ssp"
+    with zipfile.ZipFile(built / "turbocharger.ssp") as z:
+        z.extractall(d)
+    for ssd in d.glob("*.ssd"):
+        _edit(ssd, JX, new)
+    out = tmp_path / "out"
+    assert main(["cosim", str(d), "--stop-time", "1e-4", "--no-figure", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err, err
+    assert not out.exists()

@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 import warnings
+import zipfile
 
 import numpy as np
 import pytest
@@ -802,3 +803,24 @@ def test_a_run_too_short_for_figures_says_so(tmp_path, capsys):
     assert main(["runup", "--duration", "1e-3", "--out", str(tmp_path / "short")]) == 0
     assert "no figures: 21 samples recorded, the spectrogram figures need at least 64" in capsys.readouterr().out
     assert not list((tmp_path / "short").glob("composite_*"))
+
+
+def test_linearize_names_a_system_ssp_and_the_users_ssp(built, tmp_path, capsys):
+    """trust5: `frb linearize engine_turbocharger.ssp` was refused for its 1 ms macro step, naming
+    --unvalidated-step (an option linearize does not have); an SSP broken at set-up was named by its temporary
+    linearization copy."""
+    out = tmp_path / "out"
+    assert main(["linearize", str(built / "engine_turbocharger.ssp"), "--speed-rpm", "60000", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "runs the whole-turbocharger FMU" in err and "turbocharger.ssp of frb build-fmus" in err, err
+    assert "--unvalidated-step" not in err and not out.exists()
+    d = tmp_path / "ssp"
+    with zipfile.ZipFile(built / "turbocharger.ssp") as z:
+        z.extractall(d)
+    for ssd in d.glob("*.ssd"):
+        ssd.write_text(ssd.read_text().replace('<ssd:Connection startElement="rotor" startConnector="turbine_bearing.'
+                                               'journal.x" endElement="turbine" endConnector="journal.x" />', ""))
+    assert main(["linearize", str(d), "--speed-rpm", "60000", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{d}: the connected output turbine.force.x depends on the input turbine.journal.x" in err, err
+    assert "frb_linearization_" not in err

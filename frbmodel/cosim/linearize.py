@@ -25,6 +25,7 @@ from .fmu_system import rotor_system_of_fmu
 from .loader import model_identifier
 from .master import CosimStopped, Master, operating_point_overrides, system_from_parameters
 from .ssp import read_ssp
+from .system_master import is_system_ssp
 
 
 def _matrix(fmu, name, nr, nc):
@@ -127,7 +128,12 @@ def linearize(ssp, speed_rpm, method="J", parameter_set="co36"):
         raise ParameterError(f"method = {method!r}: the FMU linearization covers the film methods with ring DoFs "
                              "(F, G, I, J)")
     check_speed("speed_rpm", speed_rpm)
+    if Path(ssp).exists() and is_system_ssp(ssp):  # (it was refused for its 1 ms step, naming --unvalidated-step)
+        raise ParameterError(f"SSP {str(ssp)!r} runs the whole-turbocharger FMU (a system SSP such as "
+                             "engine_turbocharger.ssp); the linearization interconnects the rotor and bearing FMUs: "
+                             "give their SSP (turbocharger.ssp of frb build-fmus)")
     master = Master(linearization_ssp(ssp), parameter_set)
+    master.ssp_path = ssp  # (its messages name the user's SSP, not the linearization copy in a temporary folder)
     system = master.system
     ov = operating_point_overrides(system, speed_rpm, method=m.letter)
     for comp in master.ssp.components:

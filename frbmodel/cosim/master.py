@@ -30,6 +30,8 @@ from ..core.progress import simulation_bar
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
 from ..linear.equilibrium import equilibrium
 from ..nonlinear.recorder import Recorder, RunupResult, RunupSchema
+from ..nonlinear.runup import MAX_SAMPLES, check_drive_torque_value
+from ..physics.dynamics import rotor_polar_inertia
 from ..physics.film import Film
 from ..system.parameters import load_system
 from ..system.presets import turbocharger
@@ -76,6 +78,17 @@ def _checked_profile(profile):
                              "prescribed speed profile; for a torque-driven rotor use the rotor parameter "
                              "speed_source = 'torque' (frb cosim --speed-source torque)")
     return profile
+
+
+def check_whole_steps(stop_time, step_size, what="stop time"):
+    """Raise :class:`ParameterError` unless ``stop_time`` is a whole number of fixed macro steps ``step_size`` [s]
+    (to 1e-9 of a step): the run takes round(T / H) steps, so it ended short of or beyond the stop time it reported."""
+    n = stop_time / step_size
+    if abs(n - round(n)) > 1e-6:
+        lo, hi = math.floor(n) * step_size, math.ceil(n) * step_size
+        raise ParameterError(f"{what} = {stop_time!r} s is not a whole number of macro steps of {step_size!r} s "
+                             f"({n:.6g} steps): the run would end at {round(n) * step_size:.9g} s; valid: a multiple "
+                             f"of the step as --stop-time, e.g. {lo:.9g} or {hi:.9g} s (or --adaptive)")
 
 
 def _profile_stop_time(profile, stop_time):
@@ -175,6 +188,7 @@ class Master(FmuHost):
         self.fmus, self._tmp = {}, None
         self.profile = _checked_profile(profile)
         self.ssp = read_ssp(ssp)
+        what = "stop time" if stop_time is not None or profile is None else "stop time (the speed profile's last time)"
         try:
             if self.profile is not None:
                 stop_time = _profile_stop_time(self.profile, stop_time)
@@ -183,6 +197,8 @@ class Master(FmuHost):
             self.adaptive = bool(adaptive)
             if self.adaptive:
                 self._configure_adaptive(tolerance, min_step, max_step, unvalidated_step)
+            else:
+                check_whole_steps(self.stop_time, self.step_size, what)
         except BaseException:
             self.ssp.close()
             raise
@@ -207,6 +223,9 @@ class Master(FmuHost):
                                  "Use --unvalidated-step (unvalidated_step=True) to run it anyway")
         self.rollback, self.max_halvings, self.trace = bool(rollback), int(max_halvings), trace
         self.system = system_from_parameters(self.params, self._rotor_system())
+        torque = self.params.get("rotor", {}).get("drive_torque")
+        if torque is not None:  # (the rotor FMU would discard the first step: a folder with one sample, exit 3)
+            check_drive_torque_value("drive torque", torque[1], rotor_polar_inertia(self.system.rotor))
         self.fmi_time_s = 0.0
         self.fmi_calls = {}  # {function: [calls, wall time [s]]} over all FMU instances, collected at close()
         self.rejected_steps = 0
@@ -269,6 +288,7 @@ class Master(FmuHost):
             raise ParameterError(f"{self.ssp_path}: the {BEARING_FMU} components {found} do not match the rotor "
                                  f"system's bearings {names}")
         self.bearings = [self.fmus[n] for n in names]
+        self._check_fed_inputs()
         self._plan_exchange()
         self.schema = RunupSchema.from_system(self.system)
         self._rec_rotor = self.rotor.vr(["rotor_speed"] + [f"{n}_bearing.journal.{q}" for n in names for q in "xy"] +
@@ -285,6 +305,22 @@ class Master(FmuHost):
         if self.adaptive:
             self._plan_defect()
         return self
+
+    def _check_fed_inputs(self):
+        """Refuse an SSP that connects an output whose value depends directly on an input that no connection feeds
+        (e.g. a bearing's force without its journal.x connection: the input kept its start value, the parameter
+        set's initial journal position, and the run 'finished' with that journal fixed there)."""
+        fed = {(e_el, e_c) for _, _, e_el, e_c in self.ssp.connections}
+        read = {(s_el, s_c) for s_el, s_c, _, _ in self.ssp.connections}
+        for f in self.fmus.values():
+            for out in f.md.outputs:
+                if (f.name, out.variable.name) not in read:
+                    continue
+                for d in out.dependencies or ():
+                    if d.causality == "input" and (f.name, d.name) not in fed:
+                        raise ParameterError(f"{self.ssp_path}: the connected output {f.name}.{out.variable.name} "
+                                             f"depends on the input {f.name}.{d.name}, which no connection feeds (it "
+                                             "would keep its initial value over the whole run); connect it")
 
     def _plan_exchange(self):
         """Group the SSP connections into two phases (rotor -> bearings, then bearings -> rotor, so that the
@@ -662,15 +698,24 @@ class Master(FmuHost):
         :class:`RunupResult` (``meta``: wall time, time inside FMI calls, steps taken and rejected); raises
         :class:`CosimStopped` (with ``.result``) when an FMU fails."""
         H, T = self.step_size, self.stop_time
+        rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
+        if T * rate > MAX_SAMPLES:  # (the recorder holds them in memory: 2e8 samples asked for 39 GB)
+            raise ParameterError(f"stop time = {T:g} s is invalid at output_rate_hz = {rate:g} Hz: {T * rate:.3g} "
+                                 f"samples, valid range <= {MAX_SAMPLES:.0e} samples (stop time <= "
+                                 f"{MAX_SAMPLES / rate:g} s)")
         every = max(1, int(round(1.0 / (H * output_rate_hz))))
         n_steps = int(round(T / H))
         t_wall = time.perf_counter()
         status, message = "finished", ""
+        if not self.fmus:  # before the recorder writes anything: a refused SSP leaves no result files
+            try:
+                self.setup()
+            except BaseException:
+                self.close()
+                raise
         with Recorder(RunupSchema.from_system(self.system), n_steps // every + 2, out_dir,
                       self.meta(1.0 / (H * every))) as rec:
             try:
-                if not self.fmus:
-                    self.setup()
                 self.initialize()
                 rec.append(self.sample(0.0))
                 with deferred_signals() as signals, simulation_bar(T, "cosim", progress) as bar:

@@ -576,6 +576,19 @@ def _structure(ssd_root, folder, ssd_name):
     return comps, cons
 
 
+def _check_single_feeds(cons, ssd_name):
+    """ParameterError when an input is the end of more than one connection (a second one overwrote the first)."""
+    sources = {}
+    for s_el, s_c, e_el, e_c in cons:
+        sources.setdefault((e_el, e_c), []).append(f"{s_el}.{s_c}")
+    fed_twice = {k: v for k, v in sources.items() if len(v) > 1}
+    if fed_twice:
+        (e_el, e_c), srcs = next(iter(fed_twice.items()))
+        raise ParameterError(f"{ssd_name}: the input {e_el}.{e_c} is the end of {len(srcs)} connections (from "
+                             f"{', '.join(srcs)}); an input takes one connection ({len(fed_twice)} inputs are fed "
+                             "more than once)")
+
+
 def _extract(path):
     """Temporary folder with the extracted archive ``path`` (deleted again if the extraction fails)."""
     tmp = Path(tempfile.mkdtemp(prefix="frb_ssp_"))
@@ -663,6 +676,7 @@ def _read_folder(folder, source, require_fmus):
             raise ParameterError(f"SSP {str(source)!r}: {f.name} binds parameter set {name!r}, which another "
                                  "SSD binds already")
         sets[name], files[name] = values, paths
+    _check_single_feeds(cons, DEFAULT_SSD)
     step = stop = None
     fsa = root.find(".//osp:FixedStepAlgorithm", NS)
     if fsa is not None:

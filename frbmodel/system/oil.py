@@ -265,6 +265,14 @@ def oil_from_dict(d, where="oil") -> Oil:
         if missing:
             raise ParameterError(f"lacks {', '.join(missing)}: give name = one of {', '.join(OILS)}, or the numbers "
                                  f"({', '.join(OIL_KEYS[:3])} required)")
-        return Oil(**d)
+        oil = Oil(**d)
+        known = OILS.get(oil.name)
+        if known is not None and oil != known:
+            diff = [f"{k} = {v!r} (not {known.to_dict()[k]!r})" for k, v in oil.to_dict().items()
+                    if v != known.to_dict()[k]]
+            raise ParameterError(f"name = {oil.name!r} is a known oil, but the table gives {', '.join(diff)}: its "
+                                 f"results would be labelled {oil.name!r}; give another name for these numbers, or "
+                                 "the name alone")
+        return oil
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None

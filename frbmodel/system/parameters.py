@@ -25,7 +25,10 @@ import numpy as np
 from ..core.errors import ParameterError, check_positive
 from .films import Film, check_film_thickness, check_model
 from .oil import Oil, oil_from_dict
-from .rotor import GRAVITY, Disc, Rotor, ShaftElement
+from .rotor import GRAVITY, Disc, Rotor, ShaftElement, check_names
+
+#: the largest gravitational acceleration a system takes [m/s²] (100 g; the FMUs' parameter gravity has the same)
+MAX_GRAVITY = 1e3
 
 # ------------------------------------------------------------------ the schema of a system file
 REAL, INTEGER, STRING = "real number", "integer", "string"
@@ -295,6 +298,10 @@ class Turbocharger:
         if len(self.bearings) != 2:
             raise ParameterError(f"number of bearings = {len(self.bearings)} is invalid: exactly 2 are supported")
         object.__setattr__(self, "gravity", check_positive("gravity", self.gravity, "m/s^2", allow_zero=True))
+        if self.gravity > MAX_GRAVITY:
+            raise ParameterError(f"gravity = {self.gravity!r} m/s^2 is invalid: valid range 0 ... {MAX_GRAVITY:g} "
+                                 "m/s^2 (100 g)")
+        check_names("bearing", [b.name for b in self.bearings])
         check_model(self.film_model)
         nodes = [b.node for b in self.bearings]
         for b in self.bearings:
@@ -378,6 +385,10 @@ class Turbocharger:
             its place (``bearings[0].outer.clearance``).
         """
         check_section(d, SYSTEM)
+        if not d.get("units", "SI").lstrip().upper().startswith("SI"):
+            raise ParameterError(f"units = {d['units']!r} is invalid: a system file is in SI units (m, kg, s, Pa, "
+                                 "Pa s, kg m^2), whatever this note says; give every value in SI and leave units out "
+                                 "or write units = \"SI\"")
         r = d["rotor"]
         shaft = [_build(f"rotor.shaft[{i}]", ShaftElement, **e) for i, e in enumerate(r["shaft"])]
         discs = [_build(f"rotor.discs[{i}]", Disc, **x) for i, x in enumerate(r.get("discs", []))]
@@ -489,13 +500,27 @@ def load_system(path) -> Turbocharger:
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError(f"system file = {str(path)!r} cannot be read: {exc}") from None
     try:
-        d = json.loads(text) if suffix == ".json" else tomllib.loads(text)
+        d = json.loads(text, object_pairs_hook=_unique_keys) if suffix == ".json" else tomllib.loads(text)
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
         raise _syntax_error(path, text, exc) from None
+    except ParameterError as exc:
+        raise ParameterError(f"system file {str(path)!r}: {exc}") from None
     try:
         return Turbocharger.from_dict(d)
     except ParameterError as exc:
         raise ParameterError(f"system file {str(path)!r}: {exc}") from None
+
+
+def _unique_keys(pairs) -> dict:
+    """A JSON object as a dict, or a ParameterError for a key given twice (json keeps the last one silently; TOML
+    refuses a repeated key itself)."""
+    d = {}
+    for k, v in pairs:
+        if k in d:
+            raise ParameterError(f"key {k!r} is given twice in one table (values {d[k]!r:.40} and {v!r:.40}); give "
+                                 "it once")
+        d[k] = v
+    return d
 
 
 def _syntax_error(path, text, exc) -> ParameterError:

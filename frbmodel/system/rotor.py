@@ -219,6 +219,19 @@ class Disc:
         return asdict(self)
 
 
+def check_names(what, names):
+    """Raise :class:`ParameterError` unless ``names`` are distinct non-empty strings: unbalances, result columns
+    and FMU variables are named by them (a repeated name made the FMU's variable names collide)."""
+    for n in names:
+        if not isinstance(n, str) or not n.strip():
+            raise ParameterError(f"{what} name = {n!r} is invalid: give each {what} a non-empty name")
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise ParameterError(f"{what} names = {list(names)} are invalid: {', '.join(map(repr, repeated))} is used "
+                             f"more than once; each {what} needs its own name (unbalances, results and FMU variables "
+                             "are named by it)")
+
+
 @dataclass(frozen=True)
 class Rotor:
     """Shaft elements in series (node i to node i+1) plus rigid discs.
@@ -260,6 +273,7 @@ class Rotor:
         for d in self.discs:
             if d.node >= self.n_nodes:
                 raise ParameterError(f"disc '{d.name}' node = {d.node} is invalid: valid range 0..{self.n_nodes - 1}")
+        check_names("disc", [d.name for d in self.discs])
 
     @property
     def n_nodes(self) -> int:
