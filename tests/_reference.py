@@ -83,3 +83,15 @@ def table2_bearing_loads(gravity=9.81):
     moment = sum(m * gravity * (z - 0.033) for m, z in pieces)  # weight moment about the turbine bearing
     w2 = moment / 0.039  # compressor reaction from the moment balance
     return np.array([total - w2, w2])
+
+
+def with_viscosities_by_hand(system, table):
+    """``system`` with each bearing's inner and outer film viscosity [Pa s] copied by hand from the rows of a
+    thermal_losses ``table`` (one row per bearing, in order): the "frozen" system a thermal analysis at that
+    speed must equal."""
+    from dataclasses import replace
+
+    bearings = tuple(replace(b, inner=replace(b.inner, viscosity=float(r["inner viscosity [Pa s]"])),
+                             outer=replace(b.outer, viscosity=float(r["outer viscosity [Pa s]"])))
+                     for b, (_, r) in zip(system.bearings, table.iterrows()))
+    return replace(system, bearings=bearings)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _reference import with_viscosities_by_hand
 
 import frbmodel as frb
 from frbmodel.cli import main
@@ -48,16 +49,12 @@ def test_each_speed_of_the_thermal_campbell_is_the_constant_viscosity_campbell_o
     copied by hand from the thermal_losses table at that speed: the eigenvalues (sorted by frequency: the mode
     tracking over a grid numbers the modes differently from a single speed) equal to 1e-12 relative (the same
     matrices; the stacked eigen-solve of two speeds against one speed alone may round differently)."""
-    from dataclasses import replace
 
     sup = OilSupply(OIL, 343.15, 2e5)
     cd = frb.campbell(TC, "J", np.array([60e3, 180e3]), oil_supply=sup)
     for i, rpm in enumerate((60e3, 180e3)):
         tab = thermal_losses(TC, rpm, OIL, 343.15, 2e5)
-        bearings = tuple(replace(b, inner=replace(b.inner, viscosity=r["inner viscosity [Pa s]"]),
-                                 outer=replace(b.outer, viscosity=r["outer viscosity [Pa s]"]))
-                         for b, (_, r) in zip(TC.bearings, tab.iterrows()))
-        ref = frb.campbell(replace(TC, bearings=bearings), "J", np.array([rpm]))
+        ref = frb.campbell(with_viscosities_by_hand(TC, tab), "J", np.array([rpm]))
         lam, lam_ref = (x[np.isfinite(x)] for x in (cd.eigenvalues[i], ref.eigenvalues[0]))
         lam, lam_ref = lam[np.argsort(lam.imag)], lam_ref[np.argsort(lam_ref.imag)]
         assert lam.size == lam_ref.size > 10

@@ -4,10 +4,10 @@ Hopf point of the system frozen at that operating point; a limit cycle with an o
 system whose viscosities are copied in by hand; a continuation with an oil supply integrates at every speed the
 by-hand system of that speed and starts at the thermal Hopf point."""
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
+from _reference import with_viscosities_by_hand
 from scipy.optimize import brentq
 
 import frbmodel as frb
@@ -28,11 +28,8 @@ SUPPLY = OilSupply(OIL, 363.15)
 
 def _by_hand(speed_rpm):
     """Table 2 with the four film viscosities of thermal_losses at ``speed_rpm`` copied in by hand."""
-    tab = thermal_losses(TC, speed_rpm, OIL, SUPPLY.supply_temperature_K, SUPPLY.supply_pressure_Pa)
-    bearings = tuple(replace(b, inner=replace(b.inner, viscosity=r["inner viscosity [Pa s]"]),
-                             outer=replace(b.outer, viscosity=r["outer viscosity [Pa s]"]))
-                     for b, (_, r) in zip(TC.bearings, tab.iterrows()))
-    return replace(TC, bearings=bearings)
+    return with_viscosities_by_hand(TC, thermal_losses(TC, speed_rpm, OIL, SUPPLY.supply_temperature_K,
+                                                        SUPPLY.supply_pressure_Pa))
 
 
 @pytest.fixture(scope="module")

@@ -3,10 +3,10 @@ operating point is solved with the method's own equilibrium, so with eq. (6) (me
 the films' viscosity ratio and falls with speed as the inner film heats (constant 0.199 at Table 2's viscosities),
 the energy balance closes for every method, and a method's thermal Campbell diagram is its Campbell diagram of the
 by-hand system at each speed's viscosities."""
-from dataclasses import replace
 
 import numpy as np
 import pytest
+from _reference import with_viscosities_by_hand
 
 import frbmodel as frb
 from frbmodel.linear.thermal import OilSupply, thermal_losses
@@ -55,10 +55,7 @@ def test_a_thermal_campbell_of_method_f_is_the_campbell_of_its_by_hand_system():
     sup = OilSupply(OIL, 333.15)
     cd = frb.campbell(TC, "F", [120e3], whirl=False, oil_supply=sup)
     tab = thermal_losses(TC, [120e3], OIL, 333.15, method="F")
-    bearings = tuple(replace(b, inner=replace(b.inner, viscosity=r["inner viscosity [Pa s]"]),
-                             outer=replace(b.outer, viscosity=r["outer viscosity [Pa s]"]))
-                     for b, (_, r) in zip(TC.bearings, tab.iterrows()))
-    ref = frb.campbell(replace(TC, bearings=bearings), "F", [120e3], whirl=False)
+    ref = frb.campbell(with_viscosities_by_hand(TC, tab), "F", [120e3], whirl=False)
     np.testing.assert_allclose(cd.frequencies_hz, ref.frequencies_hz, rtol=1e-10)
     np.testing.assert_allclose(cd.damping, ref.damping, rtol=1e-8, atol=1e-12)
     plain = frb.campbell(TC, "F", [120e3], whirl=False)

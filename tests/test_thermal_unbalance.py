@@ -3,11 +3,11 @@ against the constant-viscosity response of a system with that operating point's 
 refined 1X crossings and response peaks at the temperatures of their own speed, and without an oil the stored numbers
 of the code before this change bit for bit."""
 import json
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from _reference import with_viscosities_by_hand
 
 import frbmodel as frb
 from frbmodel.cli import main
@@ -31,11 +31,8 @@ def thermal_response():
 
 def _by_hand(speed_rpm):
     """Table 2 with the four film viscosities of thermal_losses at ``speed_rpm`` copied in by hand."""
-    tab = thermal_losses(TC, speed_rpm, OIL, SUPPLY.supply_temperature_K, SUPPLY.supply_pressure_Pa)
-    bearings = tuple(replace(b, inner=replace(b.inner, viscosity=r["inner viscosity [Pa s]"]),
-                             outer=replace(b.outer, viscosity=r["outer viscosity [Pa s]"]))
-                     for b, (_, r) in zip(TC.bearings, tab.iterrows()))
-    return replace(TC, bearings=bearings)
+    return with_viscosities_by_hand(TC, thermal_losses(TC, speed_rpm, OIL, SUPPLY.supply_temperature_K,
+                                                        SUPPLY.supply_pressure_Pa))
 
 
 def test_without_an_oil_the_unbalance_response_is_the_stored_one_bit_for_bit():

@@ -63,6 +63,15 @@ def _mode_rows(cd, t_s):
     return rows
 
 
+def _supplies(oil, supply_temperatures_K, supply_pressure_Pa, model):
+    """One OilSupply per supply temperature [K], every value checked before any work (a non-empty list)."""
+    temps = np.atleast_1d(np.asarray(supply_temperatures_K, dtype=float))
+    if temps.ndim != 1 or temps.size == 0:
+        raise ParameterError(f"supply_temperatures_K = {supply_temperatures_K!r} is invalid: a non-empty list of "
+                             "temperatures [K]")
+    return [OilSupply(oil, t, supply_pressure_Pa, model) for t in temps]
+
+
 def onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURES_K, supply_pressure_Pa=SUPPLY_PRESSURE_PA,
                      model=None, speeds_rpm=None, progress=False):
     """Linear whirl onsets of ``system`` at each oil supply temperature, with the thermal model at every speed.
@@ -107,11 +116,7 @@ def onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURES_K, s
     import pandas as pd
 
     check_system(system)
-    temps = np.atleast_1d(np.asarray(supply_temperatures_K, dtype=float))
-    if temps.ndim != 1 or temps.size == 0:
-        raise ParameterError(f"supply_temperatures_K = {supply_temperatures_K!r} is invalid: a non-empty list of "
-                             "temperatures [K]")
-    supplies = [OilSupply(oil, t, supply_pressure_Pa, model) for t in temps]  # every value checked before any work
+    supplies = _supplies(oil, supply_temperatures_K, supply_pressure_Pa, model)
     const = film_onset_speeds(system)
     films, modes = [], []
     for sup in supplies:
@@ -160,13 +165,8 @@ def runup_onsets_vs_supply(system, oil, supply_temperatures_K=SUPPLY_TEMPERATURE
     """
     import pandas as pd
 
-
     check_system(system)
-    temps = np.atleast_1d(np.asarray(supply_temperatures_K, dtype=float))
-    if temps.ndim != 1 or temps.size == 0:
-        raise ParameterError(f"supply_temperatures_K = {supply_temperatures_K!r} is invalid: a non-empty list of "
-                             "temperatures [K]")
-    supplies = [OilSupply(oil, t, supply_pressure_Pa, model) for t in temps]  # every value checked before any run
+    supplies = _supplies(oil, supply_temperatures_K, supply_pressure_Pa, model)
     lo, hi = (float(v) for v in speed_range_rpm)
     check_output_rate(RUNUP_RATE_HZ, duration_s)  # (1e-9 s was refused by the first run, after the others' work)
     frames = []
