@@ -1,5 +1,5 @@
 """Housing motion (base excitation) in the one monolithic model: the equations in the frame of a translating rigid
-bearing housing (docs/theory/housing.md). Checks: a housing at rest is the former fixed-housing model bit for bit
+bearing housing (docs/theory/housing.md). Checks: a housing at rest is the former fixed-housing model to round-off
 (stored output of the commit before the housing terms, tests/reference/make_fixed_housing.py); a housing accelerating
 upwards by g without gravity is gravity with a fixed housing; the right-hand side's inertial load is −M T a_h on the
 rotor and −m a_h on the rings, against an independent assembly with numpy."""
@@ -16,17 +16,37 @@ REFERENCE = Path(__file__).resolve().parent / "reference" / "fixed_housing.json"
 
 
 @pytest.mark.parametrize("case", ["ramp", "torque"])
-def test_housing_at_rest_is_the_former_fixed_housing_model_bit_for_bit(case):
+def test_housing_at_rest_is_the_former_fixed_housing_model(case):
     """dy/dt at 9 states of the former model (commit 5fe3afe, tests/reference/make_fixed_housing.py) equals the
-    present right-hand side with the housing at rest, exactly (the same floating-point operations)."""
+    present right-hand side with the housing at rest, to round-off. It was bit for bit until the compiled sums were
+    allowed to be reordered (frbmodel.core.linalg.SUM_FLAGS) and the film force kernel computed cos α, sin α without
+    atan2. The rotor's acceleration rows are held to 2 (n − 1) ε_mach Σ|terms| + 1e-12 |M⁻¹| |f| (a sum of n terms
+    errs by at most (n − 1) ε Σ|terms| in any order, n = 48: 16 DoFs × 3 matrices; the film forces in f agree with
+    their former arithmetic to 1e-12 over 20 000 random states); measured 0.61 ε Σ|terms|. Every other row is held to
+    1e-11 of its largest value (the rings' rows are differences of two films' forces and torques); measured 3e-12.
+    A housing term at rest, or any other change of the equations, would be far larger."""
     ref = json.loads(REFERENCE.read_text())["cases"][case]
     profile, unb = {"ramp": (SpeedProfile.ramp(30e3, 32e3, 4e-3), [Unbalance("turbine_wheel", 2e-6, 0.3)]),
                     "torque": (SpeedProfile.torque(0.05, 40e3, 4e-3), [])}[case]
-    p = build_problem(frb.turbocharger(outer_clearance=36e-6), profile, "short", unb)
+    tc = frb.turbocharger(outer_clearance=36e-6)
+    p = build_problem(tc, profile, "short", unb)
     assert not p.housing_acc.any()
-    for t, y, want in zip(ref["t"], ref["y"], ref["dydt"]):
-        y = np.array(y)
-        np.testing.assert_array_equal(p.rhs(t, y, np.empty_like(y)), np.array(want))
+    n_r = p.n_rotor
+    _, mk, mg = tc.rotor.acceleration_matrices
+    minv, minv_k, minv_g = (np.abs(a) for a in tc.rotor.acceleration_matrices)
+    got = np.array([p.rhs(t, np.array(y), np.empty(len(y))).copy() for t, y in zip(ref["t"], ref["y"])])
+    want = np.array(ref["dydt"])
+    big = np.abs(want).max(axis=0)
+    for y, g, w in zip(np.array(ref["y"]), got, want):
+        q, qd, omega = y[:n_r], y[n_r:2 * n_r], w[2 * n_r + 10]
+        omega_dot = w[-1] if case == "torque" else (32e3 - 30e3) * np.pi / 30 / 4e-3
+        force = tc.rotor.M @ (w[n_r:2 * n_r] + mk @ q + mg @ (omega_dot * q + omega * qd))  # the nodal load
+        loads = minv @ np.abs(force)
+        terms = loads + minv_k @ np.abs(q) + minv_g @ (abs(omega_dot) * np.abs(q) + abs(omega) * np.abs(qd))
+        bound = 2 * 47 * np.finfo(float).eps * terms + 1e-12 * loads
+        np.testing.assert_array_less(np.abs(g[n_r:2 * n_r] - w[n_r:2 * n_r]), bound)
+        rest = np.r_[0:n_r, 2 * n_r:w.size]
+        np.testing.assert_array_less(np.abs(g[rest] - w[rest]), 1e-11 * big[rest] + 1e-300)
 
 
 def _rhs(problem, y, t=1e-3):

@@ -15,8 +15,14 @@ import math
 
 from numba import njit
 
+#: numba ``fastmath`` flags of the compiled loops of sums (matrix-vector products, LU, error norms): the compiler may
+#: reorder a sum and fuse a multiply-add, so the loop runs on vector registers (the 16-DoF rotor's acceleration in
+#: 0.11 µs instead of 0.33 µs, measured); never the flags that assume finite numbers, so NaN and inf checks stay
+#: valid. Results change at round-off only.
+SUM_FLAGS = {"reassoc": True, "contract": True}
 
-@njit(cache=True)
+
+@njit(cache=True, fastmath=SUM_FLAGS)
 def lu_factor(a, piv):
     """LU factorization with partial pivoting of the square matrix ``a``, in place: the unit lower factor below the
     diagonal, the upper factor on and above it; row ``k`` was interchanged with row ``piv[k]``. Returns False (and a
@@ -41,7 +47,7 @@ def lu_factor(a, piv):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def lu_solve(lu, piv, b):
     """Solve A x = b in place (``b`` becomes x) with the factors of :func:`lu_factor`."""
     n = lu.shape[0]

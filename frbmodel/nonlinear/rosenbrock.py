@@ -28,9 +28,9 @@ import numpy as np
 from numba import njit
 
 from ..core.errors import MAX_SPEED_RPM
-from ..core.linalg import lu_factor, lu_solve
+from ..core.linalg import SUM_FLAGS, lu_factor, lu_solve
 from ..physics.bearing import ring_rhs_kernel, ring_torque_kernel
-from ..physics.dynamics import film_data_at_speed, interp_uniform, monolithic_rhs
+from ..physics.dynamics import add_unbalance_forces, film_data_at_speed, interp_uniform, monolithic_rhs
 from ..physics.film import film_force_kernel
 from ..physics.losses import journal_torque_kernel
 
@@ -283,14 +283,34 @@ def _rotor_columns(jac, whole, n_r, minv_k, minv_g, omega, omega_dot):
 
 
 @njit(cache=True)
+def _angle_column(jac, y, omega, omega_dot, args):
+    """The rotation angle's column of :func:`jacobian`, exact: φ enters only the unbalance loads, whose derivative
+    ∂f/∂φ is the load at φ + π/2 (d/dφ (cos θ, sin θ) = (cos(θ + π/2), sin(θ + π/2))), so the column is
+    M⁻¹ ∂f/∂φ in the rotor's acceleration rows and zero elsewhere: no difference of the whole right-hand side (whose
+    q̈ rows cancel the large M⁻¹K q)."""
+    n_r = args[2]
+    minv = args[0][0]
+    c = 2 * n_r + 10
+    df = np.zeros(n_r)
+    add_unbalance_forces(df, y[c] + 0.5 * math.pi, omega, omega_dot, args[9], args[10], args[11])
+    for i in range(y.size):
+        jac[i, c] = 0.0
+    for i in range(n_r):
+        acc = 0.0
+        for k in range(n_r):
+            acc += minv[i, k] * df[k]
+        jac[n_r + i, c] = acc
+
+
+@njit(cache=True)
 def jacobian(t, y, f0, jac, work, yp, cols, scale, omega, omega_dot, args, films=False):
     """∂(dy/dt)/∂y of :func:`frbmodel.physics.dynamics.monolithic_rhs` into ``jac``: the rotor rows exactly (q' = q̇,
     q̇' = −(M⁻¹K + Ω̇ M⁻¹G) q − Ω M⁻¹G q̇ + ...) in every column, the bearings' journal, ring and ring-speed columns
-    added by differences of the bearing kernels (:func:`_bearing_columns`), the remaining columns of ``cols`` (the
-    rotation angle with unbalance, a torque-driven rotor speed) by forward differences of the whole right-hand side
-    (step 1.5e-8 · max(|y_k|, scale_k)). Journals on linear springs: all of ``cols`` by whole differences. ``f0`` =
-    dy/dt at (t, y). ``films`` (the fast RODAS variant, prescribed speed): the bearings' columns by differences of
-    each film alone (:func:`_bearing_columns_films`), the same entries otherwise."""
+    added by differences of the bearing kernels (:func:`_bearing_columns`), the rotation angle's column (with
+    unbalance) exactly (:func:`_angle_column`), a torque-driven rotor speed's by forward differences of the whole
+    right-hand side (step 1.5e-8 · max(|y_k|, scale_k)). Journals on linear springs: the other ``cols`` by whole
+    differences. ``f0`` = dy/dt at (t, y). ``films`` (the fast RODAS variant, prescribed speed): the bearings'
+    columns by differences of each film alone (:func:`_bearing_columns_films`), the same entries otherwise."""
     n = y.size
     n_r = args[2]
     minv_k, minv_g = args[0][1], args[0][2]
@@ -311,6 +331,9 @@ def jacobian(t, y, f0, jac, work, yp, cols, scale, omega, omega_dot, args, films
     if not springs and not (films and y.size == 2 * n_r + 11):
         _bearing_columns(y, jac, yp, scale, omega, omega_dot, args)
     for c in cols:
+        if c == 2 * n_r + 10:
+            _angle_column(jac, y, omega, omega_dot, args)
+            continue
         if not whole[c]:
             continue
         for i in range(n):
@@ -331,7 +354,7 @@ def _omegas(t, y, f0, n_r, args):
     return omega, interp_uniform(t, args[12], args[14])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def _error_norm(err, y0, y1, rtol, atol, modal):
     """RMS of err / (atol + rtol max(|y0|, |y1|)); with ``modal`` (m x m, m > 0) the first 2 m entries (the rotor's
     displacements and velocities) are taken in the coordinates ``modal @ q`` and ``modal @ q̇`` first."""
@@ -353,7 +376,7 @@ def _error_norm(err, y0, y1, rtol, atol, modal):
     return math.sqrt(s / err.size)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def _stage(y, coef, ks, nk, out):
     """out = y + Σ_j coef[j] ks[j] over the first nk stages."""
     for i in range(y.size):
@@ -406,7 +429,7 @@ def _factor(jac, hg, n_r, w, piv, blk):
     return lu_factor(w, piv)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def _factor_blocks(w, blk):
     """Block elimination of R (``w``, kept): each bearing's ring block D_b (ring x, y, vx, vy and ring speed: 5 x 5,
     which no other ring's state enters) is factored alone, G_b = D_b⁻¹ R[ring_b, dense] in the dense columns it
@@ -454,7 +477,7 @@ def _factor_blocks(w, blk):
     return lu_factor(s, spiv)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def _solve(w, piv, jac, hg, n_r, x, blk):
     """Solve W x = b in place (``x`` holds b) with the reduced factors of :func:`_factor`."""
     m = w.shape[0]
@@ -482,7 +505,7 @@ def _solve(w, piv, jac, hg, n_r, x, blk):
         x[n_r + a] = z[a]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def _solve_blocks(blk, z):
     """R x = z in place with the block factors of :func:`_factor_blocks`: t_b = D_b⁻¹ z_b, S x_d = z_d − Σ_b
     R[dense, ring_b] t_b, x_b = t_b − G_b x_d."""
@@ -583,7 +606,7 @@ def _stages5(t, h, y, f0, fx, w, piv, jac, ks, ynew, rhs, args, blk):
         ynew[i] += ks[7, i]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def _dense_output5(t, h, y, ynew, ks, t_eval, k_out, out):
     """Continuous output (order 4) of a Rodas5P step, as :func:`_dense_output`."""
     n = y.size
@@ -600,7 +623,7 @@ def _dense_output5(t, h, y, ynew, ks, t_eval, k_out, out):
     return k_out
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=SUM_FLAGS)
 def _dense_output(t, h, y, ynew, ks, t_eval, k_out, out):
     """Continuous output (order 3) of the step (t, y) -> (t + h, ynew) at the output times inside (t, t + h], from
     ``t_eval[k_out]`` on, into ``out``; returns the next output index."""
