@@ -252,9 +252,9 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
 
     def terminate(self):
         """Terminate; the record (``record_folder``) is closed as finished, or as stopped with the reason when the
-        last doStep was discarded (a host that carries on after a Discard: the record ends there)."""
-        super().terminate()
-        if self._comp is not None:
+        last doStep was discarded (a host that carries on after a Discard: the record ends there). A refused
+        fmi2Terminate (outside step mode) leaves the record open."""
+        if super().terminate() and self._comp is not None:
             if self._last_discard:
                 self._comp.close_record("stopped", self._last_discard)
             else:

@@ -26,8 +26,12 @@ class FrbSlaveMixin:
     - Variables: ``_param`` / ``_input`` / ``_output`` register each variable with its unit (every Real has one:
       :meth:`to_xml` writes it and the UnitDefinitions) and, for parameters, its valid range or values.
     - State machine (FMI 2.0 section 4.2.4): instantiated -> initialization mode -> step mode -> terminated, and
-      an error state after a failed initialization. Parameters are ``fixed``: setting one after
-      fmi2ExitInitializationMode is refused (fmi2Error, the value stays). Inputs may be set until terminate.
+      an error state after a failed initialization. Each call outside the states the standard's table allows it in
+      is refused (fmi2Error) and changes nothing: fmi2GetReal/Integer/Boolean/String in the instantiated state
+      (before fmi2EnterInitializationMode, and after fmi2Reset, which gives pythonfmu a new slave), fmi2Terminate
+      outside step mode. Parameters are ``fixed``: setting one after fmi2ExitInitializationMode is refused
+      (fmi2Error, the value stays). Inputs may be set until terminate. fmi2GetFMUstate is allowed in every state;
+      a state taken before initialization brings the instance back to the instantiated state.
     - doStep: refused (fmi2Error) outside step mode or with a step size that is not finite and > 0; discarded
       (fmi2Discard, nothing of the step is kept) when the inputs are not finite or the component fails, e.g. a
       film reaching its wall; the next doStep with valid inputs continues from the unchanged state.
@@ -74,6 +78,7 @@ class FrbSlaveMixin:
         self._deps = {}  # output name -> input names it depends on at communication points (None: all)
         self._init_deps = {}  # calculated output name -> input names it depends on in initialization mode
         self._status_from_log = bool(self.resources) and (Path(self.resources) / STATUS_FROM_LOG).is_file()
+        self._describing = False  # True while to_xml reads the start values (the only get before initialization)
         self._build = self._build_options()
 
     def _build_options(self):
@@ -187,11 +192,16 @@ class FrbSlaveMixin:
     def to_xml(self, model_options=None):
         """pythonfmu's model description plus what it does not write: units (``unit`` of each Real,
         UnitDefinitions), ranges (min/max), ModelStructure with the real dependencies
-        (:mod:`frbmodel.cosim.fmu_description`)."""
+        (:mod:`frbmodel.cosim.fmu_description`). pythonfmu reads the start values through get_real etc. of this
+        instance, which is in the instantiated state: :attr:`_describing` lets those reads through."""
         from frbmodel.cosim.fmu_description import finish
         from frbmodel.cosim.units import declare_units
 
-        root = declare_units(super().to_xml(model_options or {}), self._units)
+        self._describing = True  # pythonfmu reads each start value through get_real etc.: let those through
+        try:
+            root = declare_units(super().to_xml(model_options or {}), self._units)
+        finally:
+            self._describing = False
         params = [v.name for v in self.vars.values() if self._kind[v.value_reference] == "parameter"]
         initial = {n: self._init_deps[n] for n in self._init_deps}
         return finish(root, self._ranges, self._deps, initial, params)
@@ -313,6 +323,10 @@ class FrbSlaveMixin:
         return self._get_each(vrs, String, "")
 
     def _get_each(self, vrs, cls, default):
+        why = self._get_refusal(vrs, cls)
+        if why is not None:
+            self._refuse(why)
+            return [default] * len(vrs)
         out = []
         for vr in vrs:
             var = self.vars.get(vr)
@@ -325,16 +339,32 @@ class FrbSlaveMixin:
                 out.append(var.getter())
         return out
 
+    def _get_refusal(self, vrs, cls):
+        """Why fmi2Get<cls> of ``vrs`` is refused, or None: FMI 2.0 (section 4.2.4, the table of the co-simulation
+        state machine) allows the getters from initialization mode on, not in the instantiated state, i.e. before
+        fmi2EnterInitializationMode and after fmi2Reset (pythonfmu's reset makes a new slave, which cannot tell the
+        two apart). The model description's start values are read in that state (:meth:`to_xml`)."""
+        if self._mode != INSTANTIATED or self._describing:
+            return None
+        names = [self.vars[vr].name if vr in self.vars else f"value reference {vr}" for vr in vrs]
+        shown = ", ".join(names[:4]) + (f" and {len(names) - 4} more" if len(names) > 4 else "")
+        call = f"fmi2Get{cls.__name__}"
+        return (f"{call} of {shown or 'no variable'} refused in the instantiated state (before "
+                f"fmi2EnterInitializationMode: a new instance, or one after fmi2Reset): FMI 2.0 allows {call} only "
+                "from initialization mode on; no value is returned")
+
     def _evaluate(self, name, fn, cast, failed):
-        """Value of the output ``name`` = ``fn()``: the start value 0 before the component exists (build time,
-        initialization mode); after an error or when the evaluation fails or gives a non-finite value, ``failed``
-        with the reason logged (fmi2Error / fmi2Discard), never a silent NaN."""
+        """Value of the output ``name`` = ``fn()``, evaluated in initialization mode from the parameters and inputs
+        set so far (initial="calculated"); after an error, without a component outside initialization mode, or
+        when the evaluation fails or gives a non-finite value, ``failed`` with the reason logged (fmi2Error /
+        fmi2Discard), never a silent NaN or 0."""
         if self._mode == ERROR:
             self._refuse(f"output {name} is not available: the instance failed ({self._failure})")
             return failed
         if self._comp is None:
-            if self._mode != INITIALIZATION:
-                return cast(0)
+            if self._mode != INITIALIZATION:  # (the getters refuse the instantiated state before this)
+                self._refuse(f"output {name} is not available in {self._mode}: the instance was not initialized")
+                return failed
             try:  # initialization mode: the outputs of the parameters and inputs set so far (initial="calculated")
                 self._check_parameters()
                 self._initialize()
@@ -440,8 +470,20 @@ class FrbSlaveMixin:
             raise ValueError("; ".join(bad))
 
     def terminate(self):
-        if self._mode != ERROR:
-            self._mode = TERMINATED
+        """fmi2Terminate: allowed in step mode only (FMI 2.0 section 4.2.4: after initialization, a discarded doStep
+        included); elsewhere refused (fmi2Error) with the mode unchanged, so that an instance terminated before
+        its initialization can still be initialized or freed (it went to the terminated state, refused every call
+        after it and read 0 with fmi2OK). Returns whether the instance is terminated now."""
+        if self._mode != STEP:
+            why = {INSTANTIATED: "before initialization (fmi2ExitInitializationMode); the instance can still be "
+                                 "initialized",
+                   INITIALIZATION: "in initialization mode (call fmi2ExitInitializationMode first)",
+                   TERMINATED: "again: the instance is terminated already",
+                   ERROR: f"after the instance failed ({self._failure}); it can be reset or freed"}[self._mode]
+            self._refuse(f"fmi2Terminate called {why}")
+            return False
+        self._mode = TERMINATED
+        return True
 
     def do_step(self, current_time, step_size):
         """One communication step: refused (fmi2Error) or discarded (fmi2Discard, the state is restored) with the

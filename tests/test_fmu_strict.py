@@ -266,7 +266,7 @@ def test_fixed_parameter_set_after_initialization_is_refused(built, tmp_path):
 def test_invalid_parameters_are_an_error_naming_quantity_value_and_range(built, tmp_path, fmu, setter, name, value,
                                                                          words):
     """fmi2ExitInitializationMode with an invalid parameter: fmi2Error (not fmi2Fatal) with the quantity, the value
-    and the valid range in the log; the instance refuses to step and can be freed."""
+    and the valid range in the log; the instance refuses to step and to terminate, and can be freed."""
     h = (_bearing if fmu == "bearing" else _rotor)(built, "bad", tmp_path)
     h(OK, "setupExperiment", None, 0.0, None)
     h(OK, "enterInitializationMode")
@@ -276,6 +276,8 @@ def test_invalid_parameters_are_an_error_naming_quantity_value_and_range(built, 
     if FATAL not in h.returned:
         _, msg = h(ERROR, "doStep", 0.0, 1e-5)
         assert "failed" in msg
+        _, msg = h(ERROR, "terminate")  # (FMI 2.0: no fmi2Terminate in the error state)
+        assert "fmi2Terminate called after the instance failed" in msg and name in msg
     judge(h)
 
 
@@ -373,6 +375,142 @@ def test_do_step_outside_step_mode_or_with_invalid_step_size_is_an_error(built, 
     r(OK, "terminate")
     r(ERROR, "doStep", 1e-5, 1e-5)
     judge(h, r)
+
+
+# ---------------------------------------------------------------------------------------------------- state machine
+#: the four FMUs of frb build-fmus: every state-machine rule below holds for each (one FrbSlaveMixin)
+ALL_FMUS = ("FloatingRingBearing", "TurbochargerRotor", "FloatingRingTurbocharger", "EngineTorque")
+#: the words of the instantiated-state refusal of a getter
+BEFORE_INIT = ("refused in the instantiated state", "before fmi2EnterInitializationMode", "after fmi2Reset")
+
+
+def _probe_variables(h):
+    """One Real output, Real parameter and Real input of the FMU, and its String parameters (names)."""
+    def first(causality, typ="Real"):
+        return [v.name for v in h.md.modelVariables if v.causality == causality and v.type == typ]
+
+    return first("output")[0], first("parameter")[0], first("input")[0], first("parameter", "String")
+
+
+def _refused_get(h, function, names):
+    """``function`` (getReal, getString, ...) of ``names`` must be fmi2Error naming the first variable and the
+    reason, with no value returned with fmi2OK."""
+    value, msg = h(ERROR, function, [h.vr[n] for n in names])
+    assert names[0] in msg and all(w in msg for w in BEFORE_INIT), msg
+    if h.mapped:
+        assert value is None  # fmpy raised: no value came back with fmi2OK
+    return msg
+
+
+@pytest.mark.parametrize("fmu", ALL_FMUS)
+def test_getters_before_initialization_and_after_reset_are_an_error(built, tmp_path, fmu):
+    """FMI 2.0 (section 4.2.4, the co-simulation state table) allows fmi2GetReal etc. from initialization mode on:
+    in the instantiated state (a new instance, or one after fmi2Reset: pythonfmu makes a new slave) every getter is
+    fmi2Error naming the variables and the reason. They returned fmi2OK with 0 for an output (and the start value
+    for a parameter or an input). The model description's start values, which pythonfmu reads through the same
+    getters at build time, are the values the instance reads in initialization mode."""
+    h = Host(built / "fmus" / f"{fmu}.fmu", "early", tmp_path)
+    out, par, inp, strings = _probe_variables(h)
+    for names in ([out], [par], [inp], [out, par, inp]):
+        _refused_get(h, "getReal", names)
+    if strings:
+        _refused_get(h, "getString", strings[:1])
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    starts = {v.name: float(v.start) for v in h.md.modelVariables if v.type == "Real" and v.start is not None}
+    value, _ = h(OK, "getReal", [h.vr[n] for n in starts])
+    np.testing.assert_allclose(value, list(starts.values()), rtol=1e-15, atol=0)  # (pythonfmu writes 16 digits)
+    h(OK, "exitInitializationMode")
+    h(OK, "doStep", 0.0, 1e-5)
+    stepped, _ = h(OK, "getReal", [h.vr[out]])
+    assert math.isfinite(stepped[0])
+    h(OK, "reset")
+    _refused_get(h, "getReal", [out])
+    _refused_get(h, "getReal", [par, inp])
+    h.start()  # the reset instance starts again and steps as a new one
+    h(OK, "doStep", 0.0, 1e-5)
+    assert h(OK, "getReal", [h.vr[out]])[0] == stepped
+    judge(h)
+
+
+@pytest.mark.parametrize("fmu", ALL_FMUS)
+def test_terminate_outside_step_mode_is_an_error_and_changes_nothing(built, tmp_path, fmu):
+    """fmi2Terminate is allowed after initialization only (FMI 2.0 section 4.2.4: stepComplete, stepFailed): before
+    initialization, in initialization mode and a second time it is fmi2Error and the instance goes on as before
+    (it returned fmi2OK and moved the instance to the terminated state: every later call was refused and its
+    outputs read 0 with fmi2OK). After fmi2Terminate the outputs still read their last values (fmi2GetReal is
+    allowed there); setReal of an input or a parameter and doStep are fmi2Error."""
+    h = Host(built / "fmus" / f"{fmu}.fmu", "ends", tmp_path)
+    out, par, inp, _ = _probe_variables(h)
+    _, msg = h(ERROR, "terminate")
+    assert "fmi2Terminate called before initialization" in msg
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    _, msg = h(ERROR, "terminate")
+    assert "fmi2Terminate called in initialization mode" in msg
+    h(OK, "exitInitializationMode")
+    h(OK, "doStep", 0.0, 1e-5)
+    before, _ = h(OK, "getReal", [h.vr[n] for n in (out, par, inp)])
+    h(OK, "terminate")
+    _, msg = h(ERROR, "terminate")
+    assert "terminated already" in msg
+    after, _ = h(OK, "getReal", [h.vr[n] for n in (out, par, inp)])
+    assert after == before and all(math.isfinite(x) for x in after)
+    _, msg = h.set("setReal", [inp], [before[2]], expected=ERROR)
+    assert inp in msg and "terminated state" in msg
+    _, msg = h.set("setReal", [par], [before[1]], expected=ERROR)
+    assert par in msg and "fixed" in msg
+    _, msg = h(ERROR, "doStep", 1e-5, 1e-5)
+    assert "after fmi2Terminate" in msg
+    judge(h)
+
+
+@pytest.mark.parametrize("fmu", ALL_FMUS)
+def test_parameters_are_fixed_and_refused_after_initialization(built, tmp_path, fmu):
+    """Every parameter of every FMU is declared 'fixed' (none is 'tunable', FMI 2.0 section 4.2.4 table, footnote
+    of fmi2SetReal in stepComplete): setting one after fmi2ExitInitializationMode is fmi2Error naming it, the value
+    read back stays, and doStep before fmi2ExitInitializationMode is fmi2Error."""
+    h = Host(built / "fmus" / f"{fmu}.fmu", "fixed", tmp_path)
+    params = [v for v in h.md.modelVariables if v.causality == "parameter"]
+    assert params and {v.variability for v in params} == {"fixed"}
+    _, par, _, _ = _probe_variables(h)
+    h(OK, "setupExperiment", None, 0.0, None)
+    h(OK, "enterInitializationMode")
+    _, msg = h(ERROR, "doStep", 0.0, 1e-5)
+    assert "initialization mode" in msg
+    h(OK, "exitInitializationMode")
+    start, _ = h(OK, "getReal", [h.vr[par]])
+    _, msg = h.set("setReal", [par], [2.0 * start[0] + 1.0], expected=ERROR)
+    assert par in msg and "fixed" in msg and "step mode" in msg
+    assert h(OK, "getReal", [h.vr[par]])[0] == start
+    h(OK, "doStep", 0.0, 1e-5)
+    judge(h)
+
+
+@pytest.mark.parametrize("fmu", ALL_FMUS)
+def test_a_state_taken_before_initialization_brings_the_instance_back_there(built, tmp_path, fmu):
+    """fmi2GetFMUstate is allowed in the instantiated state (FMI 2.0 section 4.2.4) and returns fmi2OK; the state
+    serializes, and restoring it into an initialized instance brings that back to the instantiated state: its
+    getters are fmi2Error (they read 0 with fmi2OK) and it initializes and steps again."""
+    h = Host(built / "fmus" / f"{fmu}.fmu", "early_state", tmp_path)
+    out, _, _, _ = _probe_variables(h)
+    state, _ = h(OK, "getFMUstate")
+    data, _ = h(OK, "serializeFMUstate", state)
+    copy, _ = h(OK, "deSerializeFMUstate", data)
+    h.start()
+    h(OK, "doStep", 0.0, 1e-5)
+    stepped, _ = h(OK, "getReal", [h.vr[out]])
+    for s in (state, copy):
+        h(OK, "setFMUstate", s)
+        _refused_get(h, "getReal", [out])
+        _, msg = h(ERROR, "doStep", 0.0, 1e-5)
+        assert "before initialization" in msg
+        h.start()
+        h(OK, "doStep", 0.0, 1e-5)
+        assert h(OK, "getReal", [h.vr[out]])[0] == stepped
+    h(OK, "freeFMUstate", state)
+    h(OK, "freeFMUstate", copy)
+    judge(h)
 
 
 # ---------------------------------------------------------------------------------------------------- inputs
