@@ -60,7 +60,7 @@ class FrbSlaveMixin:
         self._input_values = np.zeros(0)  # Real input values, in the order of registration
         self._input_pos = {}  # input name -> position in self._input_values
         self._input_low, self._input_high = np.zeros(0), np.zeros(0)  # declared range (min/max) of each Real input
-        self._violation = (None, None)  # (self._gen, bad input names) of the last range check (_out_of_range)
+        self._violation = (None, None)  # (input values' bytes, bad input names) of the last range check
         self._mode = INSTANTIATED
         self._failure = ""  # why the instance is in the error state (repeated when a later call is refused)
         self._last_discard = ""  # why the last doStep was discarded ("" after a successful one)
@@ -387,13 +387,19 @@ class FrbSlaveMixin:
 
     def _out_of_range(self):
         """Names of the Real inputs whose finite value is outside their declared range (min/max of the model
-        description), checked once per change; non-finite values are left to the slaves' own checks."""
-        if self._violation[0] != self._gen:
-            x = self._input_values
-            with np.errstate(invalid="ignore"):
-                bad = np.isfinite(x) & ((x < self._input_low) | (x > self._input_high))
-            names = [n for n, k in self._input_pos.items() if bad[k]] if bad.any() else []
-            self._violation = (self._gen, names)
+        description), checked again only when an input value changed (the cache is keyed on the values' bytes,
+        whichever path set them); non-finite values are left to the slaves' own checks. A doStep and the reads
+        after it cost one comparison of the values' bytes instead of a masked range test under numpy's error state
+        each (3.0 µs): the main job's co-simulation calls it 800,000 times."""
+        x = self._input_values
+        key = x.tobytes()
+        if self._violation[0] != key:
+            bad = (x < self._input_low) | (x > self._input_high)  # False for NaN, without a warning
+            names = []
+            if bad.any():
+                bad &= np.isfinite(x)
+                names = [n for n, k in self._input_pos.items() if bad[k]]
+            self._violation = (key, names)
         return self._violation[1]
 
     def _range_message(self, output=None):

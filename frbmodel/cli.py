@@ -1504,7 +1504,8 @@ def _add_cosim(sub):
     cs.add_argument("--stop-time", type=float, default=None,
                     help="simulated time [s] (default: from the SSP; with --profile the table's last time)")
     cs.add_argument("--step", type=float, default=None, help="macro step [s] (default: from the SSP, 1e-5)")
-    cs.add_argument("--rollback", action="store_true", help="retry discarded steps with half steps")
+    cs.add_argument("--rollback", action="store_true",
+                    help="retry discarded steps with half steps (the fixed macro step; --adaptive retries by itself)")
     cs.add_argument("--speed-source", choices=["ramp", "torque"], default=None,
                     help="rotor speed: the parameter set's ramp (default), or a state driven by --drive-torque and "
                          "braked by the bearings' film torques (starts at the set's speed_start)")

@@ -89,6 +89,8 @@ def test_rejected_steps_are_rolled_back_transparently(built, main_job_start):
     (dict(min_step=1e-5, max_step=5e-6), "min_step = 1e-05 s is above max_step = 5e-06 s"),
     (dict(max_step=5e-5), "outside the validated range"),
     (dict(coupling="force"), "coupling = 'force' has none"),
+    # the adaptive step never read rollback (it retries every discarded step itself): refused, not ignored
+    (dict(rollback=True), r"rollback = True \(--rollback\) does not apply with adaptive = True"),
 ])
 def test_bad_adaptive_settings_are_refused(built, kw, message):
     with pytest.raises(ParameterError, match=message):
@@ -123,6 +125,7 @@ def test_cli_adaptive_with_a_profile(built, tmp_path, capsys):
 @pytest.mark.parametrize("args, message", [
     (["--coupling-tol", "1e-4"], "--coupling-tol 0.0001 applies only with --adaptive"),
     (["--adaptive", "--coupling-tol", "-1"], "--coupling-tol = -1.0 is invalid"),
+    (["--adaptive", "--rollback"], "rollback = True (--rollback) does not apply with adaptive = True (--adaptive)"),
     # trust5: 333.33 steps of 3 us ran 333 of them and reported the stop time 1 ms (it ended at 0.999 ms)
     (["--step", "3e-6"], "stop time = 0.001 s is not a whole number of macro steps of 3e-06 s (333.333 steps): the "
                          "run would end at 0.000999 s; valid: a multiple of the step as --stop-time, e.g. 0.000999 "

@@ -188,6 +188,11 @@ BAD_FILES = [
      "units = 'mm' is invalid: a system file is in SI units"),
     ("gravity above 100 g", ("gravity = 9.81", "gravity = 1e9", 0),
      "gravity = 1000000000.0 m/s^2 is invalid: valid range 0 ... 1000 m/s^2"),
+    # a disc's inertias swapped or in the wrong unit: 2 I_d >= I_p holds for every rigid body of revolution (the
+    # principal moments' triangle inequality), so I_d = 2e-5 with I_p = 4.4e-5 kg m^2 is no body at all
+    ("diametral inertia below half the polar", ("diametral_inertia = 3.27e-05", "diametral_inertia = 2e-05", 0),
+     "rotor.discs[1]: disc 'compressor_wheel' diametral_inertia = 2e-05 kg m^2 is invalid with polar_inertia = "
+     "4.4e-05 kg m^2: no rigid body of revolution has I_d < I_p / 2; valid range >= 2.2e-05 kg m^2"),
 ]
 
 

@@ -195,6 +195,10 @@ class Master(FmuHost):
             self._configure(parameter_set, stop_time, step_size, overrides, rollback, max_halvings, trace,
                             unvalidated_step)
             self.adaptive = bool(adaptive)
+            if self.adaptive and self.rollback:
+                raise ParameterError("rollback = True (--rollback) does not apply with adaptive = True (--adaptive): "
+                                     "the adaptive step already rolls back every discarded or too inaccurate step "
+                                     "and retries it shorter, down to its min_step; use one of them")
             if self.adaptive:
                 self._configure_adaptive(tolerance, min_step, max_step, unvalidated_step)
             else:

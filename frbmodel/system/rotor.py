@@ -189,7 +189,8 @@ class Disc:
     Raises
     ------
     ParameterError
-        A mass or inertia that is not a finite real number in its range, or a node that is not an integer >= 0.
+        A mass or inertia that is not a finite real number in its range, a diametral inertia below half the polar
+        one (impossible for a rigid body of revolution), or a node that is not an integer >= 0.
 
     Examples
     --------
@@ -213,6 +214,14 @@ class Disc:
                 or int(self.node) != self.node or self.node < 0:
             raise ParameterError(f"disc '{self.name}' node = {self.node!r} is invalid: must be an integer >= 0")
         object.__setattr__(self, "node", int(self.node))
+        # the principal moments of any rigid body obey I_a + I_b >= I_c; an axisymmetric one has I_a = I_b = I_d,
+        # so 2 I_d >= I_p (equal for a flat disc); 1e-9 relative for inertias rounded in a data sheet
+        if 2.0 * self.diametral_inertia < self.polar_inertia * (1.0 - 1e-9):
+            raise ParameterError(
+                f"disc '{self.name}' diametral_inertia = {self.diametral_inertia!r} kg m^2 is invalid with "
+                f"polar_inertia = {self.polar_inertia!r} kg m^2: no rigid body of revolution has I_d < I_p / 2; "
+                f"valid range >= {self.polar_inertia / 2:g} kg m^2 (were the two inertias swapped, or I_p given "
+                "about another axis?)")
 
     def to_dict(self) -> dict:
         """The disc as plain data [SI]."""
