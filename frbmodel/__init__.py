@@ -10,6 +10,7 @@ Quick start::
 
 Every name below is importable from the top level; plotting libraries are imported only when a figure is made.
 """
+from .core import kernel_cache as _kernel_cache  # noqa: F401, I001  (first: drops numba caches of changed kernels)
 from .core.errors import (
     ConvergenceError,
     CosimStopped,
