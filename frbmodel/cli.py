@@ -12,6 +12,7 @@ from .core.errors import (
     FRBError,
     ParameterError,
     RunStopped,
+    check_distinct,
     check_finite,
     check_positive,
     check_speed,
@@ -130,15 +131,6 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
         twice = next(float(v) for v in speeds if np.count_nonzero(speeds == v) > 1)
         raise ParameterError(f"{name} repeats {twice:g} rpm: give distinct speeds")
     return speeds
-
-
-def _distinct(name, values, unit=""):
-    """``values`` if no value repeats, else a ParameterError naming the first repeated one (the same case, curve or
-    table rows computed twice)."""
-    twice = next((v for k, v in enumerate(values) if v in values[:k]), None)
-    if twice is not None:
-        raise ParameterError(f"{name} repeats {twice:g}{' ' + unit if unit else ''}: give distinct values")
-    return values
 
 
 def _given(value, default):
@@ -727,7 +719,7 @@ def cmd_compare(args):
     """``frb compare``: run-ups vs method-J stability per outer clearance (figures and onset table)."""
 
     tc = load_from_args(args)
-    cl = _distinct(f"--clearances = {args.clearances!r}", [check_positive("--clearances", x, "m")
+    cl = check_distinct(f"--clearances = {args.clearances!r}", [check_positive("--clearances", x, "m")
                                                             for x in args.clearances.split(",")], "m")
     a, b = _speed_pair(args.speeds)
     writable_dir(args.out)  # (after every check: a refused option leaves no folder)
@@ -841,7 +833,7 @@ def parse_time_windows(text: str) -> list:
     Returns
     -------
     list of (float, float)
-        Start and end [s], start < end.
+        Start and end [s], start < end, each window once (a repeated window was drawn and written twice).
 
     Examples
     --------
@@ -857,7 +849,7 @@ def parse_time_windows(text: str) -> list:
         if not (np.isfinite(a) and np.isfinite(b) and a < b):
             raise ParameterError(f"--orbit-times {item!r} is invalid: valid range T0 < T1 (finite) [s]")
         out.append((a, b))
-    return out
+    return check_distinct(f"--orbit-times = {text!r}", out, "s")
 
 
 def _orbit_windows(args, run):
@@ -952,7 +944,7 @@ def _supply_from_args(args, oil):
         raise ParameterError(f"--supply-temperature = {text!r} is invalid: give a temperature [K] or a comma list "
                              "(e.g. 333.15,363.15)") from None
     temps = [check_temperature("--supply-temperature", v, T_MIN_K, oil.max_temperature_K) for v in values]
-    _distinct(f"--supply-temperature = {text!r}", temps, "K")
+    check_distinct(f"--supply-temperature = {text!r}", temps, "K")
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
     return temps, check_supply_pressure("--supply-pressure", p_s)
 
@@ -1248,7 +1240,7 @@ def _sweep_params(items):
         if name.strip() in params:
             raise ParameterError(f"--param {item!r}: {name.strip()} is given twice; give all its values in one "
                                  f"--param {name.strip()}=V1,V2,...")
-        _distinct(f"--param {item!r}", values)
+        check_distinct(f"--param {item!r}", values)
         params[name.strip()] = values
     return params
 

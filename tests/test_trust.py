@@ -824,3 +824,47 @@ def test_linearize_names_a_system_ssp_and_the_users_ssp(built, tmp_path, capsys)
     err = capsys.readouterr().err
     assert f"{d}: the connected output turbine.force.x depends on the input turbine.journal.x" in err, err
     assert "frb_linearization_" not in err
+
+
+# ------------------------------------------------------------------ trust6: repeated values, bounds, one rule, early
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    """A 5 ms run-up folder (100 samples at 20 kHz) for the ``frb plot`` and ``--runs`` cases."""
+    run = tmp_path_factory.mktemp("trust6") / "run"
+    assert main(["runup", "--duration", "0.005", "--no-figure", "--out", str(run)]) == 0
+    return run
+
+
+#: the one line of each trust6 CLI case (RUN: the short run's folder)
+TRUST6_CLI = [
+    # case 1: the window was drawn and its files written twice
+    (["plot", "RUN", "--orbit-times", "0:0.002,0:0.002"],
+     "--orbit-times = '0:0.002,0:0.002' repeats 0:0.002 s: give distinct values"),
+]
+
+
+@pytest.mark.parametrize("argv, message", TRUST6_CLI)
+def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(argv, message, short_run,
+                                                                             tmp_path, capsys, monkeypatch):
+    """trust6: each case ran (exit 0) with a value drawn or computed twice, a number past any meaning, or was refused
+    only inside the computation. Now exit 2 with the one line naming the option, its value and the valid range,
+    before any work (the analyses are replaced by functions that fail the test if they are called) and with nothing
+    written: no --out folder, the run folder's files unchanged."""
+    import frbmodel.cli as cli
+    import frbmodel.linear.thermal as lt
+
+    def computed(*args, **kwargs):
+        raise AssertionError("the analysis ran before the input was checked")
+
+    for name in ("campbell", "unbalance_response", "runup", "hopf_points", "continuation", "thermal_losses",
+                 "cosimulate", "write_composites", "write_orbits"):
+        monkeypatch.setattr(cli, name, computed)
+    monkeypatch.setattr(lt, "_operating_point", computed)
+    subs = {"RUN": str(short_run)}
+    argv = [",".join(subs.get(x, x) for x in a.split(",")) for a in argv]
+    message = message.replace("RUN", str(short_run))
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+    out = tmp_path / "out"
+    assert main(argv if argv[0] == "plot" else [*argv, "--out", str(out)]) == 2
+    assert capsys.readouterr().err.splitlines() == [f"frb {argv[0]}: error: {message}"]
+    assert not out.exists() and {p.name: p.read_bytes() for p in short_run.iterdir()} == before
