@@ -25,7 +25,7 @@ from .core.manifest import extend
 from .core.version import __version__
 from .cosim.build import build_fmus
 from .cosim.linearize import campbell_from_fmu, linearize
-from .cosim.master import COUPLING_TOL, cosimulate
+from .cosim.master import COUPLING_TOL, MAX_COUPLING_TOL, cosimulate
 from .cosim.sources import find_source
 from .cosim.ssp import read_ssp
 from .cosim.system_master import SystemMaster, is_system_ssp
@@ -1765,14 +1765,17 @@ def _finish_claims(code):
 
 
 #: every numeric option of every command, by its argparse dest: (unit, valid range). A range is (lowest, highest):
-#: floats must be finite and > lowest, integers >= lowest; None: no bound. A string names the check that bounds the
-#: option where its range depends on the system or on other options (it runs inside the command, before any work).
-#: :func:`check_numeric_options` applies the ranges before a command runs; a test requires every float or int option
-#: of the parser to be listed here.
+#: floats must be finite and > lowest (and <= highest), integers >= lowest (and <= highest); None: no bound. A bound
+#: that is a library constant is that constant, so the CLI and the API refuse the same values. A string names the
+#: check that bounds the option where its range depends on the system or on other options (it runs inside the
+#: command, before any work). :func:`check_numeric_options` applies the ranges before a command runs; a test requires
+#: every float or int option of the parser to be listed here.
 NUMERIC_OPTIONS = {
     "atol": ("m", "frbmodel.nonlinear.runup.check_tolerances (<= 1e-3 of the smallest film clearance)"),
     "rtol": ("-", "frbmodel.nonlinear.runup.check_tolerances (RTOL_RANGE)"),
-    "coupling_tol": ("-", (0.0, None)),
+    # (a fraction of the inner clearance per macro step: the run-up's atol bound, and on the main job the path defect
+    # of the longest validated step, 20 us; a larger one asks for steps the step cap overrides: 10 had no effect)
+    "coupling_tol": ("-", (0.0, MAX_COUPLING_TOL)),
     "drive_torque": ("N m", "frbmodel.nonlinear.runup.check_drive_torque (|T| <= J_p * 1e6 rpm / 1 ms)"),
     "duration": ("s", (0.0, None)),
     "fmax": ("Hz", (0.0, None)),
@@ -1813,7 +1816,11 @@ def check_numeric_options(args):
                 raise ParameterError(f"{option} = {value} is invalid: valid range >= {rng[0]}"
                                      + (f" and <= {rng[1]}" if rng[1] is not None else ""))
         else:
-            check_positive(option, value, "" if unit == "-" else unit)
+            v = check_positive(option, value, "" if unit == "-" else unit)
+            if rng[1] is not None and v > rng[1]:
+                shown = "" if unit == "-" else f" {unit}"
+                raise ParameterError(f"{option} = {value!r}{shown} is invalid: valid range is finite and > {rng[0]:g} "
+                                     f"and <= {rng[1]:g}{shown}")
 
 
 def _dispatch(args):

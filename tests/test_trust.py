@@ -840,6 +840,9 @@ TRUST6_CLI = [
     # case 1: the window was drawn and its files written twice
     (["plot", "RUN", "--orbit-times", "0:0.002,0:0.002"],
      "--orbit-times = '0:0.002,0:0.002' repeats 0:0.002 s: give distinct values"),
+    # case 2: 10 ran as the fixed 12.5 us run (the tolerance was capped by the step bound without a word)
+    (["cosim", "nofile.ssp", "--adaptive", "--coupling-tol", "10"],
+     "--coupling-tol = 10.0 is invalid: valid range is finite and > 0 and <= 0.001"),
 ]
 
 
