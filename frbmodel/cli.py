@@ -29,8 +29,8 @@ from .cosim.master import COUPLING_TOL, MAX_COUPLING_TOL, cosimulate
 from .cosim.sources import find_source
 from .cosim.ssp import read_ssp
 from .cosim.system_master import SystemMaster, is_system_ssp
-from .cycles.branch import hopf_dataframe
-from .cycles.continuation import BifurcationDiagram, check_starts, continuation, hopf_points
+from .cycles.branch import MAX_SEGMENTS, hopf_dataframe
+from .cycles.continuation import MAX_BRANCH_POINTS, BifurcationDiagram, check_starts, continuation, hopf_points
 from .linear.campbell import campbell
 from .linear.equilibrium import equilibrium
 from .linear.losses import bearing_losses, with_ring_speed_ratio
@@ -1782,14 +1782,14 @@ NUMERIC_OPTIONS = {
     "k": ("N/m", (0.0, None)),
     "kx": ("N/m", (0.0, None)),
     "ky": ("N/m", (0.0, None)),
-    "max_points": ("-", (2, None)),
+    "max_points": ("-", (2, MAX_BRANCH_POINTS)),  # (the speed-grid bound: a branch's points are its diagram's speeds)
     "mode_shapes": ("rpm", "speed"),
     "n_speeds": ("-", (2, 10000)),  # (MAX_SPEED_COUNT: 1e8 speeds started a run of days)
     "outer_clearance": ("m", "the system's film checks (clearance / radius, roughness)"),
     "rate": ("Hz", "frbmodel.nonlinear.runup.check_output_rate (samples of the run)"),
     "revolutions": ("revolutions", (0.0, None)),
     "runup_duration": ("s", (0.0, None)),
-    "segments": ("-", (1, 64)),  # (4 serve strongly unstable branches; 1e6 held a million states per orbit)
+    "segments": ("-", (1, MAX_SEGMENTS)),  # (4 serve strongly unstable branches; 1e6 held a million states per orbit)
     "speed_rpm": ("rpm", "speed"),
     "step": ("s", (0.0, None)),
     "stop_time": ("s", (0.0, None)),

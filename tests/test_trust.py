@@ -739,7 +739,7 @@ def test_losses_refuses_a_run_of_another_system_to_overlay(tmp_path, capsys):
     ({"ds": -1.0}, "ds = -1.0 is invalid"),
     ({"ds": float("nan")}, "ds = nan is invalid"),
     ({"ds": 5.0, "ds_max": 1.0}, "ds = 5 is invalid with ds_max = 1: valid range 0 < ds <= ds_max"),
-    ({"max_points": 0}, "max_points = 0 is invalid: valid range integer >= 1"),
+    ({"max_points": 0}, "max_points = 0 is invalid: valid range integer 1 ... 10000"),
     ({"max_points": 2.5}, "max_points = 2.5 is invalid"),
     ({"speeds_rpm": (3e3,)}, "speeds_rpm = (3000.0,) is invalid: give the speed range (START, END) in rpm"),
     ({"speeds_rpm": (3e3, 3e3)}, "START and END must differ"),
@@ -843,6 +843,8 @@ TRUST6_CLI = [
     # case 2: 10 ran as the fixed 12.5 us run (the tolerance was capped by the step bound without a word)
     (["cosim", "nofile.ssp", "--adaptive", "--coupling-tol", "10"],
      "--coupling-tol = 10.0 is invalid: valid range is finite and > 0 and <= 0.001"),
+    # case 3: a branch of a million points (days)
+    (["bifurcation", "--max-points", "1000000"], "--max-points = 1000000 is invalid: valid range >= 2 and <= 10000"),
 ]
 
 
@@ -871,3 +873,48 @@ def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(arg
     assert main(argv if argv[0] == "plot" else [*argv, "--out", str(out)]) == 2
     assert capsys.readouterr().err.splitlines() == [f"frb {argv[0]}: error: {message}"]
     assert not out.exists() and {p.name: p.read_bytes() for p in short_run.iterdir()} == before
+
+
+def _grid(params, analysis="runup", **options):
+    from frbmodel.studies.sweep import grid
+
+    return grid(params, analysis, **options)
+
+
+TRUST6_API = [
+    # case 3: a branch of 1e9 points; the API and the studies took any number of shooting segments
+    (lambda: __import__("frbmodel.cycles.continuation").cycles.continuation.continuation(
+        frb.turbocharger(), (1e3, 3e3), max_points=10**9),
+     "max_points = 1000000000 is invalid: valid range integer 1 ... 10000 (points per branch and direction: the "
+     "speed-grid bound)"),
+    (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", max_points=10**9),
+     "bifurcation max_points = 1000000000 is invalid: valid range integer 2 ... 10000"),
+    (lambda: __import__("frbmodel.cycles.continuation").cycles.continuation.continuation(
+        frb.turbocharger(), (1e3, 3e3), segments=10**6),
+     "segments = 1000000 is invalid: valid range integer 1 ... 64 (shooting segments per orbit)"),
+    (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", segments=10**6),
+     "bifurcation segments = 1000000 is invalid: valid range integer 1 ... 64"),
+]
+
+
+@pytest.mark.parametrize("call, message", TRUST6_API)
+def test_api_refuses_the_same_values_as_the_cli_before_any_work(call, message, monkeypatch):
+    """trust6: the library took what the CLI refuses, or refused it only inside the computation. Now one
+    ParameterError, before any work: the thermal balance, the run-up's tables and integration and the Hopf search
+    are replaced by functions that fail the test if they are called."""
+    import frbmodel.cycles.branch as br
+    import frbmodel.cycles.continuation as cc
+    import frbmodel.linear.thermal as lt
+    import frbmodel.nonlinear.runup as ru
+
+    def computed(*args, **kwargs):
+        raise AssertionError("the computation started before the input was checked")
+
+    monkeypatch.setattr(lt, "_operating_point", computed)
+    monkeypatch.setattr(cc, "hopf_points", computed)
+    monkeypatch.setattr(br, "_unstable_pairs", computed)
+    for name in ("viscosity_table", "lagged_viscosity_table", "_integrate", "initial_state"):
+        monkeypatch.setattr(ru, name, computed)
+    with pytest.raises(ParameterError) as exc:
+        call()
+    assert message in str(exc.value), str(exc.value)

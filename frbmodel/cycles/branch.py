@@ -50,6 +50,31 @@ class BranchPoint:
     state: np.ndarray = field(repr=False, default=None)
 
 
+#: most shooting segments per orbit (limit cycles, continuation, the CLI's --segments, bifurcation studies): four
+#: serve the strongly unstable branches of the Table 2 system; each segment holds a state of the orbit, so 1e6
+#: segments held a million states per orbit
+MAX_SEGMENTS = 64
+
+
+def check_segments(name, segments):
+    """``int(segments)`` if it is a whole number 1 ... :data:`MAX_SEGMENTS`, else a :class:`ParameterError` naming
+    ``name``, the value and the range.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_segments("segments", 10**6)
+    ... except ParameterError as exc:
+    ...     print(exc)
+    segments = 1000000 is invalid: valid range integer 1 ... 64 (shooting segments per orbit)
+    """
+    ok = isinstance(segments, (int, float, np.integer, np.floating)) and not isinstance(segments, bool)
+    if not (ok and int(segments) == segments and 1 <= segments <= MAX_SEGMENTS):
+        raise ParameterError(f"{name} = {segments!r} is invalid: valid range integer 1 ... {MAX_SEGMENTS} (shooting "
+                             "segments per orbit)")
+    return int(segments)
+
+
 class ContinuationProblem:
     """Flows and residuals of the continuation problem at any speed (problems built per speed and cached). With an
     ``oil_supply`` the flow at each speed has the viscosities of that speed's thermal operating point

@@ -39,7 +39,7 @@ from ..nonlinear.runup import (
 )
 from ..physics.film import check_model
 from ..signals.orbits import orbits
-from .branch import hopf_guess, shoot_segments
+from .branch import check_segments, hopf_guess, shoot_segments
 from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
 from .shooting import shoot, stable_multipliers
 
@@ -446,9 +446,9 @@ def _given_guess(guess, n):
 
 
 def _check_segments(segments, forced):
-    """Refuse a segment count that is not a whole number >= 1, or > 1 for a forced orbit (before any work)."""
-    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
-        raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
+    """Refuse a segment count that is not a whole number in 1 ... MAX_SEGMENTS, or > 1 for a forced orbit (before
+    any work)."""
+    check_segments("segments", segments)
     if forced and segments > 1:
         raise ParameterError(f"segments = {segments} is for autonomous orbits: with unbalance use segments = 1")
 

@@ -34,7 +34,8 @@ import numpy as np
 from ..core.errors import ParameterError, check_positive, check_real, read_json
 from ..core.progress import counter_bar, note
 from ..cosim.master import cosimulate, operating_point_overrides
-from ..cycles.continuation import check_starts, continuation, hopf_points
+from ..cycles.branch import check_segments
+from ..cycles.continuation import check_max_points, check_starts, continuation, hopf_points
 from ..linear.campbell import campbell
 from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
 from ..nonlinear.runup import SpeedProfile, Unbalance, check_output_rate, check_speed, runup
@@ -130,7 +131,8 @@ def check_options(analysis, options):
         ``campbell``: ``methods`` (letters, default ["J"]) and ``speeds_rpm`` (START, STOP, COUNT) in any order of
         START and STOP; run-ups: ``speed_rpm`` (START, END) — a run-down if END < START — and ``duration`` [s];
         ``hopf``: ``speed_rpm``; ``bifurcation``: ``speed_rpm``, ``start`` ("hopf", a speed [rpm] or a list),
-        ``max_points`` (>= 2, default 25) and ``segments`` (>= 1, default 1), as :func:`frbmodel.cycles.continuation`.
+        ``max_points`` (2 ... 10000, default 25) and ``segments`` (1 ... 64, default 1), as
+        :func:`frbmodel.cycles.continuation`.
         Every analysis: ``oil``, the name of a named oil or an ``[oil]`` table (dict), for the thermal model
         (:func:`case_oil_supply`).
 
@@ -181,11 +183,8 @@ def check_options(analysis, options):
         if "duration" in options:
             check_positive("duration", options["duration"], "s")
     if analysis == "bifurcation":
-        for key, low in (("max_points", 2), ("segments", 1)):
-            v = options.get(key, low)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or int(v) != v \
-                    or v < low:
-                raise ParameterError(f"bifurcation {key} = {v!r} is invalid: valid range integer >= {low}")
+        check_max_points("bifurcation max_points", options.get("max_points", 2), lowest=2)
+        check_segments("bifurcation segments", options.get("segments", 1))
         check_starts(options.get("start", "hopf"), options.get("speed_rpm", (1e3, 250e3)), "bifurcation start",
                      "speed_rpm")
 
