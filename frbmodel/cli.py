@@ -50,6 +50,7 @@ from .nonlinear.runup import (
     check_runup_oil,
     check_tolerances,
     runup,
+    unbalance_arrays,
 )
 from .plots.figures import html_plotlyjs, system_run_figure
 from .plots.losses import plot_bearing_losses
@@ -332,8 +333,8 @@ def cmd_unbalance(args):
     kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
     methods = _unbalance_methods(args.method, kw)
     check_method_speeds("--speeds", args.speeds, speeds, [letter for letter, _ in methods])
-    unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"])
     tc = load_from_args(args)
+    unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"], tc)
     supply = _oil_supply_from_args(args, tc)
     names = _locations(args)
     bad = [n for n in names or [] if n not in location_names(tc)]
@@ -409,7 +410,9 @@ def _locations(args):
     return names
 
 
-def _parse_unbalance(items):
+def _parse_unbalance(items, system):
+    """The :class:`Unbalance` list of ``--unbalance DISC:AMOUNT[:PHASE]`` (repeatable), each checked on ``system``
+    (the disc's own bound: :func:`frbmodel.nonlinear.runup.unbalance_arrays`) before any folder."""
 
     out = []
     for it in items or []:
@@ -425,6 +428,7 @@ def _parse_unbalance(items):
                                  "turbine_wheel:1e-6:0") from None
         try:
             out.append(Unbalance(disc, amount, phase))
+            unbalance_arrays(system.rotor, out)
         except ParameterError as exc:
             raise ParameterError(f"--unbalance {it!r}: {exc}") from None
     return out
@@ -519,7 +523,7 @@ def cmd_runup(args):
     check_drive_torque(tc, prof, "--drive-torque")
     supply = check_runup_oil(_with_ring_capacity(args, _oil_supply_from_args(args, tc)), prof, args.integrator, None,
                              ("--integrator", "--profile"))
-    unbalance = _parse_unbalance(args.unbalance)
+    unbalance = _parse_unbalance(args.unbalance, tc)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")

@@ -836,6 +836,9 @@ def short_run(tmp_path_factory):
 
 
 #: the one line of each trust6 CLI case (RUN: the short run's folder)
+UNBALANCE_10 = ("unbalance of turbine_wheel = 10.0 kg m is invalid: valid range 0 ... 0.00514 kg m = sqrt(m I_p) of "
+                "the disc (0.326 kg, 8.1e-05 kg m^2; a larger m e needs more mass farther from the axis than the disc "
+                "has; 1e-6 kg m = 1 g mm)")
 TRUST6_CLI = [
     # case 1: the window was drawn and its files written twice
     (["plot", "RUN", "--orbit-times", "0:0.002,0:0.002"],
@@ -845,6 +848,11 @@ TRUST6_CLI = [
      "--coupling-tol = 10.0 is invalid: valid range is finite and > 0 and <= 0.001"),
     # case 3: a branch of a million points (days)
     (["bifurcation", "--max-points", "1000000"], "--max-points = 1000000 is invalid: valid range >= 2 and <= 10000"),
+    # case 3: 10 kg m on a 0.326 kg wheel (6.9e9 N at 250 krpm)
+    (["runup", "--unbalance", "turbine_wheel:10", "--duration", "0.01"], f"--unbalance 'turbine_wheel:10': "
+                                                                         f"{UNBALANCE_10}"),
+    (["unbalance", "--unbalance", "turbine_wheel:10", "--speeds", "1000:2000:2"], f"--unbalance 'turbine_wheel:10': "
+                                                                                  f"{UNBALANCE_10}"),
 ]
 
 
@@ -875,6 +883,12 @@ def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(arg
     assert not out.exists() and {p.name: p.read_bytes() for p in short_run.iterdir()} == before
 
 
+def _unbalances(*items):
+    from frbmodel.nonlinear.runup import Unbalance
+
+    return [Unbalance(*it) for it in items]
+
+
 def _grid(params, analysis="runup", **options):
     from frbmodel.studies.sweep import grid
 
@@ -894,6 +908,16 @@ TRUST6_API = [
      "segments = 1000000 is invalid: valid range integer 1 ... 64 (shooting segments per orbit)"),
     (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", segments=10**6),
      "bifurcation segments = 1000000 is invalid: valid range integer 1 ... 64"),
+    # case 3: the unbalance's amount was checked by the run-up only, after its thermal tables, and never bounded
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, unbalance=_unbalances(("turbine_wheel", 10.0))),
+     UNBALANCE_10),
+    (lambda: frb.unbalance_response(frb.turbocharger(), "A", [1e4], {"turbine_wheel": 10.0}),
+     UNBALANCE_10.replace("unbalance of", "unbalance m e of")),
+    (lambda: _grid({"unbalance_turbine": [10.0]}), "study parameter unbalance_turbine = 10 [kg m]: "
+                                                   + UNBALANCE_10.replace("unbalance of turbine_wheel",
+                                                                          "unbalance_turbine")),
+    (lambda: _unbalances(("turbine_wheel", -1e-6)), "unbalance of turbine_wheel = -1e-06 kg m is invalid: valid range "
+                                                    "is a finite real number >= 0 kg m"),
 ]
 
 

@@ -87,12 +87,11 @@ def check_unbalance(system, unbalance):
         raise ParameterError("unbalance = {} is invalid: give at least one disc, e.g. {'turbine_wheel': (1e-6, 0.0)}")
     out = []
     for name, value in items:
-        disc = system.rotor.disc(name)
         me, phase = (value, 0.0) if not isinstance(value, (tuple, list)) else (tuple(value) + (0.0,))[:2]
         if isinstance(value, (tuple, list)) and not 1 <= len(value) <= 2:
             raise ParameterError(f"unbalance[{name!r}] = {value!r} is invalid: expected (m e [kg m], phase [rad])")
-        out.append((disc.name, disc.node, check_real(f"unbalance m e of {name}", me, "kg m", 0.0, inclusive=True),
-                    check_real(f"unbalance phase of {name}", phase, "rad")))
+        disc, me = system.rotor.check_unbalance(name, me, f"unbalance m e of {name}")  # (the disc's own bound)
+        out.append((disc.name, disc.node, me, check_real(f"unbalance phase of {name}", phase, "rad")))
     if not any(u[2] > 0 for u in out):
         raise ParameterError(f"unbalance = {unbalance!r} is invalid: every m e is 0 (no response); valid range of "
                              "at least one m e: > 0 kg m")

@@ -658,7 +658,26 @@ class Unbalance:
     phase: float = 0.0
 
     def __post_init__(self):  # (an infinite phase ended the run at t = 0: "singular iteration matrix", exit 3)
+        # (the amount was checked by the run-up only, after its thermal table; its upper bound is the disc's own,
+        # applied where the unbalance meets its rotor: unbalance_arrays)
+        self.amount = check_real(f"unbalance of {self.disc}", self.amount, "kg m", minimum=0.0, inclusive=True)
         self.phase = check_real(f"unbalance phase of {self.disc}", self.phase, "rad")
+
+
+def unbalance_arrays(rotor, unbalance):
+    """Disc nodes, m e [kg m] and phases [rad] of the :class:`Unbalance` list ``unbalance`` on ``rotor``, or a
+    :class:`ParameterError`: each m e within its disc's bound (:meth:`frbmodel.system.rotor.Rotor.check_unbalance`).
+
+    Examples
+    --------
+    >>> from frbmodel.system.presets import turbocharger
+    >>> unbalance_arrays(turbocharger().rotor, [Unbalance("compressor_wheel", 2e-6, 0.5)])
+    (array([3]), array([2.e-06]), array([0.5]))
+    """
+    unbalance = list(unbalance)
+    checked = [rotor.check_unbalance(u.disc, u.amount) for u in unbalance]
+    return (np.array([d.node for d, _ in checked], dtype=np.int64), np.array([a for _, a in checked], dtype=float),
+            np.array([float(u.phase) for u in unbalance], dtype=float))
 
 
 @dataclass
@@ -946,8 +965,9 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     Raises
     ------
     ParameterError
-        Not two bearings, a negative unbalance or spring stiffness, a non-uniform time grid, a torque-driven
-        rotor without polar inertia, or an oil supply with linear springs.
+        Not two bearings, an unbalance outside its disc's range (:func:`unbalance_arrays`), a
+        negative spring stiffness, a non-uniform time grid, a torque-driven rotor without polar inertia, or an oil
+        supply with linear springs.
 
     Examples
     --------
@@ -957,6 +977,7 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
         raise ParameterError(f"the run-up needs exactly 2 bearings, the system has {len(system.bearings)}")
     rotor = system.rotor
     springs = 0.0 if linear_springs is None else check_positive("linear_springs", linear_springs, "N/m")
+    unb_node, unb_me, unb_phase = unbalance_arrays(rotor, unbalance)  # (before the thermal tables: it was after)
     sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs)
     visc = (None, None)
     if sup is not None:
@@ -966,10 +987,6 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     arrays = [film_arrays(b, film_model) for b in system.bearings]
     geom = np.array([a[0] for a in arrays])
     polys = np.array([a[1] for a in arrays])
-    unb_node = np.array([rotor.disc(u.disc).node for u in unbalance], dtype=np.int64)
-    unb_me = np.array([check_positive(f"unbalance of {u.disc}", u.amount, "kg m", allow_zero=True)
-                       for u in unbalance])
-    unb_phase = np.array([float(u.phase) for u in unbalance])
     tg = profile.t
     if tg.size > 2 and not np.allclose(np.diff(tg), tg[1] - tg[0]):
         raise ParameterError("speed profile: the time grid must be uniform (SpeedProfile builds it so)")

@@ -381,7 +381,9 @@ def build_case_system(params, base=None):
         bs = [replace(b, ring_mass=m) for b in bs]
     unb = []
     for key in [k for k in p if k.startswith("unbalance_")]:
-        disc, amount = _named_disc(tc, key), check_real(key, p.pop(key), "kg m", minimum=0.0, inclusive=True)
+        disc = _named_disc(tc, key)
+        amount = tc.rotor.check_unbalance(disc, check_real(key, p.pop(key), "kg m", minimum=0.0, inclusive=True),
+                                          key)[1]  # (the disc's own bound, before any case runs)
         if amount > 0:
             unb.append(Unbalance(disc, amount, 0.0))
     if p:
