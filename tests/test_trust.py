@@ -918,6 +918,11 @@ TRUST6_API = [
                                                                           "unbalance_turbine")),
     (lambda: _unbalances(("turbine_wheel", -1e-6)), "unbalance of turbine_wheel = -1e-06 kg m is invalid: valid range "
                                                     "is a finite real number >= 0 kg m"),
+    # case 4: the API took a known oil's name over other numbers (the [oil] parser alone refused it)
+    (lambda: frb.Oil(60e-6, 11e-6, 852.0, 6.5e-4, 2000.0, "SAE 5W-30"),
+     "oil name = 'SAE 5W-30' is a known oil, but nu40_m2_s = 6e-05 (not 6.4e-05): its results would be labelled "
+     "'SAE 5W-30'; give another name for these numbers, or the known oil itself (frbmodel.OILS['SAE 5W-30'], or "
+     "name = 'SAE 5W-30' alone in an [oil] table)"),
 ]
 
 
