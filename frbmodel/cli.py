@@ -36,7 +36,14 @@ from .linear.equilibrium import equilibrium
 from .linear.losses import bearing_losses, with_ring_speed_ratio
 from .linear.modal import modes_from_state
 from .linear.modeshape import save_mode_shapes
-from .linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, at_operating_point, check_supply_pressure, thermal_losses
+from .linear.thermal import (
+    SUPPLY_PRESSURE_PA,
+    OilSupply,
+    at_operating_point,
+    check_oil_supply,
+    check_supply_pressure,
+    thermal_losses,
+)
 from .linear.unbalance import bode_figure, critical_speeds, location_names, unbalance_response
 from .nonlinear.recorder import RunupResult
 from .nonlinear.runup import (
@@ -522,7 +529,7 @@ def cmd_runup(args):
     rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
     check_drive_torque(tc, prof, "--drive-torque")
     supply = check_runup_oil(_with_ring_capacity(args, _oil_supply_from_args(args, tc)), prof, args.integrator, None,
-                             ("--integrator", "--profile"))
+                             ("--integrator", "--profile"), tc)
     unbalance = _parse_unbalance(args.unbalance, tc)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
@@ -920,7 +927,9 @@ def _oil_supply_from_args(args, system):
     t_s = 363.15 if args.supply_temperature is None else args.supply_temperature
     t_s = check_temperature("--supply-temperature", t_s, T_MIN_K, oil.max_temperature_K)
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
-    return OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s))
+    # (the feed holes against the system's rings, before any folder: the check ran inside the first balance)
+    return check_oil_supply(OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s)),
+                            bearings=system.bearings)
 
 
 def _with_ring_capacity(args, supply):
@@ -971,6 +980,8 @@ def cmd_losses(args):
         raise ParameterError(f"--onsets cannot be combined with --method {args.method}: the onsets are those of the "
                              "thermal Campbell diagram of method J (the full ring torque balance); use --method J")
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
+    if oil is not None:  # (the thermal model's feed holes against the rings: it ran inside the first balance)
+        check_oil_supply(OilSupply(oil, temps[0], p_s), bearings=tc.bearings)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
     run = _same_system_run(args.run, tc) if args.run is not None else None

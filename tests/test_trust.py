@@ -835,10 +835,24 @@ def short_run(tmp_path_factory):
     return run
 
 
-#: the one line of each trust6 CLI case (RUN: the short run's folder)
+@pytest.fixture(scope="module")
+def thin_ring(tmp_path_factory):
+    """A system file: the Table 2 system with the turbine ring's wall 1.2 mm thick (R_O = R_I + c_I + 1.2 mm), so
+    the default thermal model's 1.5 mm feed holes do not fit it."""
+    from dataclasses import replace
+
+    tc = frb.turbocharger()
+    b = tc.bearings[0]
+    thin = replace(b, outer=replace(b.outer, radius=b.inner.radius + b.inner.clearance + 1.2e-3))
+    return tc.with_(bearings=(thin, tc.bearings[1])).save(tmp_path_factory.mktemp("thin") / "thin.toml")
+
+
+#: the one line of each trust6 CLI case (RUN: the short run's folder, THIN: the thin-ring system file)
 UNBALANCE_10 = ("unbalance of turbine_wheel = 10.0 kg m is invalid: valid range 0 ... 0.00514 kg m = sqrt(m I_p) of "
                 "the disc (0.326 kg, 8.1e-05 kg m^2; a larger m e needs more mass farther from the axis than the disc "
                 "has; 1e-6 kg m = 1 g mm)")
+FEED_HOLES = ("thermal model feed_hole_diameter_m = 0.0015 m is invalid for the turbine bearing's ring: valid range < "
+              "its wall thickness 0.0012 m (the holes' length)")
 TRUST6_CLI = [
     # case 1: the window was drawn and its files written twice
     (["plot", "RUN", "--orbit-times", "0:0.002,0:0.002"],
@@ -853,11 +867,18 @@ TRUST6_CLI = [
                                                                          f"{UNBALANCE_10}"),
     (["unbalance", "--unbalance", "turbine_wheel:10", "--speeds", "1000:2000:2"], f"--unbalance 'turbine_wheel:10': "
                                                                                   f"{UNBALANCE_10}"),
+    # case 5: refused inside the first thermal balance, after the folder was made
+    (["campbell", "--system", "THIN", "--oil", "SAE 5W-30", "--speeds", "100000"], FEED_HOLES),
+    (["losses", "--system", "THIN", "--oil", "SAE 5W-30", "--speeds", "100000"], FEED_HOLES),
+    (["runup", "--system", "THIN", "--oil", "SAE 5W-30", "--duration", "0.01"], FEED_HOLES),
+    (["bifurcation", "--system", "THIN", "--oil", "SAE 5W-30", "--hopf-only", "--speeds", "1000:30000"], FEED_HOLES),
+    (["unbalance", "--system", "THIN", "--oil", "SAE 5W-30", "--speeds", "1000:2000:2"], FEED_HOLES),
+    (["equilibrium", "--system", "THIN", "--oil", "SAE 5W-30", "--speed-rpm", "100000"], FEED_HOLES),
 ]
 
 
 @pytest.mark.parametrize("argv, message", TRUST6_CLI)
-def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(argv, message, short_run,
+def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(argv, message, short_run, thin_ring,
                                                                              tmp_path, capsys, monkeypatch):
     """trust6: each case ran (exit 0) with a value drawn or computed twice, a number past any meaning, or was refused
     only inside the computation. Now exit 2 with the one line naming the option, its value and the valid range,
@@ -873,7 +894,7 @@ def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(arg
                  "cosimulate", "write_composites", "write_orbits"):
         monkeypatch.setattr(cli, name, computed)
     monkeypatch.setattr(lt, "_operating_point", computed)
-    subs = {"RUN": str(short_run)}
+    subs = {"RUN": str(short_run), "THIN": str(thin_ring)}
     argv = [",".join(subs.get(x, x) for x in a.split(",")) for a in argv]
     message = message.replace("RUN", str(short_run))
     before = {p.name: p.read_bytes() for p in short_run.iterdir()}
@@ -881,6 +902,12 @@ def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(arg
     assert main(argv if argv[0] == "plot" else [*argv, "--out", str(out)]) == 2
     assert capsys.readouterr().err.splitlines() == [f"frb {argv[0]}: error: {message}"]
     assert not out.exists() and {p.name: p.read_bytes() for p in short_run.iterdir()} == before
+
+
+def _supply(**model):
+    from frbmodel.physics.thermal import ThermalModel
+
+    return frb.OilSupply(frb.OILS["SAE 5W-30"], model=ThermalModel(**model))
 
 
 def _unbalances(*items):
@@ -923,6 +950,19 @@ TRUST6_API = [
      "oil name = 'SAE 5W-30' is a known oil, but nu40_m2_s = 6e-05 (not 6.4e-05): its results would be labelled "
      "'SAE 5W-30'; give another name for these numbers, or the known oil itself (frbmodel.OILS['SAE 5W-30'], or "
      "name = 'SAE 5W-30' alone in an [oil] table)"),
+    # case 5: feed holes that do not fit the ring were refused inside the first thermal balance
+    (lambda: frb.campbell(frb.turbocharger(), "J", [1e5], oil_supply=_supply(feed_hole_diameter_m=1.0)),
+     "thermal model feed_hole_diameter_m = 1 m is invalid for the turbine bearing's ring: valid range < its wall "
+     "thickness 0.002466 m (the holes' length)"),
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, oil_supply=_supply(feed_holes=40, feed_hole_diameter_m=1e-3)),
+     "thermal model feed_holes = 40 of 0.001 m do not fit around the turbine bearing's ring: valid range feed_holes x "
+     "feed_hole_diameter_m < 2 pi R_I = 0.0345575 m"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"],
+                                model=_supply(feed_hole_diameter_m=1.0).model),
+     "feed_hole_diameter_m = 1 m is invalid"),
+    (lambda: __import__("frbmodel.cycles.branch").cycles.branch.hopf_points(
+        frb.turbocharger(), (1e3, 3e3), oil_supply=_supply(feed_hole_diameter_m=1.0)),
+     "feed_hole_diameter_m = 1 m is invalid"),
 ]
 
 

@@ -83,7 +83,8 @@ class ContinuationProblem:
 
     def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm, segments=1, oil_supply=None):
 
-        self.system, self.model, self.oil_supply = system, model, check_oil_supply(oil_supply)
+        self.system, self.model = system, model
+        self.oil_supply = check_oil_supply(oil_supply, bearings=system.bearings)
         self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
         self._flows = {}
         self._last = None  # the last flow made for a new speed (it has chosen its integrator by the next one)
@@ -436,7 +437,7 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, res
     list of HopfPoint
         In increasing speed.
     """
-    supply = check_oil_supply(oil_supply)
+    supply = check_oil_supply(oil_supply, bearings=system.bearings)
     model = film_model or system.film_model
     lo, hi = check_speed_range(speeds_rpm)
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 2:

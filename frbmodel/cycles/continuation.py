@@ -247,7 +247,7 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     -------
     BifurcationDiagram
     """
-    supply = check_oil_supply(oil_supply)
+    supply = check_oil_supply(oil_supply, bearings=system.bearings)
     lo, hi = _check_steps(speeds_rpm, ds, ds_max, max_points)
     model = check_model(film_model or system.film_model)
     segments = check_segments("segments", segments)

@@ -400,7 +400,7 @@ def _at_supply(system, speed_rpm, guess, oil_supply):
     """``system`` at the thermal operating point of ``speed_rpm`` (unchanged without an oil supply); a recorded
     run-up as the guess is refused with an oil supply (its re-simulation would need the run's viscosity table)."""
 
-    supply = check_oil_supply(oil_supply)
+    supply = check_oil_supply(oil_supply, bearings=system.bearings)
     if supply is not None and isinstance(guess, RunupResult):
         raise ParameterError("guess = a RunupResult cannot be combined with oil_supply: the run is re-simulated at "
                              "constant viscosities; give a LimitCycle, 'hopf', (state, period) or no guess")

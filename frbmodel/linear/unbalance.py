@@ -715,7 +715,7 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     """
     check_system(system)
     m = get_method(method)
-    supply = check_oil_supply(oil_supply, m.letter)
+    supply = check_oil_supply(oil_supply, m.letter, system.bearings)
     unb = check_unbalance(system, {"turbine_wheel": (1e-6, 0.0)} if unbalance is None else unbalance)
     speeds = np.sort(m.check_speeds(np.linspace(*DEFAULT_SPEEDS_RPM) if speeds_rpm is None else speeds_rpm))
     m.options(**kw)  # validate early

@@ -467,7 +467,7 @@ class BearingComponent:
             Ascending rotor speeds [rad/s] of the table (> 0).
         """
 
-        sup = check_oil_supply(oil_supply)
+        sup = check_oil_supply(oil_supply, bearings=(self.bearing,))
         speeds = np.asarray(speeds_rad_s, dtype=float)
         if speeds.ndim != 1 or speeds.size < 2 or not np.all(np.diff(speeds) > 0) or not speeds[0] > 0:
             raise ParameterError(f"{self.bearing.name} bearing thermal table speeds are invalid: at least 2 ascending "

@@ -920,12 +920,14 @@ def check_lag_profile(profile, name="profile", capacity_name="ring_heat_capacity
                              f"{capacity_name} unset (quasi-static temperatures)")
 
 
-def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile")):
-    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, or linear springs (no films). Every
+def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile"),
+                    system=None):
+    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, linear springs (no films) or feed holes
+    that do not fit the rings of ``system`` (:func:`frbmodel.linear.thermal.check_oil_supply`). Every
     integrator takes it (the ``"radau"`` path packs the viscosity table, :func:`frbmodel.nonlinear.compiled.
     pack_problem`), and so does a torque-driven rotor (its table spans :func:`table_speeds_rpm`); ``profile``,
     ``integrator`` and ``names`` are kept for the callers (the CLI's option names)."""
-    sup = check_oil_supply(oil_supply)
+    sup = check_oil_supply(oil_supply, bearings=() if system is None else system.bearings)
     if sup is None:
         return None
     if linear_springs is not None:
@@ -978,7 +980,7 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     rotor = system.rotor
     springs = 0.0 if linear_springs is None else check_positive("linear_springs", linear_springs, "N/m")
     unb_node, unb_me, unb_phase = unbalance_arrays(rotor, unbalance)  # (before the thermal tables: it was after)
-    sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs)
+    sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs, system=system)
     visc = (None, None)
     if sup is not None:
         visc = lagged_viscosity_table(system, profile, sup) if sup.model.ring_heat_capacity_J_K is not None else \
@@ -1761,7 +1763,7 @@ def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, u
     if integrator not in INTEGRATORS:
         raise ParameterError(f"integrator = {integrator!r} is unknown; valid: {', '.join(map(repr, INTEGRATORS))}")
     check_drive_torque(system, profile)
-    check_runup_oil(oil_supply, profile, integrator, linear_springs)
+    check_runup_oil(oil_supply, profile, integrator, linear_springs, system=system)
     problem = build_problem(system, profile, model, unbalance, linear_springs, oil_supply)
     y0 = initial_state(problem, initial, perturbation)
     atol_v, scale = atol_vector(problem, atol)

@@ -37,7 +37,7 @@ from ..cosim.master import cosimulate, operating_point_overrides
 from ..cycles.branch import check_segments
 from ..cycles.continuation import check_max_points, check_starts, continuation, hopf_points
 from ..linear.campbell import campbell
-from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
+from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, check_oil_supply
 from ..nonlinear.runup import SpeedProfile, Unbalance, check_output_rate, check_speed, runup
 from ..plots.figures import write_html
 from ..plots.studies import stability_chart_figure, stability_map_figures
@@ -305,7 +305,8 @@ def case_oil_supply(params, options, system):
             raise ParameterError(f"study parameter {given[0]} needs an oil: give the option oil (frb sweep --oil NAME) "
                                  "or a system with an [oil] table")
         return None
-    return OilSupply(oil, params.get("supply_temperature", 363.15), params.get("supply_pressure", SUPPLY_PRESSURE_PA))
+    supply = OilSupply(oil, params.get("supply_temperature", 363.15), params.get("supply_pressure", SUPPLY_PRESSURE_PA))
+    return check_oil_supply(supply, bearings=system.bearings)  # (the feed holes against the case's rings)
 
 
 def _named_bearing(bearings, key):
