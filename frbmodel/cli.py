@@ -414,7 +414,7 @@ def _locations(args):
     if not names:  # (it drew the default locations)
         raise ParameterError(f"--locations = {args.locations!r} names no location: give a comma list of names, e.g. "
                              "turbine_wheel,compressor_wheel")
-    return names
+    return check_distinct(f"--locations = {args.locations!r}", names)  # (a repeated location was drawn twice)
 
 
 def _parse_unbalance(items, system):
@@ -628,7 +628,9 @@ def _load_runs(text, system):
     folder without one, or with a run of another system than ``system`` (its envelope was drawn behind branches it
     cannot be compared with)."""
 
-    return [(d, _same_system_run(d, system, "--runs")) for d in (text or "").split(",") if d]
+    folders = [d for d in (text or "").split(",") if d]
+    check_distinct(f"--runs = {text!r}", [str(Path(d).resolve()) for d in folders])  # (its envelope drawn twice)
+    return [(d, _same_system_run(d, system, "--runs")) for d in folders]
 
 
 def _on_sigterm(signum, frame):
@@ -762,7 +764,8 @@ def parse_orders(text: str) -> tuple:
         text = DEFAULT_ORDERS
     if text.strip().lower() in ("", "none"):
         return ()
-    return tuple(check_positive("--orders", x.strip()) for x in text.split(",") if x.strip())
+    orders = [check_positive("--orders", x.strip()) for x in text.split(",") if x.strip()]
+    return tuple(check_distinct(f"--orders = {text!r}", orders))  # (a repeated order line was drawn twice)
 
 
 #: the default order lines of ``frb plot --orders`` (0.5X and 1X)

@@ -874,6 +874,12 @@ TRUST6_CLI = [
     (["bifurcation", "--system", "THIN", "--oil", "SAE 5W-30", "--hopf-only", "--speeds", "1000:30000"], FEED_HOLES),
     (["unbalance", "--system", "THIN", "--oil", "SAE 5W-30", "--speeds", "1000:2000:2"], FEED_HOLES),
     (["equilibrium", "--system", "THIN", "--oil", "SAE 5W-30", "--speed-rpm", "100000"], FEED_HOLES),
+    # more repeated values: an order line, a location, a run's envelope drawn twice
+    (["plot", "RUN", "--orders", "1,1"], "--orders = '1,1' repeats 1: give distinct values"),
+    (["unbalance", "--method", "A", "--speeds", "3000:30000:3", "--locations", "turbine_wheel,turbine_wheel"],
+     "--locations = 'turbine_wheel,turbine_wheel' repeats turbine_wheel: give distinct values"),
+    (["bifurcation", "--runs", "RUN,RUN", "--speeds", "1000:30000"], "--runs = 'RUN,RUN' repeats RUN: give distinct "
+                                                                     "values"),
 ]
 
 
