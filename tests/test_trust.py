@@ -880,6 +880,9 @@ TRUST6_CLI = [
      "--locations = 'turbine_wheel,turbine_wheel' repeats turbine_wheel: give distinct values"),
     (["bifurcation", "--runs", "RUN,RUN", "--speeds", "1000:30000"], "--runs = 'RUN,RUN' repeats RUN: give distinct "
                                                                      "values"),
+    # the same branch followed twice (hours)
+    (["bifurcation", "--start", "25000,25000", "--speeds", "1000:30000"], "--start repeats 25000 rpm: give distinct "
+                                                                          "values"),
 ]
 
 
@@ -969,6 +972,11 @@ TRUST6_API = [
     (lambda: __import__("frbmodel.cycles.branch").cycles.branch.hopf_points(
         frb.turbocharger(), (1e3, 3e3), oil_supply=_supply(feed_hole_diameter_m=1.0)),
      "feed_hole_diameter_m = 1 m is invalid"),
+    # the same branch followed twice
+    (lambda: __import__("frbmodel.cycles.continuation").cycles.continuation.continuation(
+        frb.turbocharger(), (1e3, 3e3), start=[2e3, 2e3]), "start repeats 2000 rpm: give distinct values"),
+    (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(1e3, 3e3), start=["hopf", "hopf"]),
+     "bifurcation start repeats hopf: give distinct values"),
 ]
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.errors import MAX_SPEED_COUNT, ParameterError, check_positive
+from ..core.errors import MAX_SPEED_COUNT, ParameterError, check_distinct, check_positive
 from ..core.results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
 from ..linear.campbell import campbell
 from ..linear.thermal import check_oil_supply
@@ -319,8 +319,8 @@ def _check_start_supply(starts, supply):
 
 def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
     """The branch starts of :func:`continuation` as a list (``start``: "hopf", a LimitCycle, a speed [rpm] or a list
-    of them), or a ParameterError naming the bad one and the valid values (used by the API, ``frb bifurcation`` and
-    the ``bifurcation`` study before any computation).
+    of them, each speed and "hopf" once), or a ParameterError naming the bad one and the valid values (used by the
+    API, ``frb bifurcation`` and the ``bifurcation`` study before any computation).
 
     Examples
     --------
@@ -347,6 +347,8 @@ def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
         if not lo <= speed <= hi:
             raise ParameterError(f"{name} = {speed:.0f} rpm is outside {range_name} {lo:.0f}:{hi:.0f} rpm")
         out.append(s0 if isinstance(s0, LimitCycle) else speed)
+    # (the same branch was followed twice: hours; two LimitCycles at one speed may be two coexisting orbits)
+    check_distinct(name, [s for s in out if not isinstance(s, LimitCycle)], "rpm")
     return out
 
 
