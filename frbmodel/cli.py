@@ -419,7 +419,7 @@ def _locations(args):
 
 def _parse_unbalance(items, system):
     """The :class:`Unbalance` list of ``--unbalance DISC:AMOUNT[:PHASE]`` (repeatable), each checked on ``system``
-    (the disc's own bound: :func:`frbmodel.nonlinear.runup.unbalance_arrays`) before any folder."""
+    (the disc's own bound, each disc once: :func:`frbmodel.nonlinear.runup.unbalance_arrays`) before any folder."""
 
     out = []
     for it in items or []:

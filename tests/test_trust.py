@@ -883,6 +883,10 @@ TRUST6_CLI = [
     # the same branch followed twice (hours)
     (["bifurcation", "--start", "25000,25000", "--speeds", "1000:30000"], "--start repeats 25000 rpm: give distinct "
                                                                           "values"),
+    # two unbalances on one disc were summed (the dict form and the FMUs take one per disc)
+    (["runup", "--unbalance", "turbine_wheel:1e-6", "--unbalance", "turbine_wheel:1e-6:1", "--duration", "0.01"],
+     "--unbalance 'turbine_wheel:1e-6:1': unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: "
+     "give distinct values"),
 ]
 
 
@@ -977,6 +981,13 @@ TRUST6_API = [
         frb.turbocharger(), (1e3, 3e3), start=[2e3, 2e3]), "start repeats 2000 rpm: give distinct values"),
     (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(1e3, 3e3), start=["hopf", "hopf"]),
      "bifurcation start repeats hopf: give distinct values"),
+    # two unbalances on one disc were summed
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, unbalance=_unbalances(("turbine_wheel", 1e-6),
+                                                                                 ("turbine_wheel", 1e-6, 1.0))),
+     "unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: give distinct values"),
+    (lambda: frb.unbalance_response(frb.turbocharger(), "A", [1e4], _unbalances(("turbine_wheel", 1e-6),
+                                                                                ("turbine_wheel", 1e-6))),
+     "unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: give distinct values"),
 ]
 
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_real, check_system, read_json
+from ..core.errors import ParameterError, check_distinct, check_real, check_system, read_json
 from ..core.progress import counter_bar, progress_enabled
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
@@ -85,6 +85,8 @@ def check_unbalance(system, unbalance):
                              "[rad])}, e.g. {'turbine_wheel': (1e-6, 0.0)}")
     if not items:
         raise ParameterError("unbalance = {} is invalid: give at least one disc, e.g. {'turbine_wheel': (1e-6, 0.0)}")
+    names = [name for name, _ in items]
+    check_distinct(f"unbalance discs {names}", names)  # (a list could give a disc twice: the two were summed)
     out = []
     for name, value in items:
         me, phase = (value, 0.0) if not isinstance(value, (tuple, list)) else (tuple(value) + (0.0,))[:2]

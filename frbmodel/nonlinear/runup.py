@@ -26,6 +26,7 @@ from ..core.errors import (
     MAX_SPEED_RPM,
     ParameterError,
     RunupStopped,
+    check_distinct,
     check_finite,
     check_positive,
     check_real,
@@ -666,7 +667,8 @@ class Unbalance:
 
 def unbalance_arrays(rotor, unbalance):
     """Disc nodes, m e [kg m] and phases [rad] of the :class:`Unbalance` list ``unbalance`` on ``rotor``, or a
-    :class:`ParameterError`: each m e within its disc's bound (:meth:`frbmodel.system.rotor.Rotor.check_unbalance`).
+    :class:`ParameterError`: each disc at most once (two entries on one disc were summed; give their resultant) and
+    each m e within its disc's bound (:meth:`frbmodel.system.rotor.Rotor.check_unbalance`).
 
     Examples
     --------
@@ -675,6 +677,8 @@ def unbalance_arrays(rotor, unbalance):
     (array([3]), array([2.e-06]), array([0.5]))
     """
     unbalance = list(unbalance)
+    names = [u.disc for u in unbalance]
+    check_distinct(f"unbalance discs {names}", names)
     checked = [rotor.check_unbalance(u.disc, u.amount) for u in unbalance]
     return (np.array([d.node for d, _ in checked], dtype=np.int64), np.array([a for _, a in checked], dtype=float),
             np.array([float(u.phase) for u in unbalance], dtype=float))
@@ -967,7 +971,7 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     Raises
     ------
     ParameterError
-        Not two bearings, an unbalance outside its disc's range (:func:`unbalance_arrays`), a
+        Not two bearings, an unbalance outside its disc's range or on a disc twice (:func:`unbalance_arrays`), a
         negative spring stiffness, a non-uniform time grid, a torque-driven rotor without polar inertia, or an oil
         supply with linear springs.
 
