@@ -86,7 +86,7 @@ from .studies.sweep import (
 )
 from .studies.thermal import RUNUP_RATE_HZ, onsets_vs_supply, runup_onsets_vs_supply
 from .studies.warmup import kernels_ready, warmup, warmup_marker
-from .system.methods import METHODS, get_method
+from .system.methods import MAX_SPRING_N_M, METHODS, get_method
 from .system.oil import OIL, T_MIN_K, check_temperature
 from .system.parameters import load_system, system_from_meta
 from .system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES, turbocharger
@@ -1797,9 +1797,10 @@ NUMERIC_OPTIONS = {
     "drive_torque": ("N m", "frbmodel.nonlinear.runup.check_drive_torque (|T| <= J_p * 1e6 rpm / 1 ms)"),
     "duration": ("s", (0.0, None)),
     "fmax": ("Hz", (0.0, None)),
-    "k": ("N/m", (0.0, None)),
-    "kx": ("N/m", (0.0, None)),
-    "ky": ("N/m", (0.0, None)),
+    # (MAX_SPRING_N_M: rigid supports there; stiffer springs lose the modes to round-off, 1e40 gave wrong ones)
+    "k": ("N/m", (0.0, MAX_SPRING_N_M)),
+    "kx": ("N/m", (0.0, MAX_SPRING_N_M)),
+    "ky": ("N/m", (0.0, MAX_SPRING_N_M)),
     "max_points": ("-", (2, MAX_BRANCH_POINTS)),  # (the speed-grid bound: a branch's points are its diagram's speeds)
     "mode_shapes": ("rpm", "speed"),
     "n_speeds": ("-", (2, 10000)),  # (MAX_SPEED_COUNT: 1e8 speeds started a run of days)

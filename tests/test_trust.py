@@ -887,6 +887,11 @@ TRUST6_CLI = [
     (["runup", "--unbalance", "turbine_wheel:1e-6", "--unbalance", "turbine_wheel:1e-6:1", "--duration", "0.01"],
      "--unbalance 'turbine_wheel:1e-6:1': unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: "
      "give distinct values"),
+    # a spring of 1e40 N/m gave wrong modes without a warning
+    (["unbalance", "--method", "A", "--k", "1e40", "--speeds", "3000:30000:3"],
+     "--k = 1e+40 N/m is invalid: valid range is finite and > 0 and <= 1e+15 N/m"),
+    (["campbell", "--method", "B", "--ky", "1e40"], "--ky = 1e+40 N/m is invalid: valid range is finite and > 0 and "
+                                                    "<= 1e+15 N/m"),
 ]
 
 
@@ -988,6 +993,12 @@ TRUST6_API = [
     (lambda: frb.unbalance_response(frb.turbocharger(), "A", [1e4], _unbalances(("turbine_wheel", 1e-6),
                                                                                 ("turbine_wheel", 1e-6))),
      "unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: give distinct values"),
+    # a spring of 1e40 N/m gave wrong modes without a warning
+    (lambda: frb.campbell(frb.turbocharger(), "A", [1e4], k=1e40),
+     "method A k = 1e+40 N/m is invalid: valid range 0 < k <= 1e+15 N/m (a rigid support; stiffer springs lose the "
+     "rotor's modes to round-off)"),
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, linear_springs=1e40),
+     "linear_springs = 1e+40 N/m is invalid: valid range 0 < k <= 1e+15 N/m"),
 ]
 
 

@@ -44,6 +44,7 @@ from ..physics.dynamics import monolithic_jac as _jac
 from ..physics.dynamics import monolithic_rhs as _rhs
 from ..physics.film import check_model
 from ..physics.losses import bearing_loss_kernel, film_arrays
+from ..system.methods import check_spring
 from .compiled import pack_problem, solve_chunk
 from .recorder import Recorder, RunupResult, RunupSchema
 from .rosenbrock import FD_TYPICAL_M, STATUS, film_columns, rodas_chunk
@@ -982,7 +983,7 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     if len(system.bearings) != 2:
         raise ParameterError(f"the run-up needs exactly 2 bearings, the system has {len(system.bearings)}")
     rotor = system.rotor
-    springs = 0.0 if linear_springs is None else check_positive("linear_springs", linear_springs, "N/m")
+    springs = 0.0 if linear_springs is None else check_spring("linear_springs", linear_springs)
     unb_node, unb_me, unb_phase = unbalance_arrays(rotor, unbalance)  # (before the thermal tables: it was after)
     sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs, system=system)
     visc = (None, None)
