@@ -999,6 +999,9 @@ TRUST6_API = [
      "rotor's modes to round-off)"),
     (lambda: frb.runup(frb.turbocharger(), duration=0.01, linear_springs=1e40),
      "linear_springs = 1e+40 N/m is invalid: valid range 0 < k <= 1e+15 N/m"),
+    # a study's Campbell grid of 1e8 speeds: every case failed (the CLI's grid bound)
+    (lambda: _grid({"outer_clearance": [36e-6]}, "campbell", speeds_rpm=(1e3, 2.5e5, 10**8)),
+     "campbell speeds_rpm = (1000.0, 250000.0, 100000000) has 100000000 speeds: valid range 1 ... 10000 speeds"),
 ]
 
 

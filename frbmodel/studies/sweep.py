@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_positive, check_real, read_json
+from ..core.errors import ParameterError, check_positive, check_real, check_speed_count, read_json
 from ..core.progress import counter_bar, note
 from ..cosim.master import cosimulate, operating_point_overrides
 from ..cycles.branch import check_segments
@@ -172,6 +172,7 @@ def check_options(analysis, options):
             check_speed("campbell stop speed", b)
             if int(n) != n or n < 2:
                 raise ParameterError(f"campbell speed count = {n!r} is invalid: valid range integer >= 2")
+            check_speed_count(f"campbell speeds_rpm = {options['speeds_rpm']!r}", int(n))  # (the CLI's grid bound)
     else:  # run-ups, co-simulations and Hopf points: a speed range
         if "speed_rpm" in options:
             a, b = options["speed_rpm"]
