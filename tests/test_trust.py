@@ -847,7 +847,8 @@ def thin_ring(tmp_path_factory):
     return tc.with_(bearings=(thin, tc.bearings[1])).save(tmp_path_factory.mktemp("thin") / "thin.toml")
 
 
-#: the one line of each trust6 CLI case (RUN: the short run's folder, THIN: the thin-ring system file)
+#: the one line of each trust6 CLI case (RUN: the short run's folder, THIN: the thin-ring system file, SSP: the
+#: built turbocharger.ssp, NOSSP: a path without one)
 UNBALANCE_10 = ("unbalance of turbine_wheel = 10.0 kg m is invalid: valid range 0 ... 0.00514 kg m = sqrt(m I_p) of "
                 "the disc (0.326 kg, 8.1e-05 kg m^2; a larger m e needs more mass farther from the axis than the disc "
                 "has; 1e-6 kg m = 1 g mm)")
@@ -892,12 +893,23 @@ TRUST6_CLI = [
      "--k = 1e+40 N/m is invalid: valid range is finite and > 0 and <= 1e+15 N/m"),
     (["campbell", "--method", "B", "--ky", "1e40"], "--ky = 1e+40 N/m is invalid: valid range is finite and > 0 and "
                                                     "<= 1e+15 N/m"),
+    # a cosim study of a missing SSP, a duration off the macro steps or one recording 2e7 samples: every case failed
+    # (exit 4, a study folder written) where frb cosim refuses the same at once
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "NOSSP", "--serial"],
+     "SSP = 'NOSSP' does not exist"),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "SSP", "--duration", "0.0012345",
+      "--serial"], "cosim duration = 0.0012345 s is not a whole number of macro steps of 1e-05 s (123.45 steps): the "
+                   "run would end at 0.00123 s; valid: a multiple of the step as the option duration (frb sweep "
+                   "--duration), e.g. 0.00123 or 0.00124 s"),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "SSP", "--duration", "1000",
+      "--serial"], "cosim duration = 1000 s is invalid at output_rate_hz = 20000 Hz: 2e+07 samples, valid range <= "
+                   "1e+07 samples (cosim duration <= 500 s)"),
 ]
 
 
 @pytest.mark.parametrize("argv, message", TRUST6_CLI)
 def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(argv, message, short_run, thin_ring,
-                                                                             tmp_path, capsys, monkeypatch):
+                                                                             built, tmp_path, capsys, monkeypatch):
     """trust6: each case ran (exit 0) with a value drawn or computed twice, a number past any meaning, or was refused
     only inside the computation. Now exit 2 with the one line naming the option, its value and the valid range,
     before any work (the analyses are replaced by functions that fail the test if they are called) and with nothing
@@ -909,12 +921,14 @@ def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(arg
         raise AssertionError("the analysis ran before the input was checked")
 
     for name in ("campbell", "unbalance_response", "runup", "hopf_points", "continuation", "thermal_losses",
-                 "cosimulate", "write_composites", "write_orbits"):
+                 "cosimulate", "write_composites", "write_orbits", "run_study"):
         monkeypatch.setattr(cli, name, computed)
     monkeypatch.setattr(lt, "_operating_point", computed)
-    subs = {"RUN": str(short_run), "THIN": str(thin_ring)}
+    subs = {"RUN": str(short_run), "THIN": str(thin_ring), "SSP": str(built / "turbocharger.ssp"),
+            "NOSSP": str(short_run.parent / "none.ssp")}
     argv = [",".join(subs.get(x, x) for x in a.split(",")) for a in argv]
-    message = message.replace("RUN", str(short_run))
+    for token in ("NOSSP", "RUN"):
+        message = message.replace(token, subs[token])
     before = {p.name: p.read_bytes() for p in short_run.iterdir()}
     out = tmp_path / "out"
     assert main(argv if argv[0] == "plot" else [*argv, "--out", str(out)]) == 2
@@ -1002,6 +1016,9 @@ TRUST6_API = [
     # a study's Campbell grid of 1e8 speeds: every case failed (the CLI's grid bound)
     (lambda: _grid({"outer_clearance": [36e-6]}, "campbell", speeds_rpm=(1e3, 2.5e5, 10**8)),
      "campbell speeds_rpm = (1000.0, 250000.0, 100000000) has 100000000 speeds: valid range 1 ... 10000 speeds"),
+    # a cosim study without an SSP: every case failed with a KeyError
+    (lambda: _grid({"outer_clearance": [36e-6]}, "cosim"), "analysis 'cosim' needs the option ssp: the SSP of the FMUs "
+                                                          "(frb build-fmus writes build/turbocharger.ssp)"),
 ]
 
 

@@ -108,15 +108,28 @@ def _checked_profile(profile):
     return profile
 
 
-def check_whole_steps(stop_time, step_size, what="stop time"):
+def check_whole_steps(stop_time, step_size, what="stop time", option="--stop-time", other=" (or --adaptive)"):
     """Raise :class:`ParameterError` unless ``stop_time`` is a whole number of fixed macro steps ``step_size`` [s]
-    (to 1e-9 of a step): the run takes round(T / H) steps, so it ended short of or beyond the stop time it reported."""
+    (to 1e-9 of a step): the run takes round(T / H) steps, so it ended short of or beyond the stop time it reported.
+    ``option`` is where the user gives the stop time and ``other`` the way around it, for the message."""
     n = stop_time / step_size
     if abs(n - round(n)) > 1e-6:
         lo, hi = math.floor(n) * step_size, math.ceil(n) * step_size
         raise ParameterError(f"{what} = {stop_time!r} s is not a whole number of macro steps of {step_size!r} s "
                              f"({n:.6g} steps): the run would end at {round(n) * step_size:.9g} s; valid: a multiple "
-                             f"of the step as --stop-time, e.g. {lo:.9g} or {hi:.9g} s (or --adaptive)")
+                             f"of the step as {option}, e.g. {lo:.9g} or {hi:.9g} s{other}")
+
+
+def check_record_size(stop_time, output_rate_hz, what="stop time"):
+    """``float(output_rate_hz)`` if a co-simulation to ``stop_time`` [s] records at most
+    :data:`~frbmodel.nonlinear.runup.MAX_SAMPLES` samples at that rate [Hz], else a :class:`ParameterError` naming
+    ``what``, the rate and the valid range (the recorder holds them in memory: 2e8 samples asked for 39 GB)."""
+    rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
+    if stop_time * rate > MAX_SAMPLES:
+        raise ParameterError(f"{what} = {stop_time:g} s is invalid at output_rate_hz = {rate:g} Hz: "
+                             f"{stop_time * rate:.3g} samples, valid range <= {MAX_SAMPLES:.0e} samples ({what} <= "
+                             f"{MAX_SAMPLES / rate:g} s)")
+    return rate
 
 
 def _profile_stop_time(profile, stop_time):
@@ -726,11 +739,7 @@ class Master(FmuHost):
         :class:`RunupResult` (``meta``: wall time, time inside FMI calls, steps taken and rejected); raises
         :class:`CosimStopped` (with ``.result``) when an FMU fails."""
         H, T = self.step_size, self.stop_time
-        rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
-        if T * rate > MAX_SAMPLES:  # (the recorder holds them in memory: 2e8 samples asked for 39 GB)
-            raise ParameterError(f"stop time = {T:g} s is invalid at output_rate_hz = {rate:g} Hz: {T * rate:.3g} "
-                                 f"samples, valid range <= {MAX_SAMPLES:.0e} samples (stop time <= "
-                                 f"{MAX_SAMPLES / rate:g} s)")
+        check_record_size(T, output_rate_hz)
         every = max(1, int(round(1.0 / (H * output_rate_hz))))
         n_steps = int(round(T / H))
         t_wall = time.perf_counter()
@@ -803,8 +812,8 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
 
 
 __all__ = ["Master", "cosimulate", "CosimStopped", "RunupResult", "operating_point_overrides",
-           "system_from_parameters", "check_coupling_tol", "COUPLING_TOL", "MAX_COUPLING_TOL", "PRIME_STEP_S",
-           "VALIDATED_STEP_S"]
+           "system_from_parameters", "check_coupling_tol", "check_record_size", "COUPLING_TOL", "MAX_COUPLING_TOL",
+           "PRIME_STEP_S", "VALIDATED_STEP_S"]
 
 
 def operating_point_overrides(system, speed_rpm, end_rpm=None, ramp_time=1.0, method="J", perturbation=0.0):

@@ -33,7 +33,8 @@ import numpy as np
 
 from ..core.errors import ParameterError, check_positive, check_real, check_speed_count, read_json
 from ..core.progress import counter_bar, note
-from ..cosim.master import cosimulate, operating_point_overrides
+from ..cosim.master import Master, check_record_size, check_whole_steps, cosimulate, operating_point_overrides
+from ..cosim.ssp import read_ssp
 from ..cycles.branch import check_segments
 from ..cycles.continuation import check_max_points, check_starts, continuation, hopf_points
 from ..linear.campbell import campbell
@@ -72,6 +73,8 @@ ANALYSIS_OPTIONS = {"campbell": ("methods", "speeds_rpm", "oil", "system"),
                     "cosim": ("speed_rpm", "duration", "ssp", "parameter_set", "oil", "system"),
                     "hopf": ("speed_rpm", "oil", "system"),
                     "bifurcation": ("speed_rpm", "start", "max_points", "segments", "oil", "system")}
+#: output rate [Hz] of a cosim study's runs (cosimulate's default; :func:`_check_cosim_options` bounds their record)
+COSIM_OUTPUT_RATE_HZ = 20e3
 #: the speed profiles of a runup study (option ``profile``)
 RUNUP_PROFILES = ("exponential", "ramp")
 #: seconds to wait for an existing Dask scheduler before giving up
@@ -190,6 +193,23 @@ def check_options(analysis, options):
                      "speed_rpm")
 
 
+def _check_cosim_options(options):
+    """The SSP and the duration of a ``cosim`` study as frb cosim checks them, before any case (each case failed,
+    exit 4: a missing SSP, an unknown parameter set, a duration that is not a whole number of the SSP's macro steps or
+    records more than MAX_SAMPLES): the Master is set up without running, its FMUs not instantiated."""
+    if not options.get("ssp"):
+        raise ParameterError("analysis 'cosim' needs the option ssp: the SSP of the FMUs (frb build-fmus writes "
+                             "build/turbocharger.ssp)")
+    duration = check_positive("duration", options.get("duration", 1.0), "s")
+    with read_ssp(options["ssp"]) as ssp:
+        ssp.parameters(options.get("parameter_set", "co36"))
+        step = ssp.step_size or 1e-5  # (the Master's fixed macro step of a study's runs)
+    check_whole_steps(duration, step, "cosim duration", "the option duration (frb sweep --duration)", "")
+    check_record_size(duration, COSIM_OUTPUT_RATE_HZ, "cosim duration")
+    with Master(options["ssp"], options.get("parameter_set", "co36"), stop_time=duration):
+        pass  # (the rest of frb cosim's set-up checks: the step's validated range, the parameter set's system)
+
+
 def grid(params: dict, analysis="campbell", **options):
     """Cases for the Cartesian product of ``params`` {name: list of values}; the options are checked first
     (:func:`check_options`).
@@ -228,6 +248,8 @@ def grid(params: dict, analysis="campbell", **options):
         raise ParameterError(f"analysis = {analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
     check_options(analysis, options)
     _check_thermal_study(names, analysis, options)
+    if analysis == "cosim":  # (it reads the SSP: after the checks of the options alone)
+        _check_cosim_options(options)
     oil_base = None  # the system option's oil, if it has one, for the supply values' check
     if isinstance(options.get("system"), dict) and "oil" in options["system"]:
         oil_base = Turbocharger.from_dict(options["system"])
@@ -489,7 +511,8 @@ def _cosim_rows(tc, unb, o):
         ov[b.name]["ring.mass"] = ("Real", b.ring_mass)
     for u in unb:
         ov["rotor"][f"{u.disc}.unbalance"] = ("Real", u.amount)
-    run = cosimulate(o["ssp"], o.get("parameter_set", "co36"), stop_time=dur, overrides=ov, progress=False)
+    run = cosimulate(o["ssp"], o.get("parameter_set", "co36"), stop_time=dur, overrides=ov, progress=False,
+                     output_rate_hz=COSIM_OUTPUT_RATE_HZ)
     return _onset_rows_run(run, "co-sim run-down" if end < start else "co-sim")
 
 
