@@ -62,7 +62,7 @@ from .nonlinear.runup import (
 from .plots.figures import html_plotlyjs, system_run_figure
 from .plots.losses import plot_bearing_losses
 from .plots.thermal import plot_onsets_vs_supply, plot_thermal_losses
-from .studies.compare import compare
+from .studies.compare import check_clearances, compare
 from .studies.paper import paper_figures
 from .studies.run_outputs import (
     check_convergence,
@@ -734,6 +734,10 @@ def cmd_compare(args):
     tc = load_from_args(args)
     cl = check_distinct(f"--clearances = {args.clearances!r}", [check_positive("--clearances", x, "m")
                                                             for x in args.clearances.split(",")], "m")
+    try:  # (each against the system's films and its own result folder, before the folder is made)
+        cl = check_clearances(tc, cl)
+    except ParameterError as exc:
+        raise ParameterError(f"--clearances = {args.clearances!r}: {exc}") from None
     a, b = _speed_pair(args.speeds)
     writable_dir(args.out)  # (after every check: a refused option leaves no folder)
     table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out, progress=True,

@@ -895,6 +895,14 @@ TRUST6_CLI = [
                                                     "<= 1e+15 N/m"),
     # a cosim study of a missing SSP, a duration off the macro steps or one recording 2e7 samples: every case failed
     # (exit 4, a study folder written) where frb cosim refuses the same at once
+    # frb compare: a clearance the films refuse was refused after the Campbell diagrams and run-ups of the ones before
+    # it (their files left in the folder); two clearances within a µm wrote one result folder, the second over the first
+    (["compare", "--clearances", "36e-6,1e-12", "--duration", "0.01"],
+     "--clearances = '36e-6,1e-12': turbine outer film clearance = 1e-12 m is invalid for radius 0.008 m: valid range "
+     ">= 0.0001 * radius = 8e-07 m (a thinner film is below the surfaces' roughness: no hydrodynamic film forms)"),
+    (["compare", "--clearances", "36.2e-6,36.2000001e-6", "--duration", "0.01"],
+     "--clearances = '36.2e-6,36.2000001e-6': clearances = [3.62e-05, 3.62000001e-05]: their result folders "
+     "['co36.2um', 'co36.2um'] repeats co36.2um: give distinct values"),
     (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "NOSSP", "--serial"],
      "SSP = 'NOSSP' does not exist"),
     (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "SSP", "--duration", "0.0012345",
@@ -921,7 +929,7 @@ def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(arg
         raise AssertionError("the analysis ran before the input was checked")
 
     for name in ("campbell", "unbalance_response", "runup", "hopf_points", "continuation", "thermal_losses",
-                 "cosimulate", "write_composites", "write_orbits", "run_study"):
+                 "cosimulate", "write_composites", "write_orbits", "run_study", "compare"):
         monkeypatch.setattr(cli, name, computed)
     monkeypatch.setattr(lt, "_operating_point", computed)
     subs = {"RUN": str(short_run), "THIN": str(thin_ring), "SSP": str(built / "turbocharger.ssp"),
@@ -1016,6 +1024,9 @@ TRUST6_API = [
     # a study's Campbell grid of 1e8 speeds: every case failed (the CLI's grid bound)
     (lambda: _grid({"outer_clearance": [36e-6]}, "campbell", speeds_rpm=(1e3, 2.5e5, 10**8)),
      "campbell speeds_rpm = (1000.0, 250000.0, 100000000) has 100000000 speeds: valid range 1 ... 10000 speeds"),
+    # compare: the second clearance refused after the first's Campbell diagram and run-up
+    (lambda: __import__("frbmodel.studies.compare").studies.compare.compare(frb.turbocharger(), (36e-6, 1e-12)),
+     "turbine outer film clearance = 1e-12 m is invalid for radius 0.008 m"),
     # a cosim study without an SSP: every case failed with a KeyError
     (lambda: _grid({"outer_clearance": [36e-6]}, "cosim"), "analysis 'cosim' needs the option ssp: the SSP of the FMUs "
                                                           "(frb build-fmus writes build/turbocharger.ssp)"),
@@ -1031,6 +1042,7 @@ def test_api_refuses_the_same_values_as_the_cli_before_any_work(call, message, m
     import frbmodel.cycles.continuation as cc
     import frbmodel.linear.thermal as lt
     import frbmodel.nonlinear.runup as ru
+    import frbmodel.studies.compare as cm
 
     def computed(*args, **kwargs):
         raise AssertionError("the computation started before the input was checked")
@@ -1038,8 +1050,17 @@ def test_api_refuses_the_same_values_as_the_cli_before_any_work(call, message, m
     monkeypatch.setattr(lt, "_operating_point", computed)
     monkeypatch.setattr(cc, "hopf_points", computed)
     monkeypatch.setattr(br, "_unstable_pairs", computed)
+    monkeypatch.setattr(cm, "campbell", computed)
     for name in ("viscosity_table", "lagged_viscosity_table", "_integrate", "initial_state"):
         monkeypatch.setattr(ru, name, computed)
     with pytest.raises(ParameterError) as exc:
         call()
     assert message in str(exc.value), str(exc.value)
+
+
+def test_compare_writes_each_clearance_to_its_own_folder():
+    """trust6: the result folder of a clearance was named by the whole µm (co36um for 36.2 and 36.4 µm: the second's
+    files over the first's, while the table listed both). Now 6 significant digits name it."""
+    from frbmodel.studies.compare import clearance_tag
+
+    assert [clearance_tag(c) for c in (36e-6, 36.2e-6, 36.4e-6, 46e-6)] == ["co36um", "co36.2um", "co36.4um", "co46um"]
