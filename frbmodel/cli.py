@@ -12,6 +12,7 @@ from .core.errors import (
     FRBError,
     ParameterError,
     RunStopped,
+    check_distinct,
     check_finite,
     check_positive,
     check_speed,
@@ -24,18 +25,25 @@ from .core.manifest import extend
 from .core.version import __version__
 from .cosim.build import build_fmus
 from .cosim.linearize import campbell_from_fmu, linearize
-from .cosim.master import COUPLING_TOL, cosimulate
+from .cosim.master import COUPLING_TOL, MAX_COUPLING_TOL, cosimulate
 from .cosim.sources import find_source
 from .cosim.ssp import read_ssp
 from .cosim.system_master import SystemMaster, is_system_ssp
-from .cycles.branch import hopf_dataframe
-from .cycles.continuation import BifurcationDiagram, check_starts, continuation, hopf_points
+from .cycles.branch import MAX_SEGMENTS, hopf_dataframe
+from .cycles.continuation import MAX_BRANCH_POINTS, BifurcationDiagram, check_starts, continuation, hopf_points
 from .linear.campbell import campbell
 from .linear.equilibrium import equilibrium
 from .linear.losses import bearing_losses, with_ring_speed_ratio
 from .linear.modal import modes_from_state
 from .linear.modeshape import save_mode_shapes
-from .linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, at_operating_point, check_supply_pressure, thermal_losses
+from .linear.thermal import (
+    SUPPLY_PRESSURE_PA,
+    OilSupply,
+    at_operating_point,
+    check_oil_supply,
+    check_supply_pressure,
+    thermal_losses,
+)
 from .linear.unbalance import bode_figure, critical_speeds, location_names, unbalance_response
 from .nonlinear.recorder import RunupResult
 from .nonlinear.runup import (
@@ -49,11 +57,12 @@ from .nonlinear.runup import (
     check_runup_oil,
     check_tolerances,
     runup,
+    unbalance_arrays,
 )
 from .plots.figures import html_plotlyjs, system_run_figure
 from .plots.losses import plot_bearing_losses
 from .plots.thermal import plot_onsets_vs_supply, plot_thermal_losses
-from .studies.compare import compare
+from .studies.compare import check_clearances, compare
 from .studies.paper import paper_figures
 from .studies.run_outputs import (
     check_convergence,
@@ -77,7 +86,7 @@ from .studies.sweep import (
 )
 from .studies.thermal import RUNUP_RATE_HZ, onsets_vs_supply, runup_onsets_vs_supply
 from .studies.warmup import kernels_ready, warmup, warmup_marker
-from .system.methods import METHODS, get_method
+from .system.methods import MAX_SPRING_N_M, METHODS, get_method
 from .system.oil import OIL, T_MIN_K, check_temperature
 from .system.parameters import load_system, system_from_meta
 from .system.presets import DEFAULT_OUTER_CLEARANCE_M, PAPER_OUTER_CLEARANCES, turbocharger
@@ -130,15 +139,6 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
         twice = next(float(v) for v in speeds if np.count_nonzero(speeds == v) > 1)
         raise ParameterError(f"{name} repeats {twice:g} rpm: give distinct speeds")
     return speeds
-
-
-def _distinct(name, values, unit=""):
-    """``values`` if no value repeats, else a ParameterError naming the first repeated one (the same case, curve or
-    table rows computed twice)."""
-    twice = next((v for k, v in enumerate(values) if v in values[:k]), None)
-    if twice is not None:
-        raise ParameterError(f"{name} repeats {twice:g}{' ' + unit if unit else ''}: give distinct values")
-    return values
 
 
 def _given(value, default):
@@ -340,8 +340,8 @@ def cmd_unbalance(args):
     kw = {k: getattr(args, k) for k in ("k", "kx", "ky") if getattr(args, k) is not None}
     methods = _unbalance_methods(args.method, kw)
     check_method_speeds("--speeds", args.speeds, speeds, [letter for letter, _ in methods])
-    unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"])
     tc = load_from_args(args)
+    unbalance = _parse_unbalance(args.unbalance or ["turbine_wheel:1e-6:0"], tc)
     supply = _oil_supply_from_args(args, tc)
     names = _locations(args)
     bad = [n for n in names or [] if n not in location_names(tc)]
@@ -414,10 +414,12 @@ def _locations(args):
     if not names:  # (it drew the default locations)
         raise ParameterError(f"--locations = {args.locations!r} names no location: give a comma list of names, e.g. "
                              "turbine_wheel,compressor_wheel")
-    return names
+    return check_distinct(f"--locations = {args.locations!r}", names)  # (a repeated location was drawn twice)
 
 
-def _parse_unbalance(items):
+def _parse_unbalance(items, system):
+    """The :class:`Unbalance` list of ``--unbalance DISC:AMOUNT[:PHASE]`` (repeatable), each checked on ``system``
+    (the disc's own bound, each disc once: :func:`frbmodel.nonlinear.runup.unbalance_arrays`) before any folder."""
 
     out = []
     for it in items or []:
@@ -433,6 +435,7 @@ def _parse_unbalance(items):
                                  "turbine_wheel:1e-6:0") from None
         try:
             out.append(Unbalance(disc, amount, phase))
+            unbalance_arrays(system.rotor, out)
         except ParameterError as exc:
             raise ParameterError(f"--unbalance {it!r}: {exc}") from None
     return out
@@ -526,8 +529,8 @@ def cmd_runup(args):
     rtol, atol = check_tolerances(tc, args.rtol, args.atol, ("--rtol", "--atol"))
     check_drive_torque(tc, prof, "--drive-torque")
     supply = check_runup_oil(_with_ring_capacity(args, _oil_supply_from_args(args, tc)), prof, args.integrator, None,
-                             ("--integrator", "--profile"))
-    unbalance = _parse_unbalance(args.unbalance)
+                             ("--integrator", "--profile"), tc)
+    unbalance = _parse_unbalance(args.unbalance, tc)
     out = writable_dir(args.out)
     kind = RUN_TITLES.get(prof.direction, "run-up")
     print(f"{kind}: {prof.description}, film model {tc.film_model}, results stream to {out.resolve()}")
@@ -625,7 +628,9 @@ def _load_runs(text, system):
     folder without one, or with a run of another system than ``system`` (its envelope was drawn behind branches it
     cannot be compared with)."""
 
-    return [(d, _same_system_run(d, system, "--runs")) for d in (text or "").split(",") if d]
+    folders = [d for d in (text or "").split(",") if d]
+    check_distinct(f"--runs = {text!r}", [str(Path(d).resolve()) for d in folders])  # (its envelope drawn twice)
+    return [(d, _same_system_run(d, system, "--runs")) for d in folders]
 
 
 def _on_sigterm(signum, frame):
@@ -727,8 +732,12 @@ def cmd_compare(args):
     """``frb compare``: run-ups vs method-J stability per outer clearance (figures and onset table)."""
 
     tc = load_from_args(args)
-    cl = _distinct(f"--clearances = {args.clearances!r}", [check_positive("--clearances", x, "m")
+    cl = check_distinct(f"--clearances = {args.clearances!r}", [check_positive("--clearances", x, "m")
                                                             for x in args.clearances.split(",")], "m")
+    try:  # (each against the system's films and its own result folder, before the folder is made)
+        cl = check_clearances(tc, cl)
+    except ParameterError as exc:
+        raise ParameterError(f"--clearances = {args.clearances!r}: {exc}") from None
     a, b = _speed_pair(args.speeds)
     writable_dir(args.out)  # (after every check: a refused option leaves no folder)
     table, paths = compare(tc, cl, (a, b), args.duration, args.profile, out_dir=args.out, progress=True,
@@ -759,7 +768,8 @@ def parse_orders(text: str) -> tuple:
         text = DEFAULT_ORDERS
     if text.strip().lower() in ("", "none"):
         return ()
-    return tuple(check_positive("--orders", x.strip()) for x in text.split(",") if x.strip())
+    orders = [check_positive("--orders", x.strip()) for x in text.split(",") if x.strip()]
+    return tuple(check_distinct(f"--orders = {text!r}", orders))  # (a repeated order line was drawn twice)
 
 
 #: the default order lines of ``frb plot --orders`` (0.5X and 1X)
@@ -841,7 +851,7 @@ def parse_time_windows(text: str) -> list:
     Returns
     -------
     list of (float, float)
-        Start and end [s], start < end.
+        Start and end [s], start < end, each window once (a repeated window was drawn and written twice).
 
     Examples
     --------
@@ -857,7 +867,7 @@ def parse_time_windows(text: str) -> list:
         if not (np.isfinite(a) and np.isfinite(b) and a < b):
             raise ParameterError(f"--orbit-times {item!r} is invalid: valid range T0 < T1 (finite) [s]")
         out.append((a, b))
-    return out
+    return check_distinct(f"--orbit-times = {text!r}", out, "s")
 
 
 def _orbit_windows(args, run):
@@ -924,7 +934,9 @@ def _oil_supply_from_args(args, system):
     t_s = 363.15 if args.supply_temperature is None else args.supply_temperature
     t_s = check_temperature("--supply-temperature", t_s, T_MIN_K, oil.max_temperature_K)
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
-    return OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s))
+    # (the feed holes against the system's rings, before any folder: the check ran inside the first balance)
+    return check_oil_supply(OilSupply(oil, t_s, check_supply_pressure("--supply-pressure", p_s)),
+                            bearings=system.bearings)
 
 
 def _with_ring_capacity(args, supply):
@@ -952,7 +964,7 @@ def _supply_from_args(args, oil):
         raise ParameterError(f"--supply-temperature = {text!r} is invalid: give a temperature [K] or a comma list "
                              "(e.g. 333.15,363.15)") from None
     temps = [check_temperature("--supply-temperature", v, T_MIN_K, oil.max_temperature_K) for v in values]
-    _distinct(f"--supply-temperature = {text!r}", temps, "K")
+    check_distinct(f"--supply-temperature = {text!r}", temps, "K")
     p_s = SUPPLY_PRESSURE_PA if args.supply_pressure is None else args.supply_pressure
     return temps, check_supply_pressure("--supply-pressure", p_s)
 
@@ -975,6 +987,8 @@ def cmd_losses(args):
         raise ParameterError(f"--onsets cannot be combined with --method {args.method}: the onsets are those of the "
                              "thermal Campbell diagram of method J (the full ring torque balance); use --method J")
     temps, p_s = _supply_from_args(args, oil) if oil is not None else (None, None)
+    if oil is not None:  # (the thermal model's feed holes against the rings: it ran inside the first balance)
+        check_oil_supply(OilSupply(oil, temps[0], p_s), bearings=tc.bearings)
     speeds = parse_speeds(args.speeds)
     check_method_speeds("--speeds", args.speeds, speeds, [args.method])
     run = _same_system_run(args.run, tc) if args.run is not None else None
@@ -1248,7 +1262,7 @@ def _sweep_params(items):
         if name.strip() in params:
             raise ParameterError(f"--param {item!r}: {name.strip()} is given twice; give all its values in one "
                                  f"--param {name.strip()}=V1,V2,...")
-        _distinct(f"--param {item!r}", values)
+        check_distinct(f"--param {item!r}", values)
         params[name.strip()] = values
     return params
 
@@ -1774,28 +1788,32 @@ def _finish_claims(code):
 
 
 #: every numeric option of every command, by its argparse dest: (unit, valid range). A range is (lowest, highest):
-#: floats must be finite and > lowest, integers >= lowest; None: no bound. A string names the check that bounds the
-#: option where its range depends on the system or on other options (it runs inside the command, before any work).
-#: :func:`check_numeric_options` applies the ranges before a command runs; a test requires every float or int option
-#: of the parser to be listed here.
+#: floats must be finite and > lowest (and <= highest), integers >= lowest (and <= highest); None: no bound. A bound
+#: that is a library constant is that constant, so the CLI and the API refuse the same values. A string names the
+#: check that bounds the option where its range depends on the system or on other options (it runs inside the
+#: command, before any work). :func:`check_numeric_options` applies the ranges before a command runs; a test requires
+#: every float or int option of the parser to be listed here.
 NUMERIC_OPTIONS = {
     "atol": ("m", "frbmodel.nonlinear.runup.check_tolerances (<= 1e-3 of the smallest film clearance)"),
     "rtol": ("-", "frbmodel.nonlinear.runup.check_tolerances (RTOL_RANGE)"),
-    "coupling_tol": ("-", (0.0, None)),
+    # (a fraction of the inner clearance per macro step: the run-up's atol bound, and on the main job the path defect
+    # of the longest validated step, 20 us; a larger one asks for steps the step cap overrides: 10 had no effect)
+    "coupling_tol": ("-", (0.0, MAX_COUPLING_TOL)),
     "drive_torque": ("N m", "frbmodel.nonlinear.runup.check_drive_torque (|T| <= J_p * 1e6 rpm / 1 ms)"),
     "duration": ("s", (0.0, None)),
     "fmax": ("Hz", (0.0, None)),
-    "k": ("N/m", (0.0, None)),
-    "kx": ("N/m", (0.0, None)),
-    "ky": ("N/m", (0.0, None)),
-    "max_points": ("-", (2, None)),
+    # (MAX_SPRING_N_M: rigid supports there; stiffer springs lose the modes to round-off, 1e40 gave wrong ones)
+    "k": ("N/m", (0.0, MAX_SPRING_N_M)),
+    "kx": ("N/m", (0.0, MAX_SPRING_N_M)),
+    "ky": ("N/m", (0.0, MAX_SPRING_N_M)),
+    "max_points": ("-", (2, MAX_BRANCH_POINTS)),  # (the speed-grid bound: a branch's points are its diagram's speeds)
     "mode_shapes": ("rpm", "speed"),
     "n_speeds": ("-", (2, 10000)),  # (MAX_SPEED_COUNT: 1e8 speeds started a run of days)
     "outer_clearance": ("m", "the system's film checks (clearance / radius, roughness)"),
     "rate": ("Hz", "frbmodel.nonlinear.runup.check_output_rate (samples of the run)"),
     "revolutions": ("revolutions", (0.0, None)),
     "runup_duration": ("s", (0.0, None)),
-    "segments": ("-", (1, 64)),  # (4 serve strongly unstable branches; 1e6 held a million states per orbit)
+    "segments": ("-", (1, MAX_SEGMENTS)),  # (4 serve strongly unstable branches; 1e6 held a million states per orbit)
     "speed_rpm": ("rpm", "speed"),
     "step": ("s", (0.0, None)),
     "stop_time": ("s", (0.0, None)),
@@ -1822,7 +1840,11 @@ def check_numeric_options(args):
                 raise ParameterError(f"{option} = {value} is invalid: valid range >= {rng[0]}"
                                      + (f" and <= {rng[1]}" if rng[1] is not None else ""))
         else:
-            check_positive(option, value, "" if unit == "-" else unit)
+            v = check_positive(option, value, "" if unit == "-" else unit)
+            if rng[1] is not None and v > rng[1]:
+                shown = "" if unit == "-" else f" {unit}"
+                raise ParameterError(f"{option} = {value!r}{shown} is invalid: valid range is finite and > {rng[0]:g} "
+                                     f"and <= {rng[1]:g}{shown}")
 
 
 def _dispatch(args):

@@ -86,6 +86,8 @@ def test_rejected_steps_are_rolled_back_transparently(built, main_job_start):
 
 @pytest.mark.parametrize("kw, message", [
     (dict(tolerance=0.0), "coupling tolerance = 0.0 is invalid"),
+    # trust6: 10 was accepted and ran as the fixed run at the step cap (no step could exceed it)
+    (dict(tolerance=10.0), "coupling tolerance = 10.0 is invalid: valid range 0 < tolerance <= 0.001"),
     (dict(min_step=1e-5, max_step=5e-6), "min_step = 1e-05 s is above max_step = 5e-06 s"),
     (dict(max_step=5e-5), "outside the validated range"),
     (dict(coupling="force"), "coupling = 'force' has none"),

@@ -132,7 +132,7 @@ def test_oil_table_by_name_or_numbers_and_round_trip(tmp_path):
     ({"nu40": 46e-6}, "unknown key 'nu40' in oil"),
     # trust5: a known oil's name over other numbers was accepted, and its results labelled with that name
     ({"name": "SAE 5W-30", "nu40_m2_s": 60e-6, "nu100_m2_s": 11e-6, "density15_kg_m3": 852.0},
-     r"name = 'SAE 5W-30' is a known oil, but the table gives nu40_m2_s = 6e-05 \(not 6.4e-05\)"),
+     r"oil: oil name = 'SAE 5W-30' is a known oil, but nu40_m2_s = 6e-05 \(not 6.4e-05\)"),
 ])
 def test_bad_oil_tables_are_refused(table, message):
     with pytest.raises(ParameterError, match=message):

@@ -739,7 +739,7 @@ def test_losses_refuses_a_run_of_another_system_to_overlay(tmp_path, capsys):
     ({"ds": -1.0}, "ds = -1.0 is invalid"),
     ({"ds": float("nan")}, "ds = nan is invalid"),
     ({"ds": 5.0, "ds_max": 1.0}, "ds = 5 is invalid with ds_max = 1: valid range 0 < ds <= ds_max"),
-    ({"max_points": 0}, "max_points = 0 is invalid: valid range integer >= 1"),
+    ({"max_points": 0}, "max_points = 0 is invalid: valid range integer 1 ... 10000"),
     ({"max_points": 2.5}, "max_points = 2.5 is invalid"),
     ({"speeds_rpm": (3e3,)}, "speeds_rpm = (3000.0,) is invalid: give the speed range (START, END) in rpm"),
     ({"speeds_rpm": (3e3, 3e3)}, "START and END must differ"),
@@ -824,3 +824,243 @@ def test_linearize_names_a_system_ssp_and_the_users_ssp(built, tmp_path, capsys)
     err = capsys.readouterr().err
     assert f"{d}: the connected output turbine.force.x depends on the input turbine.journal.x" in err, err
     assert "frb_linearization_" not in err
+
+
+# ------------------------------------------------------------------ trust6: repeated values, bounds, one rule, early
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    """A 5 ms run-up folder (100 samples at 20 kHz) for the ``frb plot`` and ``--runs`` cases."""
+    run = tmp_path_factory.mktemp("trust6") / "run"
+    assert main(["runup", "--duration", "0.005", "--no-figure", "--out", str(run)]) == 0
+    return run
+
+
+@pytest.fixture(scope="module")
+def thin_ring(tmp_path_factory):
+    """A system file: the Table 2 system with the turbine ring's wall 1.2 mm thick (R_O = R_I + c_I + 1.2 mm), so
+    the default thermal model's 1.5 mm feed holes do not fit it."""
+    from dataclasses import replace
+
+    tc = frb.turbocharger()
+    b = tc.bearings[0]
+    thin = replace(b, outer=replace(b.outer, radius=b.inner.radius + b.inner.clearance + 1.2e-3))
+    return tc.with_(bearings=(thin, tc.bearings[1])).save(tmp_path_factory.mktemp("thin") / "thin.toml")
+
+
+#: the one line of each trust6 CLI case (RUN: the short run's folder, THIN: the thin-ring system file, SSP: the
+#: built turbocharger.ssp, NOSSP: a path without one)
+UNBALANCE_10 = ("unbalance of turbine_wheel = 10.0 kg m is invalid: valid range 0 ... 0.00514 kg m = sqrt(m I_p) of "
+                "the disc (0.326 kg, 8.1e-05 kg m^2; a larger m e needs more mass farther from the axis than the disc "
+                "has; 1e-6 kg m = 1 g mm)")
+FEED_HOLES = ("thermal model feed_hole_diameter_m = 0.0015 m is invalid for the turbine bearing's ring: valid range < "
+              "its wall thickness 0.0012 m (the holes' length)")
+TRUST6_CLI = [
+    # case 1: the window was drawn and its files written twice
+    (["plot", "RUN", "--orbit-times", "0:0.002,0:0.002"],
+     "--orbit-times = '0:0.002,0:0.002' repeats 0:0.002 s: give distinct values"),
+    # case 2: 10 ran as the fixed 12.5 us run (the tolerance was capped by the step bound without a word)
+    (["cosim", "nofile.ssp", "--adaptive", "--coupling-tol", "10"],
+     "--coupling-tol = 10.0 is invalid: valid range is finite and > 0 and <= 0.001"),
+    # case 3: a branch of a million points (days)
+    (["bifurcation", "--max-points", "1000000"], "--max-points = 1000000 is invalid: valid range >= 2 and <= 10000"),
+    # case 3: 10 kg m on a 0.326 kg wheel (6.9e9 N at 250 krpm)
+    (["runup", "--unbalance", "turbine_wheel:10", "--duration", "0.01"], f"--unbalance 'turbine_wheel:10': "
+                                                                         f"{UNBALANCE_10}"),
+    (["unbalance", "--unbalance", "turbine_wheel:10", "--speeds", "1000:2000:2"], f"--unbalance 'turbine_wheel:10': "
+                                                                                  f"{UNBALANCE_10}"),
+    # case 5: refused inside the first thermal balance, after the folder was made
+    (["campbell", "--system", "THIN", "--oil", "SAE 5W-30", "--speeds", "100000"], FEED_HOLES),
+    (["losses", "--system", "THIN", "--oil", "SAE 5W-30", "--speeds", "100000"], FEED_HOLES),
+    (["runup", "--system", "THIN", "--oil", "SAE 5W-30", "--duration", "0.01"], FEED_HOLES),
+    (["bifurcation", "--system", "THIN", "--oil", "SAE 5W-30", "--hopf-only", "--speeds", "1000:30000"], FEED_HOLES),
+    (["unbalance", "--system", "THIN", "--oil", "SAE 5W-30", "--speeds", "1000:2000:2"], FEED_HOLES),
+    (["equilibrium", "--system", "THIN", "--oil", "SAE 5W-30", "--speed-rpm", "100000"], FEED_HOLES),
+    # more repeated values: an order line, a location, a run's envelope drawn twice
+    (["plot", "RUN", "--orders", "1,1"], "--orders = '1,1' repeats 1: give distinct values"),
+    (["unbalance", "--method", "A", "--speeds", "3000:30000:3", "--locations", "turbine_wheel,turbine_wheel"],
+     "--locations = 'turbine_wheel,turbine_wheel' repeats turbine_wheel: give distinct values"),
+    (["bifurcation", "--runs", "RUN,RUN", "--speeds", "1000:30000"], "--runs = 'RUN,RUN' repeats RUN: give distinct "
+                                                                     "values"),
+    # the same branch followed twice (hours)
+    (["bifurcation", "--start", "25000,25000", "--speeds", "1000:30000"], "--start repeats 25000 rpm: give distinct "
+                                                                          "values"),
+    # two unbalances on one disc were summed (the dict form and the FMUs take one per disc)
+    (["runup", "--unbalance", "turbine_wheel:1e-6", "--unbalance", "turbine_wheel:1e-6:1", "--duration", "0.01"],
+     "--unbalance 'turbine_wheel:1e-6:1': unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: "
+     "give distinct values"),
+    # a spring of 1e40 N/m gave wrong modes without a warning
+    (["unbalance", "--method", "A", "--k", "1e40", "--speeds", "3000:30000:3"],
+     "--k = 1e+40 N/m is invalid: valid range is finite and > 0 and <= 1e+15 N/m"),
+    (["campbell", "--method", "B", "--ky", "1e40"], "--ky = 1e+40 N/m is invalid: valid range is finite and > 0 and "
+                                                    "<= 1e+15 N/m"),
+    # a cosim study of a missing SSP, a duration off the macro steps or one recording 2e7 samples: every case failed
+    # (exit 4, a study folder written) where frb cosim refuses the same at once
+    # frb compare: a clearance the films refuse was refused after the Campbell diagrams and run-ups of the ones before
+    # it (their files left in the folder); two clearances within a µm wrote one result folder, the second over the first
+    (["compare", "--clearances", "36e-6,1e-12", "--duration", "0.01"],
+     "--clearances = '36e-6,1e-12': turbine outer film clearance = 1e-12 m is invalid for radius 0.008 m: valid range "
+     ">= 0.0001 * radius = 8e-07 m (a thinner film is below the surfaces' roughness: no hydrodynamic film forms)"),
+    (["compare", "--clearances", "36.2e-6,36.2000001e-6", "--duration", "0.01"],
+     "--clearances = '36.2e-6,36.2000001e-6': clearances = [3.62e-05, 3.62000001e-05]: their result folders "
+     "['co36.2um', 'co36.2um'] repeats co36.2um: give distinct values"),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "NOSSP", "--serial"],
+     "SSP = 'NOSSP' does not exist"),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "SSP", "--duration", "0.0012345",
+      "--serial"], "cosim duration = 0.0012345 s is not a whole number of macro steps of 1e-05 s (123.45 steps): the "
+                   "run would end at 0.00123 s; valid: a multiple of the step as the option duration (frb sweep "
+                   "--duration), e.g. 0.00123 or 0.00124 s"),
+    (["sweep", "--param", "outer_clearance=36e-6", "--analysis", "cosim", "--ssp", "SSP", "--duration", "1000",
+      "--serial"], "cosim duration = 1000 s is invalid at output_rate_hz = 20000 Hz: 2e+07 samples, valid range <= "
+                   "1e+07 samples (cosim duration <= 500 s)"),
+]
+
+
+@pytest.mark.parametrize("argv, message", TRUST6_CLI)
+def test_repeated_values_unbounded_numbers_and_late_checks_are_refused_first(argv, message, short_run, thin_ring,
+                                                                             built, tmp_path, capsys, monkeypatch):
+    """trust6: each case ran (exit 0) with a value drawn or computed twice, a number past any meaning, or was refused
+    only inside the computation. Now exit 2 with the one line naming the option, its value and the valid range,
+    before any work (the analyses are replaced by functions that fail the test if they are called) and with nothing
+    written: no --out folder, the run folder's files unchanged."""
+    import frbmodel.cli as cli
+    import frbmodel.linear.thermal as lt
+
+    def computed(*args, **kwargs):
+        raise AssertionError("the analysis ran before the input was checked")
+
+    for name in ("campbell", "unbalance_response", "runup", "hopf_points", "continuation", "thermal_losses",
+                 "cosimulate", "write_composites", "write_orbits", "run_study", "compare"):
+        monkeypatch.setattr(cli, name, computed)
+    monkeypatch.setattr(lt, "_operating_point", computed)
+    subs = {"RUN": str(short_run), "THIN": str(thin_ring), "SSP": str(built / "turbocharger.ssp"),
+            "NOSSP": str(short_run.parent / "none.ssp")}
+    argv = [",".join(subs.get(x, x) for x in a.split(",")) for a in argv]
+    for token in ("NOSSP", "RUN"):
+        message = message.replace(token, subs[token])
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+    out = tmp_path / "out"
+    assert main(argv if argv[0] == "plot" else [*argv, "--out", str(out)]) == 2
+    assert capsys.readouterr().err.splitlines() == [f"frb {argv[0]}: error: {message}"]
+    assert not out.exists() and {p.name: p.read_bytes() for p in short_run.iterdir()} == before
+
+
+def _supply(**model):
+    from frbmodel.physics.thermal import ThermalModel
+
+    return frb.OilSupply(frb.OILS["SAE 5W-30"], model=ThermalModel(**model))
+
+
+def _unbalances(*items):
+    from frbmodel.nonlinear.runup import Unbalance
+
+    return [Unbalance(*it) for it in items]
+
+
+def _grid(params, analysis="runup", **options):
+    from frbmodel.studies.sweep import grid
+
+    return grid(params, analysis, **options)
+
+
+TRUST6_API = [
+    # case 3: a branch of 1e9 points; the API and the studies took any number of shooting segments
+    (lambda: __import__("frbmodel.cycles.continuation").cycles.continuation.continuation(
+        frb.turbocharger(), (1e3, 3e3), max_points=10**9),
+     "max_points = 1000000000 is invalid: valid range integer 1 ... 10000 (points per branch and direction: the "
+     "speed-grid bound)"),
+    (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", max_points=10**9),
+     "bifurcation max_points = 1000000000 is invalid: valid range integer 2 ... 10000"),
+    (lambda: __import__("frbmodel.cycles.continuation").cycles.continuation.continuation(
+        frb.turbocharger(), (1e3, 3e3), segments=10**6),
+     "segments = 1000000 is invalid: valid range integer 1 ... 64 (shooting segments per orbit)"),
+    (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", segments=10**6),
+     "bifurcation segments = 1000000 is invalid: valid range integer 1 ... 64"),
+    # case 3: the unbalance's amount was checked by the run-up only, after its thermal tables, and never bounded
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, unbalance=_unbalances(("turbine_wheel", 10.0))),
+     UNBALANCE_10),
+    (lambda: frb.unbalance_response(frb.turbocharger(), "A", [1e4], {"turbine_wheel": 10.0}),
+     UNBALANCE_10.replace("unbalance of", "unbalance m e of")),
+    (lambda: _grid({"unbalance_turbine": [10.0]}), "study parameter unbalance_turbine = 10 [kg m]: "
+                                                   + UNBALANCE_10.replace("unbalance of turbine_wheel",
+                                                                          "unbalance_turbine")),
+    (lambda: _unbalances(("turbine_wheel", -1e-6)), "unbalance of turbine_wheel = -1e-06 kg m is invalid: valid range "
+                                                    "is a finite real number >= 0 kg m"),
+    # case 4: the API took a known oil's name over other numbers (the [oil] parser alone refused it)
+    (lambda: frb.Oil(60e-6, 11e-6, 852.0, 6.5e-4, 2000.0, "SAE 5W-30"),
+     "oil name = 'SAE 5W-30' is a known oil, but nu40_m2_s = 6e-05 (not 6.4e-05): its results would be labelled "
+     "'SAE 5W-30'; give another name for these numbers, or the known oil itself (frbmodel.OILS['SAE 5W-30'], or "
+     "name = 'SAE 5W-30' alone in an [oil] table)"),
+    # case 5: feed holes that do not fit the ring were refused inside the first thermal balance
+    (lambda: frb.campbell(frb.turbocharger(), "J", [1e5], oil_supply=_supply(feed_hole_diameter_m=1.0)),
+     "thermal model feed_hole_diameter_m = 1 m is invalid for the turbine bearing's ring: valid range < its wall "
+     "thickness 0.002466 m (the holes' length)"),
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, oil_supply=_supply(feed_holes=40, feed_hole_diameter_m=1e-3)),
+     "thermal model feed_holes = 40 of 0.001 m do not fit around the turbine bearing's ring: valid range feed_holes x "
+     "feed_hole_diameter_m < 2 pi R_I = 0.0345575 m"),
+    (lambda: frb.thermal_losses(frb.turbocharger(), [1e5], frb.OILS["SAE 5W-30"],
+                                model=_supply(feed_hole_diameter_m=1.0).model),
+     "feed_hole_diameter_m = 1 m is invalid"),
+    (lambda: __import__("frbmodel.cycles.branch").cycles.branch.hopf_points(
+        frb.turbocharger(), (1e3, 3e3), oil_supply=_supply(feed_hole_diameter_m=1.0)),
+     "feed_hole_diameter_m = 1 m is invalid"),
+    # the same branch followed twice
+    (lambda: __import__("frbmodel.cycles.continuation").cycles.continuation.continuation(
+        frb.turbocharger(), (1e3, 3e3), start=[2e3, 2e3]), "start repeats 2000 rpm: give distinct values"),
+    (lambda: _grid({"outer_clearance": [36e-6]}, "bifurcation", speed_rpm=(1e3, 3e3), start=["hopf", "hopf"]),
+     "bifurcation start repeats hopf: give distinct values"),
+    # two unbalances on one disc were summed
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, unbalance=_unbalances(("turbine_wheel", 1e-6),
+                                                                                 ("turbine_wheel", 1e-6, 1.0))),
+     "unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: give distinct values"),
+    (lambda: frb.unbalance_response(frb.turbocharger(), "A", [1e4], _unbalances(("turbine_wheel", 1e-6),
+                                                                                ("turbine_wheel", 1e-6))),
+     "unbalance discs ['turbine_wheel', 'turbine_wheel'] repeats turbine_wheel: give distinct values"),
+    # a spring of 1e40 N/m gave wrong modes without a warning
+    (lambda: frb.campbell(frb.turbocharger(), "A", [1e4], k=1e40),
+     "method A k = 1e+40 N/m is invalid: valid range 0 < k <= 1e+15 N/m (a rigid support; stiffer springs lose the "
+     "rotor's modes to round-off)"),
+    (lambda: frb.runup(frb.turbocharger(), duration=0.01, linear_springs=1e40),
+     "linear_springs = 1e+40 N/m is invalid: valid range 0 < k <= 1e+15 N/m"),
+    # a study's Campbell grid of 1e8 speeds: every case failed (the CLI's grid bound)
+    (lambda: _grid({"outer_clearance": [36e-6]}, "campbell", speeds_rpm=(1e3, 2.5e5, 10**8)),
+     "campbell speeds_rpm = (1000.0, 250000.0, 100000000) has 100000000 speeds: valid range 1 ... 10000 speeds"),
+    # compare: the second clearance refused after the first's Campbell diagram and run-up
+    (lambda: __import__("frbmodel.studies.compare").studies.compare.compare(frb.turbocharger(), (36e-6, 1e-12)),
+     "turbine outer film clearance = 1e-12 m is invalid for radius 0.008 m"),
+    # a cosim study without an SSP: every case failed with a KeyError
+    (lambda: _grid({"outer_clearance": [36e-6]}, "cosim"), "analysis 'cosim' needs the option ssp: the SSP of the FMUs "
+                                                          "(frb build-fmus writes build/turbocharger.ssp)"),
+]
+
+
+@pytest.mark.parametrize("call, message", TRUST6_API)
+def test_api_refuses_the_same_values_as_the_cli_before_any_work(call, message, monkeypatch):
+    """trust6: the library took what the CLI refuses, or refused it only inside the computation. Now one
+    ParameterError, before any work: the thermal balance, the run-up's tables and integration and the Hopf search
+    are replaced by functions that fail the test if they are called."""
+    import frbmodel.cycles.branch as br
+    import frbmodel.cycles.continuation as cc
+    import frbmodel.linear.thermal as lt
+    import frbmodel.nonlinear.runup as ru
+    import frbmodel.studies.compare as cm
+
+    def computed(*args, **kwargs):
+        raise AssertionError("the computation started before the input was checked")
+
+    monkeypatch.setattr(lt, "_operating_point", computed)
+    monkeypatch.setattr(cc, "hopf_points", computed)
+    monkeypatch.setattr(br, "_unstable_pairs", computed)
+    monkeypatch.setattr(cm, "campbell", computed)
+    for name in ("viscosity_table", "lagged_viscosity_table", "_integrate", "initial_state"):
+        monkeypatch.setattr(ru, name, computed)
+    with pytest.raises(ParameterError) as exc:
+        call()
+    assert message in str(exc.value), str(exc.value)
+
+
+def test_compare_writes_each_clearance_to_its_own_folder():
+    """trust6: the result folder of a clearance was named by the whole µm (co36um for 36.2 and 36.4 µm: the second's
+    files over the first's, while the table listed both). Now 6 significant digits name it."""
+    from frbmodel.studies.compare import clearance_tag
+
+    assert [clearance_tag(c) for c in (36e-6, 36.2e-6, 36.4e-6, 46e-6)] == ["co36um", "co36.2um", "co36.4um", "co46um"]

@@ -208,6 +208,39 @@ def check_speed(name, speed_rpm):
     return v
 
 
+def _shown(value) -> str:
+    """A value of a list for a message: a number as ``%g``, a tuple of numbers as ``A:B`` (a window), else ``str``."""
+    if isinstance(value, tuple):
+        return ":".join(_shown(v) for v in value)
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        return f"{value:g}"
+    return str(value)
+
+
+def check_distinct(name, values, unit=""):
+    """``values`` if no value repeats, else a :class:`ParameterError` naming the first repeated one (the same case,
+    curve, window or table rows would be computed or drawn twice). ``unit`` is written after a repeated number (or
+    tuple of numbers), not after a word.
+
+    Examples
+    --------
+    >>> check_distinct("--clearances = '36e-6,40e-6'", [36e-6, 40e-6], "m")
+    [3.6e-05, 4e-05]
+    >>> try:
+    ...     check_distinct("--orbit-times = '0:1,0:1'", [(0.0, 1.0), (0.0, 1.0)], "s")
+    ... except ParameterError as exc:
+    ...     print(exc)
+    --orbit-times = '0:1,0:1' repeats 0:1 s: give distinct values
+    """
+    values = list(values)
+    twice = next((v for k, v in enumerate(values) if v in values[:k]), None)
+    if twice is not None:
+        numeric = not isinstance(twice, str)
+        raise ParameterError(f"{name} repeats {_shown(twice)}{' ' + unit if unit and numeric else ''}: give distinct "
+                             "values")
+    return values
+
+
 def check_finite(name, value, unit=""):
     """Return ``float(value)`` or raise :class:`ParameterError` if it is not a finite number.
 

@@ -30,7 +30,7 @@ from ..core.progress import simulation_bar
 from ..core.units import rad_s_to_rpm, rpm_to_rad_s
 from ..linear.equilibrium import equilibrium
 from ..nonlinear.recorder import Recorder, RunupResult, RunupSchema
-from ..nonlinear.runup import MAX_SAMPLES, check_drive_torque_value
+from ..nonlinear.runup import ATOL_MAX_OF_CLEARANCE, MAX_SAMPLES, check_drive_torque_value
 from ..physics.dynamics import rotor_polar_inertia
 from ..physics.film import Film
 from ..system.parameters import load_system
@@ -58,12 +58,40 @@ PRIME_STEP_S = 1e-9
 #: default tolerance of the adaptive macro step: the largest accepted journal path defect per step (see
 #: :meth:`Master.coupling_error`) as a fraction of the bearing's inner clearance
 COUPLING_TOL = 2e-4
+#: largest tolerance of the adaptive macro step (a fraction of the inner clearance, as :data:`COUPLING_TOL`): the
+#: monolithic run-up's bound on its local displacement error (``atol`` at most 1e-3 of the smallest film clearance,
+#: :data:`frbmodel.nonlinear.runup.ATOL_MAX_OF_CLEARANCE`), and the path defect of the longest validated step on the
+#: main job: O(h³) from the 1.3e-4 measured at 10 µs, 8 × 1.3e-4 ≈ 1e-3 at 20 µs. A larger tolerance asks for steps
+#: beyond the validated range, which the step cap (:data:`ADAPTIVE_MAX_STEP_S`) overrides without a word: it would
+#: decide no step (10 was accepted and ran as the fixed 12.5 µs run)
+MAX_COUPLING_TOL = ATOL_MAX_OF_CLEARANCE
 #: default longest adaptive step [s]. Measured on the main job's first 0.5 s (20 -> 135 krpm, 0.1 g mm seed): a fixed
 #: 12.5 µs step gives every onset of the 10 µs run within 0.04 %, while at 15 µs a spurious 0.52X component (285 Hz
 #: from 32.9 krpm) appears, and at 20 µs the 35 and 52 krpm components are lost — although the path defect there
 #: is a tenth of its value at high speed: the low-speed components are sensitive to the step in a way no local
 #: error estimate of the coupling shows, so the step is capped where it was checked.
 ADAPTIVE_MAX_STEP_S = 1.25e-5
+
+
+def check_coupling_tol(name, tolerance):
+    """``float(tolerance)`` if 0 < tolerance <= :data:`MAX_COUPLING_TOL` (the adaptive macro step's path defect per
+    step as a fraction of the inner clearance), else a :class:`ParameterError` naming ``name``, the value and the
+    range.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_coupling_tol("coupling tolerance", 10.0)
+    ... except ParameterError as exc:
+    ...     print(exc)  # doctest: +ELLIPSIS
+    coupling tolerance = 10.0 is invalid: valid range 0 < tolerance <= 0.001 (of the inner clearance per step: ...
+    """
+    tol = check_positive(name, tolerance)
+    if tol > MAX_COUPLING_TOL:
+        raise ParameterError(f"{name} = {tolerance!r} is invalid: valid range 0 < tolerance <= {MAX_COUPLING_TOL:g} "
+                             "(of the inner clearance per step: the run-up's displacement tolerance bound; a larger "
+                             "one asks for steps beyond the validated range, which the step cap overrides)")
+    return tol
 
 
 def _checked_profile(profile):
@@ -80,15 +108,28 @@ def _checked_profile(profile):
     return profile
 
 
-def check_whole_steps(stop_time, step_size, what="stop time"):
+def check_whole_steps(stop_time, step_size, what="stop time", option="--stop-time", other=" (or --adaptive)"):
     """Raise :class:`ParameterError` unless ``stop_time`` is a whole number of fixed macro steps ``step_size`` [s]
-    (to 1e-9 of a step): the run takes round(T / H) steps, so it ended short of or beyond the stop time it reported."""
+    (to 1e-9 of a step): the run takes round(T / H) steps, so it ended short of or beyond the stop time it reported.
+    ``option`` is where the user gives the stop time and ``other`` the way around it, for the message."""
     n = stop_time / step_size
     if abs(n - round(n)) > 1e-6:
         lo, hi = math.floor(n) * step_size, math.ceil(n) * step_size
         raise ParameterError(f"{what} = {stop_time!r} s is not a whole number of macro steps of {step_size!r} s "
                              f"({n:.6g} steps): the run would end at {round(n) * step_size:.9g} s; valid: a multiple "
-                             f"of the step as --stop-time, e.g. {lo:.9g} or {hi:.9g} s (or --adaptive)")
+                             f"of the step as {option}, e.g. {lo:.9g} or {hi:.9g} s{other}")
+
+
+def check_record_size(stop_time, output_rate_hz, what="stop time"):
+    """``float(output_rate_hz)`` if a co-simulation to ``stop_time`` [s] records at most
+    :data:`~frbmodel.nonlinear.runup.MAX_SAMPLES` samples at that rate [Hz], else a :class:`ParameterError` naming
+    ``what``, the rate and the valid range (the recorder holds them in memory: 2e8 samples asked for 39 GB)."""
+    rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
+    if stop_time * rate > MAX_SAMPLES:
+        raise ParameterError(f"{what} = {stop_time:g} s is invalid at output_rate_hz = {rate:g} Hz: "
+                             f"{stop_time * rate:.3g} samples, valid range <= {MAX_SAMPLES:.0e} samples ({what} <= "
+                             f"{MAX_SAMPLES / rate:g} s)")
+    return rate
 
 
 def _profile_stop_time(profile, stop_time):
@@ -245,7 +286,7 @@ class Master(FmuHost):
         if self.coupling != "jacobian":
             raise ParameterError("the adaptive macro step estimates the coupling error of the staggered Jacobian "
                                  f"coupling; coupling = {self.coupling!r} has none: use coupling = 'jacobian'")
-        self.tolerance = check_positive("coupling tolerance", tolerance)
+        self.tolerance = check_coupling_tol("coupling tolerance", tolerance)
         lo, hi = VALIDATED_STEP_S
         self.min_step = check_positive("min_step", lo if min_step is None else min_step, "s")
         self.max_step = check_positive("max_step", ADAPTIVE_MAX_STEP_S if max_step is None else max_step, "s")
@@ -702,11 +743,7 @@ class Master(FmuHost):
         :class:`RunupResult` (``meta``: wall time, time inside FMI calls, steps taken and rejected); raises
         :class:`CosimStopped` (with ``.result``) when an FMU fails."""
         H, T = self.step_size, self.stop_time
-        rate = check_positive("output_rate_hz", output_rate_hz, "Hz")
-        if T * rate > MAX_SAMPLES:  # (the recorder holds them in memory: 2e8 samples asked for 39 GB)
-            raise ParameterError(f"stop time = {T:g} s is invalid at output_rate_hz = {rate:g} Hz: {T * rate:.3g} "
-                                 f"samples, valid range <= {MAX_SAMPLES:.0e} samples (stop time <= "
-                                 f"{MAX_SAMPLES / rate:g} s)")
+        check_record_size(T, output_rate_hz)
         every = max(1, int(round(1.0 / (H * output_rate_hz))))
         n_steps = int(round(T / H))
         t_wall = time.perf_counter()
@@ -779,7 +816,8 @@ def cosimulate(ssp, parameter_set="co36", stop_time=None, step_size=None, out_di
 
 
 __all__ = ["Master", "cosimulate", "CosimStopped", "RunupResult", "operating_point_overrides",
-           "system_from_parameters", "COUPLING_TOL", "PRIME_STEP_S", "VALIDATED_STEP_S"]
+           "system_from_parameters", "check_coupling_tol", "check_record_size", "COUPLING_TOL", "MAX_COUPLING_TOL",
+           "PRIME_STEP_S", "VALIDATED_STEP_S"]
 
 
 def operating_point_overrides(system, speed_rpm, end_rpm=None, ramp_time=1.0, method="J", perturbation=0.0):

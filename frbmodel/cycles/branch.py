@@ -50,6 +50,31 @@ class BranchPoint:
     state: np.ndarray = field(repr=False, default=None)
 
 
+#: most shooting segments per orbit (limit cycles, continuation, the CLI's --segments, bifurcation studies): four
+#: serve the strongly unstable branches of the Table 2 system; each segment holds a state of the orbit, so 1e6
+#: segments held a million states per orbit
+MAX_SEGMENTS = 64
+
+
+def check_segments(name, segments):
+    """``int(segments)`` if it is a whole number 1 ... :data:`MAX_SEGMENTS`, else a :class:`ParameterError` naming
+    ``name``, the value and the range.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_segments("segments", 10**6)
+    ... except ParameterError as exc:
+    ...     print(exc)
+    segments = 1000000 is invalid: valid range integer 1 ... 64 (shooting segments per orbit)
+    """
+    ok = isinstance(segments, (int, float, np.integer, np.floating)) and not isinstance(segments, bool)
+    if not (ok and int(segments) == segments and 1 <= segments <= MAX_SEGMENTS):
+        raise ParameterError(f"{name} = {segments!r} is invalid: valid range integer 1 ... {MAX_SEGMENTS} (shooting "
+                             "segments per orbit)")
+    return int(segments)
+
+
 class ContinuationProblem:
     """Flows and residuals of the continuation problem at any speed (problems built per speed and cached). With an
     ``oil_supply`` the flow at each speed has the viscosities of that speed's thermal operating point
@@ -58,7 +83,8 @@ class ContinuationProblem:
 
     def __init__(self, system, model, rtol, atol_m, scale_m, workers, start_rpm, segments=1, oil_supply=None):
 
-        self.system, self.model, self.oil_supply = system, model, check_oil_supply(oil_supply)
+        self.system, self.model = system, model
+        self.oil_supply = check_oil_supply(oil_supply, bearings=system.bearings)
         self.rtol, self.atol_m, self.workers = rtol, atol_m, workers
         self._flows = {}
         self._last = None  # the last flow made for a new speed (it has chosen its integrator by the next one)
@@ -411,7 +437,7 @@ def hopf_points(system, speeds_rpm=(1e3, 250e3), film_model=None, n_grid=60, res
     list of HopfPoint
         In increasing speed.
     """
-    supply = check_oil_supply(oil_supply)
+    supply = check_oil_supply(oil_supply, bearings=system.bearings)
     model = film_model or system.film_model
     lo, hi = check_speed_range(speeds_rpm)
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 2:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_positive
+from ..core.errors import MAX_SPEED_COUNT, ParameterError, check_distinct, check_positive
 from ..core.results import NETCDF_ENGINE, Result, decode_attr, netcdf_attrs, variable
 from ..linear.campbell import campbell
 from ..linear.thermal import check_oil_supply
@@ -33,6 +33,7 @@ from .branch import (
     BranchPoint,
     ContinuationProblem,
     HopfPoint,
+    check_segments,
     check_speed_range,
     equilibrium_jacobian,
     follow_branch,
@@ -246,11 +247,10 @@ def continuation(system, speeds_rpm, start="hopf", film_model=None, ds=1.0, ds_m
     -------
     BifurcationDiagram
     """
-    supply = check_oil_supply(oil_supply)
+    supply = check_oil_supply(oil_supply, bearings=system.bearings)
     lo, hi = _check_steps(speeds_rpm, ds, ds_max, max_points)
     model = check_model(film_model or system.film_model)
-    if int(segments) != segments or segments < 1:
-        raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
+    segments = check_segments("segments", segments)
     starts = check_starts(start, (lo, hi))
     _check_start_supply(starts, supply)
     branches, origins = [], []  # origins: the Hopf point a branch starts at, None for a branch through an orbit
@@ -277,9 +277,33 @@ def _check_steps(speeds_rpm, ds, ds_max, max_points):
     ds, ds_max = check_positive("ds", ds), check_positive("ds_max", ds_max)
     if ds > ds_max:
         raise ParameterError(f"ds = {ds:g} is invalid with ds_max = {ds_max:g}: valid range 0 < ds <= ds_max")
-    if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < 1:
-        raise ParameterError(f"max_points = {max_points!r} is invalid: valid range integer >= 1")
+    check_max_points("max_points", max_points)
     return lo, hi
+
+
+#: most points of a branch (per direction): the speed-grid bound of every command
+#: (:data:`frbmodel.core.errors.MAX_SPEED_COUNT`, 25 rpm steps over 250 krpm) — a branch's points are the speeds of
+#: its diagram; at 1-5 s a point (measured at 36 um) that is 3-14 h per branch and direction (1e9 was accepted)
+MAX_BRANCH_POINTS = MAX_SPEED_COUNT
+
+
+def check_max_points(name, max_points, lowest=1):
+    """``int(max_points)`` if it is a whole number ``lowest`` ... :data:`MAX_BRANCH_POINTS`, else a
+    :class:`ParameterError` naming ``name``, the value and the range (the API, bifurcation studies and the CLI).
+
+    Examples
+    --------
+    >>> try:
+    ...     check_max_points("max_points", 10**9)
+    ... except ParameterError as exc:
+    ...     print(exc)  # doctest: +ELLIPSIS
+    max_points = 1000000000 is invalid: valid range integer 1 ... 10000 (points per branch and direction: ...
+    """
+    ok = isinstance(max_points, (int, float, np.integer, np.floating)) and not isinstance(max_points, bool)
+    if not (ok and int(max_points) == max_points and lowest <= max_points <= MAX_BRANCH_POINTS):
+        raise ParameterError(f"{name} = {max_points!r} is invalid: valid range integer {lowest} ... "
+                             f"{MAX_BRANCH_POINTS} (points per branch and direction: the speed-grid bound)")
+    return int(max_points)
 
 
 def _check_start_supply(starts, supply):
@@ -295,8 +319,8 @@ def _check_start_supply(starts, supply):
 
 def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
     """The branch starts of :func:`continuation` as a list (``start``: "hopf", a LimitCycle, a speed [rpm] or a list
-    of them), or a ParameterError naming the bad one and the valid values (used by the API, ``frb bifurcation`` and
-    the ``bifurcation`` study before any computation).
+    of them, each speed and "hopf" once), or a ParameterError naming the bad one and the valid values (used by the
+    API, ``frb bifurcation`` and the ``bifurcation`` study before any computation).
 
     Examples
     --------
@@ -323,6 +347,8 @@ def check_starts(start, speeds_rpm, name="start", range_name="the speed range"):
         if not lo <= speed <= hi:
             raise ParameterError(f"{name} = {speed:.0f} rpm is outside {range_name} {lo:.0f}:{hi:.0f} rpm")
         out.append(s0 if isinstance(s0, LimitCycle) else speed)
+    # (the same branch was followed twice: hours; two LimitCycles at one speed may be two coexisting orbits)
+    check_distinct(name, [s for s in out if not isinstance(s, LimitCycle)], "rpm")
     return out
 
 

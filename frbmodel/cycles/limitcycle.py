@@ -39,7 +39,7 @@ from ..nonlinear.runup import (
 )
 from ..physics.film import check_model
 from ..signals.orbits import orbits
-from .branch import hopf_guess, shoot_segments
+from .branch import check_segments, hopf_guess, shoot_segments
 from .flow import FD_STEP, MULTIPLIER_TOL, SCALE_M, SHOOT_ATOL_M, SHOOT_RTOL, WORKERS, ConstantSpeedFlow, orbit_result
 from .shooting import shoot, stable_multipliers
 
@@ -400,7 +400,7 @@ def _at_supply(system, speed_rpm, guess, oil_supply):
     """``system`` at the thermal operating point of ``speed_rpm`` (unchanged without an oil supply); a recorded
     run-up as the guess is refused with an oil supply (its re-simulation would need the run's viscosity table)."""
 
-    supply = check_oil_supply(oil_supply)
+    supply = check_oil_supply(oil_supply, bearings=system.bearings)
     if supply is not None and isinstance(guess, RunupResult):
         raise ParameterError("guess = a RunupResult cannot be combined with oil_supply: the run is re-simulated at "
                              "constant viscosities; give a LimitCycle, 'hopf', (state, period) or no guess")
@@ -446,9 +446,9 @@ def _given_guess(guess, n):
 
 
 def _check_segments(segments, forced):
-    """Refuse a segment count that is not a whole number >= 1, or > 1 for a forced orbit (before any work)."""
-    if isinstance(segments, bool) or int(segments) != segments or segments < 1:
-        raise ParameterError(f"segments = {segments!r} is invalid: a whole number >= 1")
+    """Refuse a segment count that is not a whole number in 1 ... MAX_SEGMENTS, or > 1 for a forced orbit (before
+    any work)."""
+    check_segments("segments", segments)
     if forced and segments > 1:
         raise ParameterError(f"segments = {segments} is for autonomous orbits: with unbalance use segments = 1")
 

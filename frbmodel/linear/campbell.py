@@ -748,7 +748,7 @@ def campbell(system, method="J", speeds_rpm=None, whirl=True, progress: bool = F
     """
     check_system(system)
     m = get_method(method)
-    supply = check_oil_supply(oil_supply, m.letter)
+    supply = check_oil_supply(oil_supply, m.letter, system.bearings)
     given = np.linspace(*PAPER_SPEED_RANGE_RPM, 100) if speeds_rpm is None else speeds_rpm
     speeds = m.check_speeds(given)
     order = speed_grid_order(speeds)

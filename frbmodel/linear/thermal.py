@@ -16,7 +16,14 @@ import numpy as np
 
 from ..core.errors import ConvergenceError, ParameterError, check_real, check_real_array, check_speed, check_system
 from ..core.units import RPM
-from ..physics.thermal import ThermalModel, bearing_flows, film_temperatures, films_at_ring_temperature, heat_flows
+from ..physics.thermal import (
+    ThermalModel,
+    bearing_flows,
+    check_feed_holes,
+    film_temperatures,
+    films_at_ring_temperature,
+    heat_flows,
+)
 from ..system.methods import get_method
 from ..system.oil import T_MIN_K, Oil, check_temperature
 from ..system.rotor import GRAVITY
@@ -108,10 +115,12 @@ class OilSupply:
                    ThermalModel(**d["model"]))
 
 
-def check_oil_supply(oil_supply, method="J"):
+def check_oil_supply(oil_supply, method="J", bearings=()):
     """``oil_supply`` if it is None or an :class:`OilSupply` used with a film method (C, D, F, G, I, J: the
-    thermal operating point is solved with that method's own equilibrium), else a :class:`ParameterError` (the
-    spring methods A, B, E have no films)."""
+    thermal operating point is solved with that method's own equilibrium) whose thermal model's feed holes fit the
+    rings of ``bearings`` (:func:`frbmodel.physics.thermal.check_feed_holes`; every analysis passes its system's
+    bearings, so the check runs before any work), else a :class:`ParameterError` (the spring methods A, B, E have no
+    films)."""
     if oil_supply is None:
         return None
     if not isinstance(oil_supply, OilSupply):
@@ -120,6 +129,8 @@ def check_oil_supply(oil_supply, method="J"):
     if not get_method(method).needs_films:
         raise ParameterError(f"method = {method!r} cannot be combined with an oil supply: its bearings are linear "
                              "springs without oil films; use a film method (C, D, F, G, I, J)")
+    for b in bearings:
+        check_feed_holes(b, oil_supply.model)
     return oil_supply
 
 
@@ -277,19 +288,7 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=None, suppl
             raise ParameterError(f"{given[0]} needs an oil: give oil=frbmodel.OILS[name] or a system with an oil "
                                  "(without one the films keep their constant viscosities)")
         return _isothermal(system, speeds, method)
-    if not isinstance(oil, Oil):
-        raise ParameterError(f"oil = {oil!r:.60} is a {type(oil).__name__}; expected an Oil (frbmodel.OILS[name])")
-    if not get_method(method).needs_films:
-        raise ParameterError(f"method = {method!r} has no oil films: the thermal operating point needs one of C, D, F, "
-                             "G, I, J")
-    model = ThermalModel() if model is None else model
-    if not isinstance(model, ThermalModel):
-        raise ParameterError(f"model = {model!r:.60} is a {type(model).__name__}; expected a ThermalModel")
-    p_s = check_supply_pressure("supply_pressure_Pa", SUPPLY_PRESSURE_PA if supply_pressure_Pa is None
-                                else supply_pressure_Pa)
-    temps = [check_temperature("supply_temperature_K", t, T_MIN_K, oil.max_temperature_K)
-             for t in _values("supply_temperature_K", 363.15 if supply_temperature_K is None else
-                              supply_temperature_K, "K")]
+    model, temps, p_s = _thermal_inputs(system, oil, supply_temperature_K, supply_pressure_Pa, model, method)
     rows = []
     for t_s in temps:
         for rpm in speeds:
@@ -298,6 +297,28 @@ def thermal_losses(system, speed_rpm, oil=None, supply_temperature_K=None, suppl
                                      system.gravity, method=method)
                 rows.append(_row(rpm, t_s, p_s, oil, model, s))
     return pd.DataFrame(rows)
+
+
+def _thermal_inputs(system, oil, supply_temperature_K, supply_pressure_Pa, model, method):
+    """The thermal model (default :class:`ThermalModel()`), supply temperatures [K] and pressure [Pa] of
+    :func:`thermal_losses` with an ``oil``, each checked before any balance — the feed holes against the system's
+    rings too (they were refused inside the first balance)."""
+    if not isinstance(oil, Oil):
+        raise ParameterError(f"oil = {oil!r:.60} is a {type(oil).__name__}; expected an Oil (frbmodel.OILS[name])")
+    if not get_method(method).needs_films:
+        raise ParameterError(f"method = {method!r} has no oil films: the thermal operating point needs one of C, D, F, "
+                             "G, I, J")
+    model = ThermalModel() if model is None else model
+    if not isinstance(model, ThermalModel):
+        raise ParameterError(f"model = {model!r:.60} is a {type(model).__name__}; expected a ThermalModel")
+    for b in system.bearings:
+        check_feed_holes(b, model)
+    p_s = check_supply_pressure("supply_pressure_Pa", SUPPLY_PRESSURE_PA if supply_pressure_Pa is None
+                                else supply_pressure_Pa)
+    temps = [check_temperature("supply_temperature_K", t, T_MIN_K, oil.max_temperature_K)
+             for t in _values("supply_temperature_K", 363.15 if supply_temperature_K is None else
+                              supply_temperature_K, "K")]
+    return model, temps, p_s
 
 
 def _values(name, value, unit):
@@ -332,7 +353,7 @@ def thermal_bearing(bearing, load_N, speed_rpm, oil_supply, film_model="short", 
     -------
     FloatingRingBearing
     """
-    sup = check_oil_supply(oil_supply, method)
+    sup = check_oil_supply(oil_supply, method, (bearing,))
     s = _operating_point(bearing, float(load_N), check_speed("speed_rpm", speed_rpm) * RPM, sup.oil,
                          sup.supply_temperature_K, sup.supply_pressure_Pa, sup.model, film_model,
                          gravity, method=method)
@@ -361,7 +382,7 @@ def bearing_operating_point(bearing, load_N, speed_rpm, oil_supply, film_model="
     dict
         The columns of :func:`thermal_losses` (units in every key).
     """
-    sup = check_oil_supply(oil_supply)
+    sup = check_oil_supply(oil_supply, bearings=(bearing,))
     rpm = check_speed("speed_rpm", speed_rpm)
     s = _operating_point(bearing, float(load_N), rpm * RPM, sup.oil, sup.supply_temperature_K, sup.supply_pressure_Pa,
                          sup.model, film_model, gravity)
@@ -399,7 +420,7 @@ def ring_lag(system, time_s, speed_rpm, oil_supply, rtol=1e-8):
     from scipy.integrate import solve_ivp
 
     check_system(system)
-    supply = check_oil_supply(oil_supply)
+    supply = check_oil_supply(oil_supply, bearings=system.bearings)
     if supply is None or supply.model.ring_heat_capacity_J_K is None:
         raise ParameterError("ring_lag needs an OilSupply whose model has ring_heat_capacity_J_K [J/K]")
     rtol = check_real("rtol", rtol, "", minimum=0.0)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_real, check_system, read_json
+from ..core.errors import ParameterError, check_distinct, check_real, check_system, read_json
 from ..core.progress import counter_bar, progress_enabled
 from ..core.results import Result, decode_attr, netcdf_attrs, variable
 from ..core.units import rpm_to_rad_s
@@ -85,14 +85,15 @@ def check_unbalance(system, unbalance):
                              "[rad])}, e.g. {'turbine_wheel': (1e-6, 0.0)}")
     if not items:
         raise ParameterError("unbalance = {} is invalid: give at least one disc, e.g. {'turbine_wheel': (1e-6, 0.0)}")
+    names = [name for name, _ in items]
+    check_distinct(f"unbalance discs {names}", names)  # (a list could give a disc twice: the two were summed)
     out = []
     for name, value in items:
-        disc = system.rotor.disc(name)
         me, phase = (value, 0.0) if not isinstance(value, (tuple, list)) else (tuple(value) + (0.0,))[:2]
         if isinstance(value, (tuple, list)) and not 1 <= len(value) <= 2:
             raise ParameterError(f"unbalance[{name!r}] = {value!r} is invalid: expected (m e [kg m], phase [rad])")
-        out.append((disc.name, disc.node, check_real(f"unbalance m e of {name}", me, "kg m", 0.0, inclusive=True),
-                    check_real(f"unbalance phase of {name}", phase, "rad")))
+        disc, me = system.rotor.check_unbalance(name, me, f"unbalance m e of {name}")  # (the disc's own bound)
+        out.append((disc.name, disc.node, me, check_real(f"unbalance phase of {name}", phase, "rad")))
     if not any(u[2] > 0 for u in out):
         raise ParameterError(f"unbalance = {unbalance!r} is invalid: every m e is 0 (no response); valid range of "
                              "at least one m e: > 0 kg m")
@@ -716,7 +717,7 @@ def unbalance_response(system, method="J", speeds_rpm=None, unbalance=None, crit
     """
     check_system(system)
     m = get_method(method)
-    supply = check_oil_supply(oil_supply, m.letter)
+    supply = check_oil_supply(oil_supply, m.letter, system.bearings)
     unb = check_unbalance(system, {"turbine_wheel": (1e-6, 0.0)} if unbalance is None else unbalance)
     speeds = np.sort(m.check_speeds(np.linspace(*DEFAULT_SPEEDS_RPM) if speeds_rpm is None else speeds_rpm))
     m.options(**kw)  # validate early

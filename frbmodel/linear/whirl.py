@@ -252,7 +252,7 @@ def film_onset_speeds(system, method="J", speed_range_rpm=ONSET_SEARCH_RPM, oil_
     m = get_method(method)
     if m.equilibrium is None:
         raise ParameterError(f"method = {method!r} has no film equilibrium; film onsets need one of C, D, F, G, I, J")
-    supply = check_oil_supply(oil_supply, m.letter)
+    supply = check_oil_supply(oil_supply, m.letter, system.bearings)
     lo, hi = _check_search_range(speed_range_rpm)
     film_model = check_model(system.film_model)
     loads = system.bearing_loads

@@ -42,7 +42,7 @@ from ..physics.dynamics import (
 from ..physics.film import check_model, film_force_kernel
 from ..physics.losses import bearing_loss_kernel, film_arrays
 from ..system.rotor import GRAVITY
-from .runup import check_drive_torque_value
+from .runup import check_drive_torque_value, unbalance_arrays
 
 #: default ring integration substep [s] of :class:`BearingComponent` (and of the bearing FMU)
 BEARING_SUBSTEP = 5e-6
@@ -467,7 +467,7 @@ class BearingComponent:
             Ascending rotor speeds [rad/s] of the table (> 0).
         """
 
-        sup = check_oil_supply(oil_supply)
+        sup = check_oil_supply(oil_supply, bearings=(self.bearing,))
         speeds = np.asarray(speeds_rad_s, dtype=float)
         if speeds.ndim != 1 or speeds.size < 2 or not np.all(np.diff(speeds) > 0) or not speeds[0] > 0:
             raise ParameterError(f"{self.bearing.name} bearing thermal table speeds are invalid: at least 2 ascending "
@@ -1039,9 +1039,7 @@ class RotorComponent:
         self.f_grav = rotor.gravity_load(system.gravity)
         self.jdofs = np.array([[4 * b.node, 4 * b.node + 1] for b in system.bearings], dtype=np.int64)
         self._jidx = [np.array([i, k, self.n + i, self.n + k]) for i, k in self.jdofs]
-        self.unb_node = np.array([rotor.disc(u.disc).node for u in unbalance], dtype=np.int64)
-        self.unb_me = np.array([float(u.amount) for u in unbalance])
-        self.unb_phase = np.array([float(u.phase) for u in unbalance])
+        self.unb_node, self.unb_me, self.unb_phase = unbalance_arrays(rotor, unbalance)
         self.substep = float(substep)
         self.polar_inertia = check_positive("rotor polar_inertia", rotor_polar_inertia(rotor) if polar_inertia is None
                                             else polar_inertia, "kg m^2")

@@ -26,6 +26,7 @@ from ..core.errors import (
     MAX_SPEED_RPM,
     ParameterError,
     RunupStopped,
+    check_distinct,
     check_finite,
     check_positive,
     check_real,
@@ -43,6 +44,7 @@ from ..physics.dynamics import monolithic_jac as _jac
 from ..physics.dynamics import monolithic_rhs as _rhs
 from ..physics.film import check_model
 from ..physics.losses import bearing_loss_kernel, film_arrays
+from ..system.methods import check_spring
 from .compiled import pack_problem, solve_chunk
 from .recorder import Recorder, RunupResult, RunupSchema
 from .rosenbrock import FD_TYPICAL_M, STATUS, film_columns, rodas_chunk
@@ -658,7 +660,29 @@ class Unbalance:
     phase: float = 0.0
 
     def __post_init__(self):  # (an infinite phase ended the run at t = 0: "singular iteration matrix", exit 3)
+        # (the amount was checked by the run-up only, after its thermal table; its upper bound is the disc's own,
+        # applied where the unbalance meets its rotor: unbalance_arrays)
+        self.amount = check_real(f"unbalance of {self.disc}", self.amount, "kg m", minimum=0.0, inclusive=True)
         self.phase = check_real(f"unbalance phase of {self.disc}", self.phase, "rad")
+
+
+def unbalance_arrays(rotor, unbalance):
+    """Disc nodes, m e [kg m] and phases [rad] of the :class:`Unbalance` list ``unbalance`` on ``rotor``, or a
+    :class:`ParameterError`: each disc at most once (two entries on one disc were summed; give their resultant) and
+    each m e within its disc's bound (:meth:`frbmodel.system.rotor.Rotor.check_unbalance`).
+
+    Examples
+    --------
+    >>> from frbmodel.system.presets import turbocharger
+    >>> unbalance_arrays(turbocharger().rotor, [Unbalance("compressor_wheel", 2e-6, 0.5)])
+    (array([3]), array([2.e-06]), array([0.5]))
+    """
+    unbalance = list(unbalance)
+    names = [u.disc for u in unbalance]
+    check_distinct(f"unbalance discs {names}", names)
+    checked = [rotor.check_unbalance(u.disc, u.amount) for u in unbalance]
+    return (np.array([d.node for d, _ in checked], dtype=np.int64), np.array([a for _, a in checked], dtype=float),
+            np.array([float(u.phase) for u in unbalance], dtype=float))
 
 
 @dataclass
@@ -901,12 +925,14 @@ def check_lag_profile(profile, name="profile", capacity_name="ring_heat_capacity
                              f"{capacity_name} unset (quasi-static temperatures)")
 
 
-def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile")):
-    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, or linear springs (no films). Every
+def check_runup_oil(oil_supply, profile, integrator="rodas", linear_springs=None, names=("integrator", "profile"),
+                    system=None):
+    """Refuse an oil supply a run cannot use: not an :class:`OilSupply`, linear springs (no films) or feed holes
+    that do not fit the rings of ``system`` (:func:`frbmodel.linear.thermal.check_oil_supply`). Every
     integrator takes it (the ``"radau"`` path packs the viscosity table, :func:`frbmodel.nonlinear.compiled.
     pack_problem`), and so does a torque-driven rotor (its table spans :func:`table_speeds_rpm`); ``profile``,
     ``integrator`` and ``names`` are kept for the callers (the CLI's option names)."""
-    sup = check_oil_supply(oil_supply)
+    sup = check_oil_supply(oil_supply, bearings=() if system is None else system.bearings)
     if sup is None:
         return None
     if linear_springs is not None:
@@ -946,8 +972,9 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     Raises
     ------
     ParameterError
-        Not two bearings, a negative unbalance or spring stiffness, a non-uniform time grid, a torque-driven
-        rotor without polar inertia, or an oil supply with linear springs.
+        Not two bearings, an unbalance outside its disc's range or on a disc twice (:func:`unbalance_arrays`), a
+        negative spring stiffness, a non-uniform time grid, a torque-driven rotor without polar inertia, or an oil
+        supply with linear springs.
 
     Examples
     --------
@@ -956,8 +983,9 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     if len(system.bearings) != 2:
         raise ParameterError(f"the run-up needs exactly 2 bearings, the system has {len(system.bearings)}")
     rotor = system.rotor
-    springs = 0.0 if linear_springs is None else check_positive("linear_springs", linear_springs, "N/m")
-    sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs)
+    springs = 0.0 if linear_springs is None else check_spring("linear_springs", linear_springs)
+    unb_node, unb_me, unb_phase = unbalance_arrays(rotor, unbalance)  # (before the thermal tables: it was after)
+    sup = check_runup_oil(oil_supply, profile, "rodas", linear_springs, system=system)
     visc = (None, None)
     if sup is not None:
         visc = lagged_viscosity_table(system, profile, sup) if sup.model.ring_heat_capacity_J_K is not None else \
@@ -966,10 +994,6 @@ def build_problem(system, profile, film_model, unbalance=(), linear_springs=None
     arrays = [film_arrays(b, film_model) for b in system.bearings]
     geom = np.array([a[0] for a in arrays])
     polys = np.array([a[1] for a in arrays])
-    unb_node = np.array([rotor.disc(u.disc).node for u in unbalance], dtype=np.int64)
-    unb_me = np.array([check_positive(f"unbalance of {u.disc}", u.amount, "kg m", allow_zero=True)
-                       for u in unbalance])
-    unb_phase = np.array([float(u.phase) for u in unbalance])
     tg = profile.t
     if tg.size > 2 and not np.allclose(np.diff(tg), tg[1] - tg[0]):
         raise ParameterError("speed profile: the time grid must be uniform (SpeedProfile builds it so)")
@@ -1744,7 +1768,7 @@ def runup(system, speed_rpm=None, duration=1.0, profile=None, film_model=None, u
     if integrator not in INTEGRATORS:
         raise ParameterError(f"integrator = {integrator!r} is unknown; valid: {', '.join(map(repr, INTEGRATORS))}")
     check_drive_torque(system, profile)
-    check_runup_oil(oil_supply, profile, integrator, linear_springs)
+    check_runup_oil(oil_supply, profile, integrator, linear_springs, system=system)
     problem = build_problem(system, profile, model, unbalance, linear_springs, oil_supply)
     y0 = initial_state(problem, initial, perturbation)
     atol_v, scale = atol_vector(problem, atol)

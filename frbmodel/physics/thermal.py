@@ -23,7 +23,7 @@ import numpy as np
 from ..core.errors import ParameterError, check_real
 
 __all__ = ["ThermalModel", "bearing_flows", "check_feed_holes", "film_temperatures", "heat_flows", "pressure_flow",
-           "side_flow"]
+           "ring_wall_m", "side_flow"]
 
 
 #: the loosest accepted convergence of the film temperatures [K] (ThermalModel.tolerance_K)
@@ -174,11 +174,28 @@ def pressure_flow(film, eps, pressure_Pa):
             / (3.0 * film.viscosity * film.length))
 
 
-def check_feed_holes(bearing, model, wall_m):
-    """Refuse feed holes that do not fit the ring of ``bearing``: a diameter not below its wall thickness
-    ``wall_m`` [m] (the holes' Poiseuille resistance assumes a tube longer than wide) or more holes than fit side by
-    side around the inner film (a 1 m hole was taken: the inner film flooded at the supply temperature)."""
-    d, n = model.feed_hole_diameter_m, model.feed_holes
+def ring_wall_m(bearing):
+    """Wall thickness of the ring [m], R_O − R_I − c_I: the length of its feed holes."""
+    return bearing.outer.radius - bearing.inner.radius - bearing.inner.clearance
+
+
+def check_feed_holes(bearing, model):
+    """Refuse feed holes of the thermal ``model`` that do not fit the ring of ``bearing``: a diameter not below its
+    wall thickness (:func:`ring_wall_m`; the holes' Poiseuille resistance assumes a tube longer than wide) or more
+    holes than fit side by side around the inner film (a 1 m hole was taken: the inner film flooded at the supply
+    temperature). Called where an oil supply meets the system, before any work
+    (:func:`frbmodel.linear.thermal.check_oil_supply`), not inside the balance (:func:`bearing_flows`).
+
+    Examples
+    --------
+    >>> from frbmodel.system.presets import turbocharger
+    >>> try:
+    ...     check_feed_holes(turbocharger().bearings[0], ThermalModel(feed_hole_diameter_m=1.0))
+    ... except ParameterError as exc:
+    ...     print(exc)  # doctest: +ELLIPSIS
+    thermal model feed_hole_diameter_m = 1 m is invalid for the turbine bearing's ring: valid range < its wall ...
+    """
+    d, n, wall_m = model.feed_hole_diameter_m, model.feed_holes, ring_wall_m(bearing)
     if n > 0 and not d < wall_m:
         raise ParameterError(f"thermal model feed_hole_diameter_m = {d:g} m is invalid for the {bearing.name} "
                              f"bearing's ring: valid range < its wall thickness {wall_m:g} m (the holes' length)")
@@ -220,8 +237,7 @@ def bearing_flows(bearing, eps_inner, eps_outer, rotor_speed, ring_speed, supply
         pressure driving the inner feed; <= 0: the holes deliver nothing beyond the side flow).
     """
     inner, outer = bearing.inner, bearing.outer
-    wall = outer.radius - inner.radius - inner.clearance
-    check_feed_holes(bearing, model, wall)
+    wall = ring_wall_m(bearing)  # (the holes fit the ring: check_feed_holes ran when the inputs were validated)
     p_feed = supply_pressure_Pa
     if model.centrifugal_feed:
         p_feed -= 0.5 * density_kg_m3 * ring_speed ** 2 * (outer.radius ** 2 - inner.radius ** 2)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_system
+from ..core.errors import ParameterError, check_distinct, check_system
 from ..core.progress import counter_bar, note
 from ..linear.campbell import campbell
 from ..nonlinear.runup import DEFAULT_ATOL_M, DEFAULT_RTOL, RunupStopped, SpeedProfile, check_output_rate, runup
@@ -223,6 +223,7 @@ def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), d
     if profile not in ("exponential", "ramp"):  # (anything else ran as a ramp)
         raise ParameterError(f"profile = {profile!r} is unknown; valid: exponential, ramp")
     check_output_rate((runup_kw or {}).get("output_rate_hz", 20e3), duration)  # (was refused after a diagram)
+    clearances = check_clearances(system, clearances)
     node = node or system.rotor.discs[0].name
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -246,6 +247,34 @@ def compare(system, clearances=PAPER_OUTER_CLEARANCES, speed_rpm=(1e3, 250e3), d
     return table, paths
 
 
+def clearance_tag(clearance_m):
+    """The result folder of an outer clearance [m]: ``co<µm>um``, the µm to 6 significant digits (36e-6: co36um;
+    36.5e-6: co36.5um; it was rounded to whole µm, so 36.2e-6 and 36.4e-6 wrote one folder, the second's files over
+    the first's)."""
+    return f"co{clearance_m * 1e6:g}um"
+
+
+def check_clearances(system, clearances):
+    """The outer clearances [m] of :func:`compare` as floats, each one that ``system``'s films take
+    (:meth:`~frbmodel.system.parameters.Turbocharger.with_outer_clearance`) and each with its own result folder
+    (:func:`clearance_tag`), or a :class:`ParameterError` — before any diagram (a clearance the films refuse was
+    refused after the Campbell diagrams and run-ups of the ones before it, their files left in the folder).
+
+    Examples
+    --------
+    >>> from frbmodel.system.presets import turbocharger
+    >>> try:
+    ...     check_clearances(turbocharger(), [36e-6, 36.0000001e-6])
+    ... except ParameterError as exc:
+    ...     print(exc)  # doctest: +ELLIPSIS
+    clearances = [3.6e-05, 3.60000001e-05]: their result folders ['co36um', 'co36um'] repeats co36um: give distinct ...
+    """
+    values = [float(system.with_outer_clearance(c).bearings[0].outer.clearance) for c in clearances]
+    tags = [clearance_tag(c) for c in values]
+    check_distinct(f"clearances = {values!r}: their result folders {tags}", tags)
+    return values
+
+
 def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_speeds, progress, runup_kw, segment_s,
                        fmax_hz, check_convergence):
     """One clearance of :func:`compare`: Campbell diagram, run, spectrogram, figures; (table rows, paths)."""
@@ -253,7 +282,7 @@ def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_spe
     start, end = speed_rpm
     lo, hi = sorted((start, end))
     kind = "run-down" if end < start else "run-up"
-    tag = f"co{c * 1e6:.0f}um"
+    tag = clearance_tag(c)
     tc = system.with_outer_clearance(c)
     note(f"[{tag}] method-J Campbell diagram", progress)
     cd = campbell(tc, "J", np.geomspace(lo, hi, n_speeds) if profile == "exponential" else
@@ -271,7 +300,7 @@ def _compare_clearance(system, c, out, speed_rpm, duration, profile, node, n_spe
         run, status = exc.result, "stopped"
     paths += [out / tag / "runup.csv", out / tag / "runup.json"]
     sp = spectrogram(run, node, segment_s=min(segment_s, duration / 8))
-    title = f"c_o = {c * 1e6:.0f} µm: {kind} spectrogram ({readable(node)}) vs method J"
+    title = f"c_o = {c * 1e6:g} µm: {kind} spectrogram ({readable(node)}) vs method J"
     paths += write_spectrogram(sp, cd, out / tag, title, "log" if profile == "exponential" else "linear", fmax_hz)
     rows = comparison_rows(c, sp, sp.components(), cd, status)
     if check_convergence:

@@ -31,12 +31,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import ParameterError, check_positive, check_real, read_json
+from ..core.errors import ParameterError, check_positive, check_real, check_speed_count, read_json
 from ..core.progress import counter_bar, note
-from ..cosim.master import cosimulate, operating_point_overrides
-from ..cycles.continuation import check_starts, continuation, hopf_points
+from ..cosim.master import Master, check_record_size, check_whole_steps, cosimulate, operating_point_overrides
+from ..cosim.ssp import read_ssp
+from ..cycles.branch import check_segments
+from ..cycles.continuation import check_max_points, check_starts, continuation, hopf_points
 from ..linear.campbell import campbell
-from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply
+from ..linear.thermal import SUPPLY_PRESSURE_PA, OilSupply, check_oil_supply
 from ..nonlinear.runup import SpeedProfile, Unbalance, check_output_rate, check_speed, runup
 from ..plots.figures import write_html
 from ..plots.studies import stability_chart_figure, stability_map_figures
@@ -71,6 +73,8 @@ ANALYSIS_OPTIONS = {"campbell": ("methods", "speeds_rpm", "oil", "system"),
                     "cosim": ("speed_rpm", "duration", "ssp", "parameter_set", "oil", "system"),
                     "hopf": ("speed_rpm", "oil", "system"),
                     "bifurcation": ("speed_rpm", "start", "max_points", "segments", "oil", "system")}
+#: output rate [Hz] of a cosim study's runs (cosimulate's default; :func:`_check_cosim_options` bounds their record)
+COSIM_OUTPUT_RATE_HZ = 20e3
 #: the speed profiles of a runup study (option ``profile``)
 RUNUP_PROFILES = ("exponential", "ramp")
 #: seconds to wait for an existing Dask scheduler before giving up
@@ -130,7 +134,8 @@ def check_options(analysis, options):
         ``campbell``: ``methods`` (letters, default ["J"]) and ``speeds_rpm`` (START, STOP, COUNT) in any order of
         START and STOP; run-ups: ``speed_rpm`` (START, END) — a run-down if END < START — and ``duration`` [s];
         ``hopf``: ``speed_rpm``; ``bifurcation``: ``speed_rpm``, ``start`` ("hopf", a speed [rpm] or a list),
-        ``max_points`` (>= 2, default 25) and ``segments`` (>= 1, default 1), as :func:`frbmodel.cycles.continuation`.
+        ``max_points`` (2 ... 10000, default 25) and ``segments`` (1 ... 64, default 1), as
+        :func:`frbmodel.cycles.continuation`.
         Every analysis: ``oil``, the name of a named oil or an ``[oil]`` table (dict), for the thermal model
         (:func:`case_oil_supply`).
 
@@ -170,6 +175,7 @@ def check_options(analysis, options):
             check_speed("campbell stop speed", b)
             if int(n) != n or n < 2:
                 raise ParameterError(f"campbell speed count = {n!r} is invalid: valid range integer >= 2")
+            check_speed_count(f"campbell speeds_rpm = {options['speeds_rpm']!r}", int(n))  # (the CLI's grid bound)
     else:  # run-ups, co-simulations and Hopf points: a speed range
         if "speed_rpm" in options:
             a, b = options["speed_rpm"]
@@ -181,13 +187,27 @@ def check_options(analysis, options):
         if "duration" in options:
             check_positive("duration", options["duration"], "s")
     if analysis == "bifurcation":
-        for key, low in (("max_points", 2), ("segments", 1)):
-            v = options.get(key, low)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or int(v) != v \
-                    or v < low:
-                raise ParameterError(f"bifurcation {key} = {v!r} is invalid: valid range integer >= {low}")
+        check_max_points("bifurcation max_points", options.get("max_points", 2), lowest=2)
+        check_segments("bifurcation segments", options.get("segments", 1))
         check_starts(options.get("start", "hopf"), options.get("speed_rpm", (1e3, 250e3)), "bifurcation start",
                      "speed_rpm")
+
+
+def _check_cosim_options(options):
+    """The SSP and the duration of a ``cosim`` study as frb cosim checks them, before any case (each case failed,
+    exit 4: a missing SSP, an unknown parameter set, a duration that is not a whole number of the SSP's macro steps or
+    records more than MAX_SAMPLES): the Master is set up without running, its FMUs not instantiated."""
+    if not options.get("ssp"):
+        raise ParameterError("analysis 'cosim' needs the option ssp: the SSP of the FMUs (frb build-fmus writes "
+                             "build/turbocharger.ssp)")
+    duration = check_positive("duration", options.get("duration", 1.0), "s")
+    with read_ssp(options["ssp"]) as ssp:
+        ssp.parameters(options.get("parameter_set", "co36"))
+        step = ssp.step_size or 1e-5  # (the Master's fixed macro step of a study's runs)
+    check_whole_steps(duration, step, "cosim duration", "the option duration (frb sweep --duration)", "")
+    check_record_size(duration, COSIM_OUTPUT_RATE_HZ, "cosim duration")
+    with Master(options["ssp"], options.get("parameter_set", "co36"), stop_time=duration):
+        pass  # (the rest of frb cosim's set-up checks: the step's validated range, the parameter set's system)
 
 
 def grid(params: dict, analysis="campbell", **options):
@@ -228,6 +248,8 @@ def grid(params: dict, analysis="campbell", **options):
         raise ParameterError(f"analysis = {analysis!r} is unknown; valid: {', '.join(ANALYSES)}")
     check_options(analysis, options)
     _check_thermal_study(names, analysis, options)
+    if analysis == "cosim":  # (it reads the SSP: after the checks of the options alone)
+        _check_cosim_options(options)
     oil_base = None  # the system option's oil, if it has one, for the supply values' check
     if isinstance(options.get("system"), dict) and "oil" in options["system"]:
         oil_base = Turbocharger.from_dict(options["system"])
@@ -306,7 +328,8 @@ def case_oil_supply(params, options, system):
             raise ParameterError(f"study parameter {given[0]} needs an oil: give the option oil (frb sweep --oil NAME) "
                                  "or a system with an [oil] table")
         return None
-    return OilSupply(oil, params.get("supply_temperature", 363.15), params.get("supply_pressure", SUPPLY_PRESSURE_PA))
+    supply = OilSupply(oil, params.get("supply_temperature", 363.15), params.get("supply_pressure", SUPPLY_PRESSURE_PA))
+    return check_oil_supply(supply, bearings=system.bearings)  # (the feed holes against the case's rings)
 
 
 def _named_bearing(bearings, key):
@@ -382,7 +405,9 @@ def build_case_system(params, base=None):
         bs = [replace(b, ring_mass=m) for b in bs]
     unb = []
     for key in [k for k in p if k.startswith("unbalance_")]:
-        disc, amount = _named_disc(tc, key), check_real(key, p.pop(key), "kg m", minimum=0.0, inclusive=True)
+        disc = _named_disc(tc, key)
+        amount = tc.rotor.check_unbalance(disc, check_real(key, p.pop(key), "kg m", minimum=0.0, inclusive=True),
+                                          key)[1]  # (the disc's own bound, before any case runs)
         if amount > 0:
             unb.append(Unbalance(disc, amount, 0.0))
     if p:
@@ -486,7 +511,8 @@ def _cosim_rows(tc, unb, o):
         ov[b.name]["ring.mass"] = ("Real", b.ring_mass)
     for u in unb:
         ov["rotor"][f"{u.disc}.unbalance"] = ("Real", u.amount)
-    run = cosimulate(o["ssp"], o.get("parameter_set", "co36"), stop_time=dur, overrides=ov, progress=False)
+    run = cosimulate(o["ssp"], o.get("parameter_set", "co36"), stop_time=dur, overrides=ov, progress=False,
+                     output_rate_hz=COSIM_OUTPUT_RATE_HZ)
     return _onset_rows_run(run, "co-sim run-down" if end < start else "co-sim")
 
 

@@ -27,6 +27,31 @@ from dataclasses import dataclass
 
 from ..core.errors import ParameterError, check_real, check_real_array, check_speeds_in_range
 
+#: stiffest linear spring of methods A, B, E and the run-up's ``linear_springs`` [N/m]. The supports are rigid there:
+#: the Table 2 rotor's first four frequencies at 1e15 N/m are those at 1e18 within 3e-8 (methods A, B, E); stiffer
+#: springs only lose digits to round-off in the state matrix (method B's first mode 4e-6 off at 1e25, 3 % at 1e30)
+#: until, at 1e40, every method's modes are wrong without a warning (method A's first at 251 Hz instead of 525 Hz)
+MAX_SPRING_N_M = 1e15
+
+
+def check_spring(name, value):
+    """``float(value)`` of a linear spring stiffness [N/m] in 0 < k <= :data:`MAX_SPRING_N_M`, else a
+    :class:`ParameterError` naming ``name``, the value and the range (strings are refused, not converted).
+
+    Examples
+    --------
+    >>> try:
+    ...     check_spring("method A k", 1e40)
+    ... except ParameterError as exc:
+    ...     print(exc)  # doctest: +ELLIPSIS
+    method A k = 1e+40 N/m is invalid: valid range 0 < k <= 1e+15 N/m (a rigid support; stiffer springs lose ...
+    """
+    k = check_real(name, value, "N/m", minimum=0.0)
+    if k > MAX_SPRING_N_M:
+        raise ParameterError(f"{name} = {value!r} N/m is invalid: valid range 0 < k <= {MAX_SPRING_N_M:g} N/m (a rigid "
+                             "support; stiffer springs lose the rotor's modes to round-off)")
+    return k
+
 
 @dataclass(frozen=True)
 class Method:
@@ -124,8 +149,8 @@ class Method:
         Raises
         ------
         ParameterError
-            A parameter the method does not take, or a value that is not a finite real number > 0 (strings are
-            refused, not converted).
+            A parameter the method does not take, or a value that is not a finite real number in 0 < k <=
+            :data:`MAX_SPRING_N_M` (strings are refused, not converted).
         """
         out = dict(zip(self.parameters, self.defaults))
         for k, v in kwargs.items():
@@ -134,7 +159,7 @@ class Method:
             if k not in out:
                 raise ParameterError(f"parameter {k!r} is not used by method {self.letter}; "
                                      f"valid: {list(self.parameters) or 'none'}")
-            out[k] = check_real(f"method {self.letter} {k}", v, "N/m", minimum=0.0)
+            out[k] = check_spring(f"method {self.letter} {k}", v)
         return out
 
 

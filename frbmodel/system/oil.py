@@ -148,6 +148,7 @@ class Oil:
         for f, v in (("nu40_m2_s", nu40), ("nu100_m2_s", nu100), ("density15_kg_m3", rho),
                      ("density_coefficient_1_K", alpha), ("specific_heat_J_kgK", cp)):
             object.__setattr__(self, f, v)
+        _check_known_name(self)
 
     @property
     def walther(self):
@@ -201,6 +202,20 @@ class Oil:
     def from_dict(cls, d: dict, where: str = "oil") -> "Oil":
         """Inverse of :meth:`to_dict`, or ``{"name": ...}`` for one of :data:`OILS`; see :func:`oil_from_dict`."""
         return oil_from_dict(d, where)
+
+
+def _check_known_name(oil):
+    """Refuse an oil that has the name of one of :data:`OILS` but other numbers: its results would be labelled
+    with the known oil's name. Every oil passes here, built in code or read from an ``[oil]`` table (the table's
+    parser alone refused it). (The named oils themselves are built before :data:`OILS` exists.)"""
+    known = globals().get("OILS", {}).get(oil.name)
+    if known is None or oil == known:
+        return
+    mine, theirs = oil.to_dict(), known.to_dict()
+    diff = [f"{k} = {v!r} (not {theirs[k]!r})" for k, v in mine.items() if v != theirs[k]]
+    raise ParameterError(f"oil name = {oil.name!r} is a known oil, but {', '.join(diff)}: its results would be "
+                         f"labelled {oil.name!r}; give another name for these numbers, or the known oil itself "
+                         f"(frbmodel.OILS[{oil.name!r}], or name = {oil.name!r} alone in an [oil] table)")
 
 
 # Named oils: typical values of their grades. The viscosity at 100 °C of each engine oil lies inside its SAE J300
@@ -265,14 +280,6 @@ def oil_from_dict(d, where="oil") -> Oil:
         if missing:
             raise ParameterError(f"lacks {', '.join(missing)}: give name = one of {', '.join(OILS)}, or the numbers "
                                  f"({', '.join(OIL_KEYS[:3])} required)")
-        oil = Oil(**d)
-        known = OILS.get(oil.name)
-        if known is not None and oil != known:
-            diff = [f"{k} = {v!r} (not {known.to_dict()[k]!r})" for k, v in oil.to_dict().items()
-                    if v != known.to_dict()[k]]
-            raise ParameterError(f"name = {oil.name!r} is a known oil, but the table gives {', '.join(diff)}: its "
-                                 f"results would be labelled {oil.name!r}; give another name for these numbers, or "
-                                 "the name alone")
-        return oil
+        return Oil(**d)  # (a known oil's name with other numbers is refused by Oil itself)
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None

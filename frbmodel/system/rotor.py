@@ -325,6 +325,48 @@ class Rotor:
                 return d
         raise ParameterError(f"disc name = {name!r} is unknown; rotor discs are {[d.name for d in self.discs]}")
 
+    def check_unbalance(self, name, amount_kg_m, what=None):
+        """``(disc, m e)`` of an unbalance of ``amount_kg_m`` [kg m] on the disc called ``name``, or a
+        :class:`ParameterError` naming it, its value and the valid range 0 ... sqrt(m I_p) of the disc.
+
+        The bound is the disc's own: its unbalance mass m_u at radius e_u is part of the disc, so m_u <= m and
+        m_u e_u² <= I_p (the polar moment about the shaft axis holds every mass of the disc), hence
+        m_u e_u <= sqrt(m I_p) — an unbalance above it needs more mass farther out than the disc has (10 kg m was
+        accepted: 6.9e9 N at 250 krpm on a 0.5 kg rotor). (A bound by the rotor's weight is not one: 1 g mm at 250
+        krpm is already 685 N, 134 times the Table 2 rotor's weight.)
+
+        Parameters
+        ----------
+        name : str
+            The disc's name.
+        amount_kg_m : float
+            m e [kg m], >= 0.
+        what : str, optional
+            The quantity's name for the message (default ``"unbalance of <name>"``).
+
+        Returns
+        -------
+        (Disc, float)
+
+        Examples
+        --------
+        >>> from frbmodel.system.presets import turbocharger
+        >>> try:
+        ...     turbocharger().rotor.check_unbalance("turbine_wheel", 10.0)
+        ... except ParameterError as exc:
+        ...     print(exc)  # doctest: +ELLIPSIS
+        unbalance of turbine_wheel = 10.0 kg m is invalid: valid range 0 ... 0.00514 kg m = sqrt(m I_p) of the disc ...
+        """
+        disc = self.disc(name)
+        what = what or f"unbalance of {name}"
+        amount = check_real(what, amount_kg_m, "kg m", minimum=0.0, inclusive=True)
+        top = math.sqrt(disc.mass * disc.polar_inertia)
+        if amount > top:
+            raise ParameterError(f"{what} = {amount_kg_m!r} kg m is invalid: valid range 0 ... {top:.3g} kg m = "
+                                 f"sqrt(m I_p) of the disc ({disc.mass:g} kg, {disc.polar_inertia:g} kg m^2; a larger "
+                                 "m e needs more mass farther from the axis than the disc has; 1e-6 kg m = 1 g mm)")
+        return disc, amount
+
     @cached_property
     def _assembled(self):
         n = self.n_dof
