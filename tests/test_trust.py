@@ -179,6 +179,20 @@ def test_warmup_marks_the_kernels_ready_for_these_sources(tmp_path, monkeypatch)
     assert not w.kernels_ready()
 
 
+def test_first_run_notice_compiles_once_and_says_so(monkeypatch, capsys):
+    """A kernel command whose kernels are not ready compiles them first and says so, one line on stderr, before its
+    own output (here a refusal of its system file); a command without kernels does not."""
+    import frbmodel.cli as cli
+
+    calls = []
+    monkeypatch.setattr(cli, "kernels_ready", lambda: False)
+    monkeypatch.setattr(cli, "warmup", lambda progress: calls.append(progress) or 0.0)
+    assert cli.main(["equilibrium", "--system", "no-such-file.toml"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert calls == [True] and err[0].startswith("frb: compiling the numba kernels (first run only") and len(err) == 2
+    assert cli.main(["plot", "nofolder"]) == 2 and calls == [True]
+
+
 def test_a_run_longer_than_its_speed_profile_is_refused():
     """Beyond its table a profile would keep its last acceleration at a constant speed (gyroscopic and unbalance
     terms then disagree with the speed): refused, naming both lengths."""

@@ -14,10 +14,10 @@ True
 """
 from __future__ import annotations
 
-import hashlib
 import time
 from pathlib import Path
 
+from ..core.kernel_cache import kernel_sources_digest
 from ..core.progress import counter_bar
 from ..core.version import __version__
 from ..linear.equilibrium import equilibrium
@@ -27,17 +27,11 @@ from ..nonlinear.runup import INTEGRATORS, SpeedProfile, runup
 from ..physics.film import film_coefficients, film_force
 from ..system.presets import turbocharger
 
-#: the modules holding numba kernels (their sources stamp the marker), relative to the package
-KERNEL_MODULES = ("physics/film", "physics/bearing", "physics/dynamics", "nonlinear/compiled", "nonlinear/rosenbrock",
-                  "nonlinear/runup", "nonlinear/components", "physics/losses")
-
 
 def _stamp():
-    pkg = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for name in KERNEL_MODULES:
-        h.update((pkg / f"{name}.py").read_bytes())
-    return h.hexdigest()[:16]
+    """The marker's stamp: the hash of every module that uses numba (:func:`kernel_sources_digest`, the one the
+    package drops its stale kernel caches by)."""
+    return kernel_sources_digest()[:16]
 
 
 def warmup_marker():
