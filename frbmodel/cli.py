@@ -1096,13 +1096,20 @@ KERNEL_COMMANDS = ("campbell", "equilibrium", "losses", "runup", "compare", "cos
                    "paper-figures", "unbalance")
 
 
-def _first_run_notice(command):
-    """On the first run after an install or an update, compile the kernels with a visible message and a bar."""
+def _first_run_notice(args):
+    """On the first run after an install or an update, compile the kernels with a visible message and a bar; the
+    system file (``--system``, with ``--outer-clearance`` / ``--film-model``) and an SSP's path are checked before,
+    so that a mistyped file is named at once, not after the ~40 s of compiling."""
 
-    if command in KERNEL_COMMANDS and not kernels_ready():
-        print("frb: compiling the numba kernels (first run only, ~40 s on 2 cores; `frb warmup` does it on purpose)",
-              file=sys.stderr, flush=True)
-        warmup(progress=True)
+    if args.command not in KERNEL_COMMANDS or kernels_ready():
+        return
+    if hasattr(args, "outer_clearance"):
+        load_from_args(args)  # (read again by the command; milliseconds)
+    if isinstance(getattr(args, "ssp", None), str) and not Path(args.ssp).exists():
+        raise ParameterError(f"SSP = {args.ssp!r} does not exist")
+    print("frb: compiling the numba kernels (first run only, ~40 s on 2 cores; `frb warmup` does it on purpose)",
+          file=sys.stderr, flush=True)
+    warmup(progress=True)
 
 
 def cmd_build_fmus(args):
@@ -1852,7 +1859,7 @@ def _dispatch(args):
     try:
         check_numeric_options(args)  # (before the first-run notice and any folder)
         mode = _html_mode(args)
-        _first_run_notice(args.command)
+        _first_run_notice(args)
         with html_plotlyjs(mode):
             return args.func(args) or 0
     except FRBError as exc:
