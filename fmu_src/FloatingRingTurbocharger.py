@@ -12,6 +12,7 @@ of the same structure at run time (rotor and bearing nodes); the films and rings
 ``<bearing>_bearing.inner.*``, ``.outer.*``, ``.ring.*`` (defaults: the system the FMU was built for).
 """
 import math
+import weakref
 
 import numpy as np
 from _fmu_common import FrbSlaveMixin
@@ -35,6 +36,18 @@ INPUTS = (("speed_in", "rad/s", "rotor speed held over the step (speed_source = 
 INPUT_STARTS = {"oil_supply_temperature": 363.15, "oil_supply_pressure": 3e5}
 #: upper bounds of the supply inputs (frbmodel.system.oil.T_MAX_K, frbmodel.linear.thermal.MAX_SUPPLY_PRESSURE_PA)
 INPUT_HIGHS = {"oil_supply_temperature": 473.15, "oil_supply_pressure": 2e6}
+
+
+
+def _close_abandoned_record(comp):
+    """Close a record the host left open (fmi2FreeInstance, fmi2Reset or the end of its process without an accepted
+    fmi2Terminate) as interrupted, so that its runup.json does not say "running" for ever; nothing when fmi2Terminate
+    closed it (a finalizer of the slave: it runs once, when the slave is collected or at the process's exit)."""
+    try:
+        comp.close_record("interrupted", f"the FMU instance ended without fmi2Terminate; the record ends at t = "
+                                         f"{comp.t:.9g} s")
+    except Exception:  # noqa: BLE001  (a finalizer must not raise, e.g. at the interpreter's exit)
+        pass
 
 
 class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
@@ -215,6 +228,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
             except OSError as exc:  # (the message was "[Errno 2] No such file or directory: '/proc/x'" alone)
                 raise ValueError(f"record_folder = {v['record_folder']!r} cannot be written: "
                                  f"{exc.strerror or exc}") from None
+            weakref.finalize(self, _close_abandoned_record, comp)
         self._comp = comp
         self._changed()
 
@@ -253,7 +267,8 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
     def terminate(self):
         """Terminate; the record (``record_folder``) is closed as finished, or as stopped with the reason when the
         last doStep was discarded (a host that carries on after a Discard: the record ends there). A refused
-        fmi2Terminate (outside step mode) leaves the record open."""
+        fmi2Terminate (outside step mode) leaves the record open; an instance that ends without an accepted one closes
+        it as interrupted (:func:`_close_abandoned_record`)."""
         if super().terminate() and self._comp is not None:
             if self._last_discard:
                 self._comp.close_record("stopped", self._last_discard)

@@ -642,6 +642,30 @@ def test_an_unwritable_record_folder_is_named(built, tmp_path):
     judge(h)
 
 
+def test_a_record_left_open_by_the_host_ends_as_interrupted(built, tmp_path):
+    """A turbocharger FMU freed after steps without fmi2Terminate (a host that crashed or forgot it): its
+    record_folder's runup.json says interrupted with the time it ends at, not "running" for ever; with
+    fmi2Terminate, finished."""
+    import gc
+    import json
+
+    for name, terminate in (("abandoned", False), ("terminated", True)):
+        h = Host(built / "fmus" / "FloatingRingTurbocharger.fmu", name, tmp_path)
+        h.start(strings={"record_folder": str(tmp_path / f"rec_{name}")})
+        for k in range(3):
+            h(OK, "doStep", k * 1e-5, 1e-5)
+        if terminate:
+            h(OK, "terminate")
+        judge(h)
+        del h
+        gc.collect()  # (the slave's getters hold it in reference cycles: collected, not freed at once)
+        meta = json.loads((tmp_path / f"rec_{name}" / "runup.json").read_text())
+        if terminate:
+            assert meta["status"] == "finished", meta["status"]
+        else:
+            assert meta["status"] == "interrupted" and "ended without fmi2Terminate" in meta["message"], meta
+
+
 def test_a_skipped_step_is_discarded_naming_the_time_the_state_is_at(built, tmp_path):
     """doStep from t = 5 s of a turbocharger FMU at t = 0: Discard, and the message says the state stays at 0 s (it
     said 'stays at t = 5 s', where it never was)."""
