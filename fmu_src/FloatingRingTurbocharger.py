@@ -15,7 +15,7 @@ import math
 import weakref
 
 import numpy as np
-from _fmu_common import FrbSlaveMixin
+from _fmu_common import UNUSED_INPUT_RTOL, FrbSlaveMixin
 from pythonfmu import DefaultExperiment, Fmi2Slave
 
 #: film parameters per bearing: (name, unit, description)
@@ -239,7 +239,7 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
             supply = {"supply_temperature_K": float(t_s), "supply_pressure_Pa": float(p_s)}
         else:
             for name, value in (("oil_supply_temperature", t_s), ("oil_supply_pressure", p_s)):
-                if value != INPUT_STARTS[name]:
+                if not math.isclose(value, INPUT_STARTS[name], rel_tol=UNUSED_INPUT_RTOL, abs_tol=0.0):
                     raise ValueError(f"{name} = {float(value)!r} needs the thermal model: set the parameter oil (the "
                                      "films have constant viscosities); leave the input at its start value "
                                      f"{INPUT_STARTS[name]!r} otherwise")
