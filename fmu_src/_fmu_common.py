@@ -399,8 +399,7 @@ class FrbSlaveMixin:
         x = self._input_values
         key = x.tobytes()
         if self._violation[0] != key:
-            with np.errstate(invalid="ignore"):
-                bad = ~np.isfinite(x) | (x < self._input_low) | (x > self._input_high)
+            bad = ~np.isfinite(x) | (x < self._input_low) | (x > self._input_high)  # (NaN compares False, silently)
             names = [n for n, k in self._input_pos.items() if bad[k]] if bad.any() else []
             self._violation = (key, names)
         return self._violation[1]
