@@ -1098,13 +1098,15 @@ KERNEL_COMMANDS = ("campbell", "equilibrium", "losses", "runup", "compare", "cos
 
 def _first_run_notice(args):
     """On the first run after an install or an update, compile the kernels with a visible message and a bar; the
-    system file (``--system``, with ``--outer-clearance`` / ``--film-model``) and an SSP's path are checked before,
-    so that a mistyped file is named at once, not after the ~40 s of compiling."""
+    system file (``--system``, with ``--outer-clearance`` / ``--film-model``), an SSP's path and an ``--oil`` name
+    are checked before, so that a mistyped one is named at once, not after the ~40 s of compiling."""
 
     if args.command not in KERNEL_COMMANDS or kernels_ready():
         return
     if hasattr(args, "outer_clearance"):
         load_from_args(args)  # (read again by the command; milliseconds)
+    if isinstance(getattr(args, "oil", None), str):
+        OIL(args.oil)  # an unknown oil name
     if isinstance(getattr(args, "ssp", None), str) and not Path(args.ssp).exists():
         raise ParameterError(f"SSP = {args.ssp!r} does not exist")
     print("frb: compiling the numba kernels (first run only, ~40 s on 2 cores; `frb warmup` does it on purpose)",

@@ -188,7 +188,8 @@ def test_first_run_notice_compiles_once_and_says_so(monkeypatch, capsys, tmp_pat
     calls = []
     monkeypatch.setattr(cli, "kernels_ready", lambda: False)
     monkeypatch.setattr(cli, "warmup", lambda progress: calls.append(progress) or 0.0)
-    for argv in (["equilibrium", "--system", "no-such-file.toml"], ["cosim", "no-such.ssp"], ["plot", "nofolder"]):
+    for argv in (["equilibrium", "--system", "no-such-file.toml"], ["cosim", "no-such.ssp"], ["plot", "nofolder"],
+                 ["campbell", "--oil", "SAE 99"]):
         assert cli.main(argv) == 2 and calls == []
         assert len(capsys.readouterr().err.splitlines()) == 1
     assert cli.main(["equilibrium", "--speed-rpm", "50000", "--out", str(tmp_path / "eq")]) == 0
