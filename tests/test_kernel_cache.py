@@ -32,6 +32,8 @@ def test_caches_dropped_exactly_when_a_compiled_source_changes(tmp_path):
     assert kernel_cache.drop_stale_kernels(root) == 0 and len(_caches(root)) == 3  # unchanged sources
     (root / "b.py").write_text("x = 2\n")
     assert kernel_cache.drop_stale_kernels(root) == 0 and len(_caches(root)) == 3
+    (root / "b.py").write_text('print("compiling the numba kernels")\n')  # names numba, imports none: not a kernel
+    assert kernel_cache.drop_stale_kernels(root) == 0 and len(_caches(root)) == 3
     (root / "sub" / "c.py").write_text("import numba  # edited\n")  # a callee in another file than a's kernels
     assert kernel_cache.drop_stale_kernels(root) == 3 and _caches(root) == []
     (root / "sub" / "c.py").rename(root / "sub" / "d.py")  # a moved module is a change too

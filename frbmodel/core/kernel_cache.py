@@ -6,23 +6,26 @@ callee compiled in, so after a change of, say, the film force kernel in ``physic
 kernels of ``nonlinear/compiled.py`` would go on computing with the former film forces: a silent wrong answer in a
 working copy after ``git pull`` or an edit (a fresh installation has new files and no such cache).
 :func:`drop_stale_kernels` runs when this module is imported, first thing in ``frbmodel/__init__.py``: it hashes
-the sources of every module that uses numba and, when the hash differs from the one stored with the caches,
+the sources of every module that imports numba and, when the hash differs from the one stored with the caches,
 deletes the package's cached kernels (numba compiles them again on first use) and stores the new hash.
 """
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent
 STAMP = "frb_kernels.sha256"  # in the package's top __pycache__
 CACHE_SUFFIXES = (".nbi", ".nbc")
+IMPORTS_NUMBA = re.compile(rb"^[ \t]*(?:from|import)[ \t]+numba\b", re.MULTILINE)
 
 
 def kernel_sources_digest(root=PACKAGE):
-    """SHA-256 over the paths and contents of the package's modules that use numba (any ``.py`` under ``root``
-    whose text mentions ``numba``), in sorted order.
+    """SHA-256 over the paths and contents of the package's modules that use numba (any ``.py`` under ``root`` with
+    an ``import numba`` or ``from numba`` line; a module that only names numba in a message is not one), in sorted
+    order.
 
     Parameters
     ----------
@@ -37,7 +40,7 @@ def kernel_sources_digest(root=PACKAGE):
     h = hashlib.sha256()
     for f in sorted(Path(root).rglob("*.py")):
         data = f.read_bytes()
-        if b"numba" in data:
+        if IMPORTS_NUMBA.search(data):
             h.update(f.relative_to(root).as_posix().encode() + b"\0" + data + b"\0")
     return h.hexdigest()
 
