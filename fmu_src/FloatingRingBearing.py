@@ -5,7 +5,7 @@ Thin adapter over :class:`frbmodel.nonlinear.components.BearingComponent`; all p
 import math
 
 import numpy as np
-from _fmu_common import UNUSED_INPUT_RTOL, FrbSlaveMixin
+from _fmu_common import FrbSlaveMixin
 from pythonfmu import DefaultExperiment, Fmi2Slave
 
 #: the journal inputs (x, y, vx, vy) and the rotor speed: every output of the communication point depends on them
@@ -295,11 +295,8 @@ class FloatingRingBearing(FrbSlaveMixin, Fmi2Slave):
 
     def _advance(self, current_time, step_size):
         if not self._values["oil"]:
-            for (name, _, _, start, *_), value in zip(SUPPLY_IN, self._supply_inputs()):
-                if not math.isclose(value, start, rel_tol=UNUSED_INPUT_RTOL, abs_tol=0.0):
-                    raise ValueError(f"{name} = {value!r} needs the thermal model: set the parameter oil (the films "
-                                     f"have constant viscosities); leave the input at its start value {start!r} "
-                                     "otherwise")
+            self._check_unused_inputs((name, value, start) for (name, _, _, start, *_), value
+                                      in zip(SUPPLY_IN, self._supply_inputs()))
         out = self._out()  # outputs at the current inputs (cached since the exchange): validates them, updates eps
         self._comp.step(out[-4:].copy(), float(self._input_values[self._speed_idx]), 0.0, step_size, t=current_time)
 

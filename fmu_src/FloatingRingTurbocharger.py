@@ -15,7 +15,7 @@ import math
 import weakref
 
 import numpy as np
-from _fmu_common import UNUSED_INPUT_RTOL, FrbSlaveMixin
+from _fmu_common import FrbSlaveMixin
 from pythonfmu import DefaultExperiment, Fmi2Slave
 
 #: film parameters per bearing: (name, unit, description)
@@ -36,7 +36,6 @@ INPUTS = (("speed_in", "rad/s", "rotor speed held over the step (speed_source = 
 INPUT_STARTS = {"oil_supply_temperature": 363.15, "oil_supply_pressure": 3e5}
 #: upper bounds of the supply inputs (frbmodel.system.oil.T_MAX_K, frbmodel.linear.thermal.MAX_SUPPLY_PRESSURE_PA)
 INPUT_HIGHS = {"oil_supply_temperature": 473.15, "oil_supply_pressure": 2e6}
-
 
 
 def _close_abandoned_record(comp):
@@ -238,11 +237,8 @@ class FloatingRingTurbocharger(FrbSlaveMixin, Fmi2Slave):
         if self._values["oil"]:
             supply = {"supply_temperature_K": float(t_s), "supply_pressure_Pa": float(p_s)}
         else:
-            for name, value in (("oil_supply_temperature", t_s), ("oil_supply_pressure", p_s)):
-                if not math.isclose(value, INPUT_STARTS[name], rel_tol=UNUSED_INPUT_RTOL, abs_tol=0.0):
-                    raise ValueError(f"{name} = {float(value)!r} needs the thermal model: set the parameter oil (the "
-                                     "films have constant viscosities); leave the input at its start value "
-                                     f"{INPUT_STARTS[name]!r} otherwise")
+            self._check_unused_inputs((name, value, INPUT_STARTS[name]) for name, value
+                                      in (("oil_supply_temperature", t_s), ("oil_supply_pressure", p_s)))
         self._comp.step(step_size, speed_in=float(w), drive_torque=float(tq), housing_acc=(float(ax), float(ay)),
                         t=current_time, **supply)
 

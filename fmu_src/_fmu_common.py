@@ -404,6 +404,16 @@ class FrbSlaveMixin:
             self._violation = (key, names)
         return self._violation[1]
 
+    @staticmethod
+    def _check_unused_inputs(values_and_starts):
+        """Raise ValueError for an oil-supply input that differs from its start value (to :data:`UNUSED_INPUT_RTOL`)
+        while the parameter oil is empty: the films have constant viscosities, so the input would be ignored.
+        ``values_and_starts``: (name, value, start value) triples."""
+        for name, value, start in values_and_starts:
+            if not math.isclose(value, start, rel_tol=UNUSED_INPUT_RTOL, abs_tol=0.0):
+                raise ValueError(f"{name} = {float(value)!r} needs the thermal model: set the parameter oil (the films "
+                                 f"have constant viscosities); leave the input at its start value {start!r} otherwise")
+
     def _range_message(self, output=None):
         """Why the inputs are out of range (those ``output`` depends on; all for a doStep), or ''."""
         names = self._out_of_range()

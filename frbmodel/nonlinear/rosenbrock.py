@@ -165,12 +165,8 @@ def _bearing_columns(y, jac, yp, scale, omega, omega_dot, args):
     # torque-driven: d(q̈)/d(Ω̇) = M⁻¹ (∂f_unbalance/∂Ω̇) − M⁻¹G q
     sens = np.zeros(n_r)
     if torque:
-        fu = np.zeros(n_r)
-        phi = y[2 * n_r + 10]
-        for d in range(unb_node.size):
-            th = phi + unb_phase[d]
-            fu[4 * unb_node[d]] += unb_me[d] * math.sin(th)
-            fu[4 * unb_node[d] + 1] -= unb_me[d] * math.cos(th)
+        fu = np.zeros(n_r)  # ∂f_unbalance/∂Ω̇: the load of add_unbalance_forces at Ω = 0, Ω̇ = 1
+        add_unbalance_forces(fu, y[2 * n_r + 10], 0.0, 1.0, unb_node, unb_me, unb_phase)
         for i in range(n_r):
             acc = 0.0
             for k in range(n_r):
